@@ -1,0 +1,92 @@
+"""A straightforward per-beam reference for `emonav_drake.core.grid_maps.lgm_frame`.
+
+Every beam is tested against every disc in plain Python, then the hit cells are marked one
+beam at a time — the style of the authors' original implementation, and about as slow.
+It exists to check the vectorised, windowed implementation: both must give identical
+frames (``np.array_equal``).
+
+To make an exact comparison meaningful, this code evaluates the same formulas in the
+same floating-point order as the fast code (disc centres rotated into the robot frame,
+``math.cos``/``math.sin`` per beam, hit = t − √(r² − (d² − t²))); it shares no code
+with it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def _ranges_reference(
+    origin_xy, heading, centers, radii, num_beams, max_range, min_range
+) -> list[float]:
+    """Per-beam ranges [m]: nearest disc surface, clipped to [min_range, max_range]."""
+    ox, oy = float(origin_xy[0]), float(origin_xy[1])
+    ch, sh = math.cos(heading), math.sin(heading)
+    # Disc centres in the robot frame (x forward, y left).
+    discs = []
+    for (cx, cy), r in zip(centers, radii, strict=True):
+        dx, dy = float(cx) - ox, float(cy) - oy
+        discs.append((ch * dx + sh * dy, ch * dy - sh * dx, float(r)))
+    ranges = []
+    for i in range(num_beams):
+        angle = (i - (num_beams - 1) / 2) * (2.0 * math.pi / num_beams)
+        ux, uy = math.cos(angle), math.sin(angle)
+        best = math.inf
+        for px, py, r in discs:
+            d2 = px * px + py * py
+            r2 = r * r
+            if d2 <= r2:
+                best = 0.0  # the LiDAR is inside (or on) the disc
+                continue
+            t = px * ux + py * uy
+            disc = r2 - (d2 - t * t)
+            if t <= 0.0 or disc < 0.0:
+                continue
+            best = min(best, t - math.sqrt(disc))
+        ranges.append(max(min(best, max_range), min_range))
+    return ranges
+
+
+def lgm_frame_reference(
+    origin_xy,
+    heading: float,
+    centers,
+    radii,
+    margins,
+    num_beams: int = 1800,
+    grid_size: int = 100,
+    max_range: float = 6.0,
+    min_range: float = 0.27,
+    kind: str = "lgm",
+) -> np.ndarray:
+    """Reference grid-map frame: uint8 (M, M), same conventions as `lgm_frame`.
+
+    ``kind`` is "lgm" (the pie map) or "ogm" (the Cartesian baseline).
+    """
+    centers = np.asarray(centers, dtype=float).reshape(-1, 2)
+    radii = [float(r) for r in radii]
+    inflated = [r + float(m) for r, m in zip(radii, margins, strict=True)]
+    hit = _ranges_reference(origin_xy, heading, centers, radii, num_beams, max_range, min_range)
+    infl = _ranges_reference(origin_xy, heading, centers, inflated, num_beams, max_range, min_range)
+    grid = np.zeros((grid_size, grid_size), dtype=np.uint8)
+    for value, ranges in ((255, hit), (127, infl)):
+        for i, rng in enumerate(ranges):
+            if rng >= max_range:
+                continue  # no hit within range
+            if kind == "lgm":
+                row = i // (num_beams // grid_size)
+                col = min(int(rng / (max_range / grid_size)), grid_size - 1)
+            elif kind == "ogm":
+                angle = (i - (num_beams - 1) / 2) * (2.0 * math.pi / num_beams)
+                x, y = rng * math.cos(angle), rng * math.sin(angle)
+                cell = 2.0 * max_range / grid_size
+                row = min(max(math.floor((x + max_range) / cell), 0), grid_size - 1)
+                col = min(max(math.floor((max_range - y) / cell), 0), grid_size - 1)
+            else:
+                raise ValueError(f"kind must be 'lgm' or 'ogm', got {kind!r}")
+            if value == 127 and grid[row, col] == 255:
+                continue  # discomfort never overwrites a collision cell
+            grid[row, col] = value
+    return grid

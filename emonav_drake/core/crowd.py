@@ -1,0 +1,192 @@
+"""Pedestrians with emotions and static discs: the crowd of the paper's world (§IV-B).
+
+Pedestrians walk start → goal at the preferred speed with ORCA (RVO2 semantics, see
+`orca.py`) and turn round at their goal. Static discs are ORCA obstacles. The robot is
+an ORCA neighbour that a pedestrian takes into account **only when the pedestrian is
+faster than the robot** (the paper's visibility rule); the robot's own velocity is never
+changed by ORCA.
+
+`Crowd` holds what does not change during an episode (radii, discs, emotion schedules,
+parameters); `CrowdState` is the changing part. `Crowd.step` is a pure function from
+one state to the next (one period `dt`), so Drake can keep the state in a context and
+the Gymnasium environment in an attribute, with identical results.
+
+World frame, metres, seconds, m/s. Emotion codes: HAPPY 0, NEUTRAL 1, NEGATIVE 2.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+
+import numpy as np
+
+from emonav_drake.core.orca import OrcaParams, orca_velocities
+from emonav_drake.core.scenario import Scenario
+from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
+
+
+@dc.dataclass(frozen=True)
+class CrowdState:
+    """The changing part of the crowd after `substep` periods of `dt`."""
+
+    positions: np.ndarray  # (P, 2) pedestrian centres, world [m]
+    velocities: np.ndarray  # (P, 2) world [m/s]
+    goals: np.ndarray  # (P, 2) current goal of each pedestrian [m]
+    origins: np.ndarray  # (P, 2) the other end of each pedestrian's route [m]
+    emotions: np.ndarray  # (P,) int emotion codes in force now
+    substep: int  # number of crowd periods since the episode began
+
+
+@dc.dataclass(frozen=True)
+class CrowdSnapshot:
+    """Everything a planner or sensor may know about the crowd at one instant."""
+
+    positions: np.ndarray  # (P, 2) [m]
+    velocities: np.ndarray  # (P, 2) [m/s]
+    radius: float  # pedestrian radius [m]
+    emotions: np.ndarray  # (P,) int codes
+    discomfort: np.ndarray  # (P,) discomfort distance of each pedestrian now [m]
+    static_centers: np.ndarray  # (S, 2) [m]
+    static_radii: np.ndarray  # (S,) [m]
+    static_discomfort: float  # d_static [m]
+
+
+class Crowd:
+    """The pedestrians and static discs of one scenario.
+
+    Args:
+        scenario: start/goal/emotion of each pedestrian and the static discs.
+        config: crowd parameters (ORCA, speeds, radii) and discomfort distances.
+    """
+
+    def __init__(self, scenario: Scenario, config: EmoNavConfig) -> None:
+        c = config.crowd
+        self.dt = c.dt
+        self.radius = c.pedestrian_radius
+        self.preferred_speed = c.preferred_speed
+        self.goal_tolerance = c.goal_tolerance
+        self.safety_space = c.safety_space
+        self.robot_radius = config.robot.radius
+        self.orca = OrcaParams(
+            neighbor_dist=c.neighbor_dist,
+            max_neighbors=c.max_neighbors,
+            time_horizon=c.time_horizon,
+            time_horizon_obst=c.time_horizon_obst,
+        )
+        self.emotion_distances = np.asarray(config.reward.emotion_distances())
+        self.static_discomfort = config.reward.static_discomfort
+        peds = scenario.pedestrians
+        self.num_pedestrians = len(peds)
+        self._starts = np.array([p.start for p in peds], dtype=float).reshape(-1, 2)
+        self._goals = np.array([p.goal for p in peds], dtype=float).reshape(-1, 2)
+        self.static_centers = np.array([o.center for o in scenario.obstacles], dtype=float).reshape(
+            -1, 2
+        )
+        self.static_radii = np.array([o.radius for o in scenario.obstacles], dtype=float)
+        # Emotion schedule: row i = codes of every pedestrian during period i.
+        base = np.array([EMOTION_NAMES.index(p.emotion) for p in peds], dtype=np.int64)
+        length = max([len(p.emotion_schedule) for p in peds], default=0)
+        self._schedule = np.tile(base, (max(length, 1), 1))
+        for i, p in enumerate(peds):
+            for k, name in enumerate(p.emotion_schedule):
+                self._schedule[k, i] = EMOTION_NAMES.index(name)
+            if p.emotion_schedule:  # hold the last entry beyond the schedule
+                self._schedule[len(p.emotion_schedule) :, i] = self._schedule[
+                    len(p.emotion_schedule) - 1, i
+                ]
+        self._substeps_per_change = max(1, round(scenario.emotion_change_period / self.dt))
+        # ORCA arrays for pedestrians + the robot (last), built once.
+        n = self.num_pedestrians + 1
+        self._radii = np.full(n, self.radius + self.safety_space)
+        self._radii[-1] = self.robot_radius + self.safety_space
+        self._max_speeds = np.full(n, self.preferred_speed)
+        self._active = np.ones(n, dtype=bool)
+        self._active[-1] = False
+        self._visible = ~np.eye(n, dtype=bool)
+
+    def emotions_at(self, substep: int) -> np.ndarray:
+        """Emotion codes in force after `substep` crowd periods."""
+        row = min(substep // self._substeps_per_change, len(self._schedule) - 1)
+        return self._schedule[row].copy()
+
+    def initial_state(self) -> CrowdState:
+        """Pedestrians at rest at their starts."""
+        return CrowdState(
+            positions=self._starts.copy(),
+            velocities=np.zeros_like(self._starts),
+            goals=self._goals.copy(),
+            origins=self._starts.copy(),
+            emotions=self.emotions_at(0),
+            substep=0,
+        )
+
+    def step(
+        self, state: CrowdState, robot_xy: np.ndarray, robot_velocity: np.ndarray
+    ) -> CrowdState:
+        """Advance the crowd by one period `dt` (new velocities from the old state)."""
+        if self.num_pedestrians == 0:
+            return dc.replace(state, substep=state.substep + 1)
+        goals, origins = state.goals.copy(), state.origins.copy()
+        # Turn round at the goal: swap the route's ends.
+        arrived = np.linalg.norm(goals - state.positions, axis=1) < self.goal_tolerance
+        goals[arrived], origins[arrived] = state.origins[arrived], state.goals[arrived]
+        to_goal = goals - state.positions
+        dist = np.linalg.norm(to_goal, axis=1)
+        # Preferred velocity: towards the goal, slowing to arrive exactly in one period.
+        speed = np.minimum(self.preferred_speed, dist / self.dt)
+        pref = to_goal * (speed / np.maximum(dist, 1e-9))[:, None]
+
+        positions = np.vstack([state.positions, robot_xy[None, :]])
+        velocities = np.vstack([state.velocities, robot_velocity[None, :]])
+        pref_all = np.vstack([pref, robot_velocity[None, :]])
+        # The paper's rule: a pedestrian sees the robot only when it is faster than it.
+        visible = self._visible.copy()
+        visible[:-1, -1] = np.linalg.norm(state.velocities, axis=1) > float(
+            np.linalg.norm(robot_velocity)
+        )
+        new_v = orca_velocities(
+            positions,
+            velocities,
+            self._radii,
+            pref_all,
+            self._max_speeds,
+            self.dt,
+            self.orca,
+            obstacle_centers=self.static_centers,
+            obstacle_radii=self.static_radii,
+            visible=visible,
+            active=self._active,
+        )[:-1]
+        substep = state.substep + 1
+        return CrowdState(
+            positions=state.positions + new_v * self.dt,
+            velocities=new_v,
+            goals=goals,
+            origins=origins,
+            emotions=self.emotions_at(substep),
+            substep=substep,
+        )
+
+    def snapshot(self, state: CrowdState) -> CrowdSnapshot:
+        """What sensors and planners may know of the crowd in `state`."""
+        return CrowdSnapshot(
+            positions=state.positions,
+            velocities=state.velocities,
+            radius=self.radius,
+            emotions=state.emotions,
+            discomfort=self.emotion_distances[state.emotions],
+            static_centers=self.static_centers,
+            static_radii=self.static_radii,
+            static_discomfort=self.static_discomfort,
+        )
+
+
+def obstacle_discs(snapshot: CrowdSnapshot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """All discs as (centres (n, 2), radii (n,), discomfort margins (n,)): pedestrians first."""
+    p = len(snapshot.positions)
+    centers = np.vstack([snapshot.positions, snapshot.static_centers]).reshape(-1, 2)
+    radii = np.concatenate([np.full(p, snapshot.radius), snapshot.static_radii])
+    margins = np.concatenate(
+        [snapshot.discomfort, np.full(len(snapshot.static_radii), snapshot.static_discomfort)]
+    )
+    return centers, radii, margins

@@ -1,0 +1,535 @@
+"""LiDAR grid maps (LGM, the paper's pie-shaped map) and occupancy grid maps (OGM), numpy only.
+
+Both maps are ``uint8 (M, M)`` images built from two scans of the same discs (see
+`emonav_drake.core.lidar` for the beam conventions): the real scan, and a scan of the
+discs inflated by their discomfort margins (pedestrian radius + emotion distance, static
+radius + 0.2 m; the caller passes the margins). Each beam marks only the cell of its hit:
+
+* 255 — the hit of the real scan (collision area, red in the paper);
+* 127 — the hit of the inflated scan, where the cell is not already 255 (discomfort zone);
+* 0 — everything else. A beam whose range equals ``max_range`` marks nothing.
+
+The robot's own radius plays no part.
+
+LGM (paper Section III-C, DESIGN.md §3.2): row = angular sector ``⌊i/(K/M)⌋`` of beam i
+(row 0 just behind on the right, rows M/2 − 1 and M/2 either side of straight ahead, CCW
+increasing), column = ring ``⌊range/(L/M)⌋`` capped at M − 1 (column 0 at the robot), with
+L = ``max_range``.
+
+OGM baseline: a 2L × 2L Cartesian square in the robot frame (x forward, y left) with
+cell side h = 2L/M; the hit point ``(x, y) = range·(cos a, sin a)`` lands in
+row ``⌊(x + L)/h⌋`` (row index grows forward) and column ``⌊(L − y)/h⌋`` (column index
+grows to the robot's right), both clipped to 0…M−1.
+
+Frames are stacked oldest first in `FrameStack`.
+
+The module also holds the paper's resolution comparison between the two maps (Eq. 2 and
+the text after it); see `resolution_crossing_rings`.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import numpy as np
+
+from emonav_drake.core.lidar import (
+    DEFAULT_MAX_RANGE,
+    DEFAULT_MIN_RANGE,
+    DEFAULT_NUM_BEAMS,
+    as_discs,
+    as_point,
+    beam_table,
+    cast_robot_frame,
+    check_num_beams,
+    check_ranges_limits,
+    robot_frame_centers,
+)
+
+DEFAULT_GRID_SIZE = 100  # M
+DEFAULT_NUM_FRAMES = 9  # N
+COLLISION_VALUE = 255
+DISCOMFORT_VALUE = 127
+GRID_KINDS = ("lgm", "ogm")
+
+
+# --------------------------------------------------------------------------- validation
+
+
+def check_grid_size(grid_size: int) -> int:
+    """Return ``grid_size`` (M) as an int, or raise ValueError if it is not a positive int."""
+    if isinstance(grid_size, bool) or not isinstance(grid_size, int | np.integer):
+        raise ValueError(f"grid_size must be an int, got {grid_size!r}")
+    if grid_size < 1:
+        raise ValueError(f"grid_size must be positive, got {grid_size}")
+    return int(grid_size)
+
+
+def check_beams_per_sector(num_beams: int, grid_size: int) -> int:
+    """K/M, the beams per LGM sector; ValueError unless M divides K."""
+    if num_beams % grid_size:
+        raise ValueError(
+            f"num_beams ({num_beams}) must be divisible by grid_size ({grid_size}) "
+            "so that every LGM sector holds the same number of beams"
+        )
+    return num_beams // grid_size
+
+
+def _check_max_range(max_range: float) -> float:
+    max_range = float(max_range)
+    if not (math.isfinite(max_range) and max_range > 0.0):
+        raise ValueError(f"max_range must be finite and > 0, got {max_range}")
+    return max_range
+
+
+def _as_ranges(ranges: object, name: str, num_beams: int | None = None) -> np.ndarray:
+    r = np.asarray(ranges, dtype=np.float64)
+    if r.ndim != 1 or r.size == 0:
+        raise ValueError(f"{name} must be a non-empty 1-D array, got shape {r.shape}")
+    if num_beams is not None and r.size != num_beams:
+        raise ValueError(f"{name} has {r.size} beams, expected {num_beams}")
+    if not (np.isfinite(r).all() and (r >= 0.0).all()):
+        raise ValueError(f"{name} must be finite and >= 0")
+    return r
+
+
+def _out_grid(out: np.ndarray | None, grid_size: int) -> np.ndarray:
+    if out is None:
+        return np.zeros((grid_size, grid_size), dtype=np.uint8)
+    if not isinstance(out, np.ndarray):
+        raise ValueError("out must be a numpy array")
+    if (
+        out.shape != (grid_size, grid_size)
+        or out.dtype != np.uint8
+        or not out.flags.c_contiguous
+        or not out.flags.writeable
+    ):
+        raise ValueError(
+            f"out must be a writeable C-contiguous uint8 array of shape "
+            f"({grid_size}, {grid_size}), got {out.dtype} {out.shape}"
+        )
+    out.fill(0)
+    return out
+
+
+# --------------------------------------------------------------------------- grid filling
+
+
+@lru_cache(maxsize=16)
+def _lgm_row_offsets(num_beams: int, grid_size: int) -> np.ndarray:
+    """Flat-index offset ``row·M`` of every beam's LGM row, (K,) intp, read-only."""
+    per_sector = num_beams // grid_size
+    offsets = (np.arange(num_beams, dtype=np.intp) // per_sector) * grid_size
+    offsets.flags.writeable = False
+    return offsets
+
+
+def _fill_lgm(ranges: np.ndarray, grid_size: int, max_range: float, out: np.ndarray) -> None:
+    """Mark (2, K) ranges (row 0 real, row 1 inflated) into the zeroed LGM ``out``."""
+    cell = max_range / grid_size
+    flat_idx = (ranges / cell).astype(np.intp)
+    np.minimum(flat_idx, grid_size - 1, out=flat_idx)
+    flat_idx += _lgm_row_offsets(ranges.shape[1], grid_size)
+    seen = ranges < max_range
+    flat = out.reshape(-1)
+    # 127 first, then 255 over it: "127 only where the cell is not 255".
+    flat[flat_idx[1][seen[1]]] = DISCOMFORT_VALUE
+    flat[flat_idx[0][seen[0]]] = COLLISION_VALUE
+
+
+def _fill_ogm(ranges: np.ndarray, grid_size: int, max_range: float, out: np.ndarray) -> None:
+    """Mark (2, K) ranges (row 0 real, row 1 inflated) into the zeroed OGM ``out``."""
+    _, cos, sin = beam_table(ranges.shape[1])
+    cell = 2.0 * max_range / grid_size
+    row = np.floor((ranges * cos + max_range) / cell)
+    col = np.floor((max_range - ranges * sin) / cell)
+    np.clip(row, 0, grid_size - 1, out=row)
+    np.clip(col, 0, grid_size - 1, out=col)
+    row *= grid_size
+    row += col
+    flat_idx = row.astype(np.intp)
+    seen = ranges < max_range
+    flat = out.reshape(-1)
+    flat[flat_idx[1][seen[1]]] = DISCOMFORT_VALUE
+    flat[flat_idx[0][seen[0]]] = COLLISION_VALUE
+
+
+def _grid_from_ranges(
+    kind: str,
+    hit_ranges: object,
+    inflated_ranges: object,
+    grid_size: int,
+    max_range: float,
+    out: np.ndarray | None,
+) -> np.ndarray:
+    m = check_grid_size(grid_size)
+    max_range = _check_max_range(max_range)
+    hit = _as_ranges(hit_ranges, "hit_ranges")
+    inflated = _as_ranges(inflated_ranges, "inflated_ranges", hit.size)
+    if kind == "lgm":
+        check_beams_per_sector(hit.size, m)
+    grid = _out_grid(out, m)
+    (_fill_lgm if kind == "lgm" else _fill_ogm)(np.stack((hit, inflated)), m, max_range, grid)
+    return grid
+
+
+def lgm_from_ranges(
+    hit_ranges: object,
+    inflated_ranges: object,
+    grid_size: int = DEFAULT_GRID_SIZE,
+    max_range: float = DEFAULT_MAX_RANGE,
+    out: np.ndarray | None = None,
+) -> np.ndarray:
+    """LiDAR grid map from a real and an inflated scan.
+
+    Args:
+        hit_ranges: (K,) ranges [m] of the real discs (beam i as in `lidar.beam_angles`).
+        inflated_ranges: (K,) ranges [m] of the discs inflated by their discomfort margins.
+        grid_size: M, sectors (rows) and rings (columns); K must be divisible by M.
+        max_range: L [m]; a range ≥ L marks nothing, ring width is L/M.
+        out: optional writeable C-contiguous uint8 (M, M) array, zeroed and filled in place.
+
+    Returns:
+        uint8 (M, M): row = sector ⌊i/(K/M)⌋, column = ring ⌊range/(L/M)⌋ capped at M − 1;
+        255 real hits, 127 inflated hits not on a 255 cell, 0 elsewhere.
+    """
+    return _grid_from_ranges("lgm", hit_ranges, inflated_ranges, grid_size, max_range, out)
+
+
+def ogm_from_ranges(
+    hit_ranges: object,
+    inflated_ranges: object,
+    grid_size: int = DEFAULT_GRID_SIZE,
+    max_range: float = DEFAULT_MAX_RANGE,
+    out: np.ndarray | None = None,
+) -> np.ndarray:
+    """Occupancy grid map (2L × 2L square in the robot frame) from a real and an inflated scan.
+
+    Args:
+        hit_ranges: (K,) ranges [m] of the real discs (beam i as in `lidar.beam_angles`).
+        inflated_ranges: (K,) ranges [m] of the inflated discs.
+        grid_size: M cells per side; cell side 2L/M.
+        max_range: L [m]; a range ≥ L marks nothing.
+        out: optional writeable C-contiguous uint8 (M, M) array, zeroed and filled in place.
+
+    Returns:
+        uint8 (M, M): hit (x forward, y left) in row ⌊(x + L)/(2L/M)⌋, column
+        ⌊(L − y)/(2L/M)⌋, clipped to 0…M−1; values 255 / 127 / 0 as for the LGM.
+    """
+    return _grid_from_ranges("ogm", hit_ranges, inflated_ranges, grid_size, max_range, out)
+
+
+def lgm_frame(
+    origin_xy: object,
+    heading: float,
+    centers: object,
+    radii: object,
+    margins: object,
+    num_beams: int = DEFAULT_NUM_BEAMS,
+    grid_size: int = DEFAULT_GRID_SIZE,
+    max_range: float = DEFAULT_MAX_RANGE,
+    min_range: float = DEFAULT_MIN_RANGE,
+    kind: str = "lgm",
+    out: np.ndarray | None = None,
+) -> np.ndarray:
+    """One grid-map frame seen from a LiDAR: real scan + inflated scan + grid.
+
+    Args:
+        origin_xy: LiDAR position (2,) in the world frame [m].
+        heading: robot heading in the world frame [rad], CCW from +x.
+        centers: disc centres (n, 2) in the world frame [m]; n may be 0.
+        radii: disc radii (n,) [m], > 0.
+        margins: discomfort margins (n,) [m], ≥ 0, added to the radii for the second scan
+            (pedestrian: its emotion's distance; static disc: 0.2 m).
+        num_beams: K; for the LGM, K must be divisible by M.
+        grid_size: M.
+        max_range, min_range: LiDAR clipping limits [m] (L = max_range).
+        kind: "lgm" (pie map, the paper's) or "ogm" (Cartesian baseline).
+        out: optional writeable C-contiguous uint8 (M, M) array to fill in place.
+
+    Returns:
+        uint8 (M, M) frame, as `lgm_from_ranges` / `ogm_from_ranges` describe.
+    """
+    if kind not in GRID_KINDS:
+        raise ValueError(f"kind must be one of {GRID_KINDS}, got {kind!r}")
+    k = check_num_beams(num_beams)
+    m = check_grid_size(grid_size)
+    if kind == "lgm":
+        check_beams_per_sector(k, m)
+    max_range, min_range = check_ranges_limits(max_range, min_range)
+    origin = as_point(origin_xy)
+    heading = float(heading)
+    if not math.isfinite(heading):
+        raise ValueError(f"heading must be finite, got {heading}")
+    c, r = as_discs(centers, radii)
+    mg = np.asarray(margins, dtype=np.float64)
+    if mg.size == 0:
+        mg = mg.reshape(0)
+    if mg.shape != r.shape:
+        raise ValueError(f"margins must have shape {r.shape} to match radii, got {mg.shape}")
+    if not (np.isfinite(mg).all() and (mg >= 0.0).all()):
+        raise ValueError(f"margins must be finite and >= 0, got {mg.tolist()}")
+    grid = _out_grid(out, m)
+    px, py = robot_frame_centers(origin, heading, c)
+    scan_radii = np.empty((2, r.size), dtype=np.float64)
+    scan_radii[0] = r
+    np.add(r, mg, out=scan_radii[1])
+    ranges = cast_robot_frame(px, py, scan_radii, k, max_range, min_range)
+    (_fill_lgm if kind == "lgm" else _fill_ogm)(ranges, m, max_range, grid)
+    return grid
+
+
+# --------------------------------------------------------------------------- frame stack
+
+
+class FrameStack:
+    """The last N grid-map frames, oldest first, as one ``uint8 (N, M, M)`` array.
+
+    Args:
+        num_frames: N (the paper's 9).
+        grid_size: M.
+
+    `reset(frame)` fills all N slots with the first frame; `push(frame)` drops the oldest
+    frame and appends the new one last. `array`, `reset` and `push` return copies, so a
+    caller may keep them (e.g. in a replay buffer) while the stack moves on.
+    """
+
+    def __init__(
+        self, num_frames: int = DEFAULT_NUM_FRAMES, grid_size: int = DEFAULT_GRID_SIZE
+    ) -> None:
+        if isinstance(num_frames, bool) or not isinstance(num_frames, int | np.integer):
+            raise ValueError(f"num_frames must be an int, got {num_frames!r}")
+        if num_frames < 1:
+            raise ValueError(f"num_frames must be positive, got {num_frames}")
+        self._grid_size = check_grid_size(grid_size)
+        self._frames = np.zeros((int(num_frames), self._grid_size, self._grid_size), np.uint8)
+        self._started = False
+
+    @property
+    def num_frames(self) -> int:
+        return self._frames.shape[0]
+
+    @property
+    def grid_size(self) -> int:
+        return self._grid_size
+
+    def _check(self, frame: object) -> np.ndarray:
+        f = np.asarray(frame)
+        m = self._grid_size
+        if f.shape != (m, m) or f.dtype != np.uint8:
+            raise ValueError(f"frame must be uint8 ({m}, {m}), got {f.dtype} {f.shape}")
+        return f
+
+    def reset(self, frame: object) -> np.ndarray:
+        """Fill every slot with ``frame`` (uint8 (M, M)); returns the stack (a copy)."""
+        self._frames[:] = self._check(frame)
+        self._started = True
+        return self.array
+
+    def push(self, frame: object) -> np.ndarray:
+        """Drop the oldest frame, append ``frame`` last; returns the stack (a copy).
+
+        Before the first `reset`, `push` acts as `reset`.
+        """
+        f = self._check(frame)
+        if not self._started:
+            return self.reset(f)
+        self._frames[:-1] = self._frames[1:]  # numpy handles the overlapping copy
+        self._frames[-1] = f
+        return self.array
+
+    @property
+    def array(self) -> np.ndarray:
+        """The stack, uint8 (N, M, M), oldest first, newest last (a copy)."""
+        return self._frames.copy()
+
+
+# --------------------------------------------------------------------------- resolution
+# Paper Section III-C: "resolution" of a cell = LiDAR beams per unit area (Eq. 2) for the
+# LGM, (M/2L)² for the OGM; the text compares the two maps ring by ring.
+
+
+def _check_ring(ring: int, grid_size: int) -> int:
+    if isinstance(ring, bool) or not isinstance(ring, int | np.integer):
+        raise ValueError(f"ring must be an int, got {ring!r}")
+    if not 1 <= ring <= grid_size:
+        raise ValueError(f"ring must be in 1..{grid_size} (counted from 1), got {ring}")
+    return int(ring)
+
+
+def lgm_cell_area(
+    ring: int, grid_size: int = DEFAULT_GRID_SIZE, max_range: float = DEFAULT_MAX_RANGE
+) -> float:
+    """Area [m²] of one LGM cell in ring ``ring`` (counted from 1): π L² (2i − 1) / M³."""
+    m = check_grid_size(grid_size)
+    i = _check_ring(ring, m)
+    max_range = _check_max_range(max_range)
+    return math.pi * max_range**2 * (2 * i - 1) / m**3
+
+
+def lgm_resolution(
+    ring: int,
+    num_beams: int = DEFAULT_NUM_BEAMS,
+    grid_size: int = DEFAULT_GRID_SIZE,
+    max_range: float = DEFAULT_MAX_RANGE,
+) -> float:
+    """Paper Eq. 2: beams per m² in an LGM cell of ring i (from 1), K M² / (π L² (2i − 1))."""
+    k = check_num_beams(num_beams)
+    m = check_grid_size(grid_size)
+    i = _check_ring(ring, m)
+    max_range = _check_max_range(max_range)
+    return k * m**2 / (math.pi * max_range**2 * (2 * i - 1))
+
+
+def lgm_mean_resolution(
+    grid_size: int = DEFAULT_GRID_SIZE, max_range: float = DEFAULT_MAX_RANGE
+) -> float:
+    """The paper's LGM average, (M / (√π L))² = M² cells over the disc of radius L [1/m²]."""
+    m = check_grid_size(grid_size)
+    max_range = _check_max_range(max_range)
+    return (m / (math.sqrt(math.pi) * max_range)) ** 2
+
+
+def ogm_resolution(
+    grid_size: int = DEFAULT_GRID_SIZE, max_range: float = DEFAULT_MAX_RANGE
+) -> float:
+    """The paper's OGM resolution (M / 2L)² [cells per m²] (cell side 2L/M)."""
+    m = check_grid_size(grid_size)
+    max_range = _check_max_range(max_range)
+    return (m / (2.0 * max_range)) ** 2
+
+
+def lgm_ring_cell_counts(grid_size: int = DEFAULT_GRID_SIZE) -> np.ndarray:
+    """LGM cells in each ring 1…M, (M,) int: every ring holds M sector cells."""
+    m = check_grid_size(grid_size)
+    return np.full(m, m, dtype=np.int64)
+
+
+def _ogm_cell_distance_bounds(
+    grid_size: int, max_range: float, cell_size: float | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Nearest and farthest distance from the robot to every OGM cell square.
+
+    The cells tile the 2L × 2L square centred on the robot with side ``cell_size``
+    (default 2L/M, the OGM's), so the robot sits on a cell corner as in `ogm_from_ranges`.
+    """
+    m = check_grid_size(grid_size)
+    max_range = _check_max_range(max_range)
+    side = 2.0 * max_range / m if cell_size is None else float(cell_size)
+    n = round(2.0 * max_range / side)
+    if not (side > 0.0 and n >= 1 and math.isclose(n * side, 2.0 * max_range)):
+        raise ValueError(f"cell_size must tile 2L = {2.0 * max_range} m, got {cell_size}")
+    edges = (np.arange(n + 1) - n / 2) * side
+    lo, hi = edges[:-1], edges[1:]
+    near_1d = np.maximum(np.maximum(lo, -hi), 0.0)
+    far_1d = np.maximum(np.abs(lo), np.abs(hi))
+    near = np.hypot(near_1d[:, None], near_1d[None, :])
+    far = np.hypot(far_1d[:, None], far_1d[None, :])
+    return near, far
+
+
+def ogm_cells_touched_by_disc(
+    radius: float,
+    grid_size: int = DEFAULT_GRID_SIZE,
+    max_range: float = DEFAULT_MAX_RANGE,
+    cell_size: float | None = None,
+) -> int:
+    """OGM cells sharing a positive area with the disc of ``radius`` [m] around the robot."""
+    near, _ = _ogm_cell_distance_bounds(grid_size, max_range, cell_size)
+    return int(np.count_nonzero(near < radius))
+
+
+def ogm_ring_cell_counts(
+    grid_size: int = DEFAULT_GRID_SIZE,
+    max_range: float = DEFAULT_MAX_RANGE,
+    cell_size: float | None = None,
+) -> np.ndarray:
+    """OGM cells sharing a positive area with each LGM ring's annulus, (M,) int.
+
+    Ring i (from 1) spans radii ((i − 1)L/M, iL/M). Ring 1 with the paper's M = 100,
+    L = 6 m is the 0.06 m disc around the robot, which touches 4 OGM cells.
+    """
+    m = check_grid_size(grid_size)
+    near, far = _ogm_cell_distance_bounds(grid_size, max_range, cell_size)
+    width = float(max_range) / m
+    return np.array(
+        [np.count_nonzero((near < i * width) & (far > (i - 1) * width)) for i in range(1, m + 1)]
+    )
+
+
+def ogm_ring_circle_cell_counts(
+    grid_size: int = DEFAULT_GRID_SIZE,
+    max_range: float = DEFAULT_MAX_RANGE,
+    cell_size: float | None = None,
+) -> np.ndarray:
+    """OGM cells whose interior each ring's mid circle (radius (i − ½)L/M) crosses, (M,) int.
+
+    These are the OGM cells that hits at mid-ring can land in (dense enough beams reach
+    them all), the OGM's counterpart of the M LGM cells of a ring. With the robot on a
+    cell corner and cell side h it equals 8⌊R/h⌋ + 4.
+    """
+    m = check_grid_size(grid_size)
+    near, far = _ogm_cell_distance_bounds(grid_size, max_range, cell_size)
+    width = float(max_range) / m
+    counts = []
+    for i in range(1, m + 1):
+        radius = (i - 0.5) * width
+        counts.append(np.count_nonzero((near < radius) & (far > radius)))
+    return np.array(counts)
+
+
+def _first_ring_for_good(ogm_exceeds: np.ndarray) -> int | None:
+    """Smallest ring i (from 1) with the OGM ahead in ring i and every ring after it."""
+    if not ogm_exceeds[-1]:
+        return None
+    behind = np.flatnonzero(~ogm_exceeds)
+    return 1 if behind.size == 0 else int(behind[-1]) + 2
+
+
+def resolution_crossing_rings(
+    num_beams: int = DEFAULT_NUM_BEAMS,
+    grid_size: int = DEFAULT_GRID_SIZE,
+    max_range: float = DEFAULT_MAX_RANGE,
+) -> dict[str, int | None]:
+    """The ring from which the OGM is "denser" than the LGM, under each reading of the paper.
+
+    The paper (Section III-C) says that for M = 100, L = 6 m, K = 1800 "when i > 13 the
+    density of the OGM grid surpasses that of the LGM". For each definition below the value
+    is the smallest ring i (from 1) such that the OGM is strictly ahead in ring i and in
+    every ring after it (None: never within the map's M rings):
+
+    * ``cell_density`` — cells per m²: 1 / LGM cell area M³/(π L² (2i − 1)) against the
+      OGM's (M/2L)². Same ring for beams per m² with K/M beams in every cell of both maps.
+    * ``eq2_vs_ogm_resolution`` — Eq. 2's beams per m² against (M/2L)² cells per m², the two
+      numbers the paper prints side by side.
+    * ``cells_overlapping_ring`` — OGM cells sharing area with ring i's annulus
+      (`ogm_ring_cell_counts`) against the ring's M LGM cells (the paper's i = 1 example:
+      4 against 100).
+    * ``cells_crossed_by_mid_circle`` — OGM cells crossed by ring i's mid circle
+      (`ogm_ring_circle_cell_counts`), i.e. the distinct OGM cells the beams' mid-ring hits
+      land in, against M.
+    * ``cells_crossed_by_mid_circle_half_cell`` — the same with a hypothetical OGM cell of
+      side L/M (half the OGM's 2L/M): 8(i − ½) > M, i.e. i > M/8 + ½.
+    """
+    k = check_num_beams(num_beams)
+    m = check_grid_size(grid_size)
+    max_range = _check_max_range(max_range)
+    rings = np.arange(1, m + 1)
+    lgm_cells = lgm_ring_cell_counts(m)
+    lgm_density = m**3 / (math.pi * max_range**2 * (2 * rings - 1))
+    eq2 = k * m**2 / (math.pi * max_range**2 * (2 * rings - 1))
+    ogm_density = ogm_resolution(m, max_range)
+    return {
+        "cell_density": _first_ring_for_good(ogm_density > lgm_density),
+        "eq2_vs_ogm_resolution": _first_ring_for_good(ogm_density > eq2),
+        "cells_overlapping_ring": _first_ring_for_good(
+            ogm_ring_cell_counts(m, max_range) > lgm_cells
+        ),
+        "cells_crossed_by_mid_circle": _first_ring_for_good(
+            ogm_ring_circle_cell_counts(m, max_range) > lgm_cells
+        ),
+        "cells_crossed_by_mid_circle_half_cell": _first_ring_for_good(
+            ogm_ring_circle_cell_counts(m, max_range, cell_size=max_range / m) > lgm_cells
+        ),
+    }

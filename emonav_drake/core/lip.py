@@ -1,0 +1,94 @@
+"""The linear inverted pendulum (LIP) step map of the paper's Eq. 1, in the world frame.
+
+The reduced-order robot is a point CoM at constant height H walking in steps of
+duration T. At each foot switch (step k) the navigation command u_k = (u_v, u_Δθ)
+arrives:
+
+* the heading turns at the switch: θ_{k+1} = θ_k + u_Δθ (wrapped to (−π, π]), and the
+  whole step is walked along θ_{k+1} (the sagittal direction of the new stance);
+* the foot is placed d_k ahead of the CoM (Eq. 1) so that the sagittal speed at the next
+  switch equals u_v:  d_k = (v_k cosh ωT − u_v) / (ω sinh ωT);
+* within the step the CoM moves Δx(t) = v_k sinh(ωt)/ω + d_k (1 − cosh ωt) along θ_{k+1},
+  with speed v(t) = v_k cosh(ωt) − d_k ω sinh(ωt); at t = T this is Eq. 1's Δx^loc and
+  v(T) = u_v exactly.
+
+`LipState` is (x, y, θ, v): CoM position in the world frame [m], heading [rad] and
+sagittal speed [m/s].
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+
+class LipState(NamedTuple):
+    """Reduced-order robot state at a foot switch (world frame)."""
+
+    x: float  # CoM x [m]
+    y: float  # CoM y [m]
+    heading: float  # θ [rad]
+    speed: float  # sagittal speed v [m/s]
+
+
+def wrap_angle(a: float) -> float:
+    """Wrap an angle to (−π, π]."""
+    return math.atan2(math.sin(a), math.cos(a))
+
+
+def foot_offset(speed: float, target_speed: float, omega: float, step_time: float) -> float:
+    """Paper Eq. 1, first line: sagittal foot position ahead of the CoM, d_k [m]."""
+    wt = omega * step_time
+    return (speed * math.cosh(wt) - target_speed) / (omega * math.sinh(wt))
+
+
+def sagittal_displacement(speed: float, d: float, omega: float, elapsed: float) -> float:
+    """Paper Eq. 1, second line, at any time within the step: Δx(t) [m]."""
+    wt = omega * elapsed
+    return speed * math.sinh(wt) / omega + d * (1.0 - math.cosh(wt))
+
+
+def sagittal_speed(speed: float, d: float, omega: float, elapsed: float) -> float:
+    """Sagittal CoM speed within the step, v(t) = v cosh ωt − d ω sinh ωt [m/s]."""
+    wt = omega * elapsed
+    return speed * math.cosh(wt) - d * omega * math.sinh(wt)
+
+
+def lip_step(
+    state: LipState, u_speed: float, u_heading: float, omega: float, step_time: float
+) -> LipState:
+    """One walking step of the LIP model: the state at the next foot switch."""
+    heading = wrap_angle(state.heading + u_heading)
+    d = foot_offset(state.speed, u_speed, omega, step_time)
+    dx = sagittal_displacement(state.speed, d, omega, step_time)
+    return LipState(
+        state.x + dx * math.cos(heading), state.y + dx * math.sin(heading), heading, float(u_speed)
+    )
+
+
+def lip_in_step(
+    state: LipState,
+    u_speed: float,
+    u_heading: float,
+    omega: float,
+    step_time: float,
+    elapsed: float,
+) -> LipState:
+    """The CoM `elapsed` s into a step: position, heading (the new one) and sagittal speed.
+
+    `state` is the state at the start of the step, (u_speed, u_heading) the step's command.
+    """
+    if not 0.0 <= elapsed <= step_time + 1e-12:
+        raise ValueError(f"elapsed = {elapsed} s is outside the step [0, {step_time}] s")
+    heading = wrap_angle(state.heading + u_heading)
+    d = foot_offset(state.speed, u_speed, omega, step_time)
+    dx = sagittal_displacement(state.speed, d, omega, elapsed)
+    v = sagittal_speed(state.speed, d, omega, elapsed)
+    return LipState(state.x + dx * math.cos(heading), state.y + dx * math.sin(heading), heading, v)
+
+
+def lip_velocity(state: LipState) -> np.ndarray:
+    """World-frame CoM velocity (2,) [m/s]: the sagittal speed along the heading."""
+    return np.array([state.speed * math.cos(state.heading), state.speed * math.sin(state.heading)])

@@ -1,0 +1,225 @@
+"""One navigation episode on the LIP robot, in plain numpy: the fast world.
+
+The timing is the diagram's, step for step (`diagrams/navigation.py`):
+
+* walking step k starts at t_k = kT. The observation is built from the robot at its
+  foot switch (p_k, θ_k) and the crowd at t_k; the planner answers u_k at once;
+* the crowd advances in T/dt periods of dt. In period j the robot is seen where the
+  LIP model has it at t_k + j·dt (`robot_at_substep`): for j = 0 the end of the previous
+  step (p_k, walking along θ_k at v_k), for j ≥ 1 the current step's CoM trajectory;
+* the robot reaches its next foot switch (p_{k+1}, θ_{k+1}, v_{k+1} = u_v);
+* reward and termination are evaluated on (p_{k+1}, crowd at t_{k+1}).
+
+`NavigationWorld` is what the Gymnasium environment wraps; the Drake systems call the
+same functions (`robot_at_substep`, `Crowd.step`, `lgm_frame`, `evaluate_step`).
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+
+import numpy as np
+
+from emonav_drake.core.crowd import Crowd, CrowdSnapshot, CrowdState, obstacle_discs
+from emonav_drake.core.grid_maps import FrameStack, lgm_frame
+from emonav_drake.core.lip import LipState, lip_in_step, lip_step, lip_velocity, wrap_angle
+from emonav_drake.core.metrics import EpisodeRecord, EpisodeTracker
+from emonav_drake.core.reward import StepEvaluation, evaluate_step
+from emonav_drake.core.scenario import Scenario
+from emonav_drake.params import EmoNavConfig, RobotParams
+
+
+@dc.dataclass(frozen=True)
+class PlannerInput:
+    """Everything a planner may use at one walking step (world frame, SI units).
+
+    Learned policies use only `lgm_stack`, `goal_state()` and `last_command`; model-based
+    planners (DWA, MPC) use the privileged `crowd` snapshot.
+    """
+
+    robot: LipState
+    goal_xy: np.ndarray  # (2,) [m]
+    last_command: np.ndarray  # (2,) (u_v [m/s], u_Δθ [rad]) of the previous step
+    crowd: CrowdSnapshot
+    lgm_stack: np.ndarray | None  # (N, M, M) uint8, oldest first
+    step: int
+
+    def goal_state(self) -> np.ndarray:
+        """(distance [m], bearing [rad]) of the goal in the robot frame."""
+        return goal_state(self.robot, self.goal_xy)
+
+
+def goal_state(robot: LipState, goal_xy: np.ndarray) -> np.ndarray:
+    """(distance [m], bearing [rad, CCW from the heading]) of the goal."""
+    dx, dy = goal_xy[0] - robot.x, goal_xy[1] - robot.y
+    return np.array([math.hypot(dx, dy), wrap_angle(math.atan2(dy, dx) - robot.heading)])
+
+
+class CommandError(ValueError):
+    """A navigation command is NaN or outside the paper's bounds (Eq. 2)."""
+
+
+def check_command(
+    command: np.ndarray, robot: RobotParams, clip: bool = False, tolerance: float = 1e-6
+) -> tuple[np.ndarray, bool]:
+    """Validate (u_v, u_Δθ) against 0 ≤ u_v ≤ ū_v, |u_Δθ| ≤ ū_Δθ.
+
+    Returns the command (clipped if `clip` and out of range) and whether it was clipped.
+    NaN or a wrong shape always raises `CommandError`; out of range raises unless `clip`.
+    """
+    u = np.asarray(command, dtype=float).reshape(-1)
+    if u.shape != (2,):
+        raise CommandError(f"command must be (u_v, u_dtheta), got shape {np.shape(command)}")
+    if not np.all(np.isfinite(u)):
+        raise CommandError(f"command {u.tolist()} is not finite")
+    lo = np.array([0.0, -robot.max_heading_change])
+    hi = np.array([robot.max_speed, robot.max_heading_change])
+    outside = bool(np.any(u < lo - tolerance) or np.any(u > hi + tolerance))
+    if outside and not clip:
+        raise CommandError(
+            f"command {u.tolist()} is outside the bounds u_v in [0, {robot.max_speed}] m/s, "
+            f"u_dtheta in [-{robot.max_heading_change}, {robot.max_heading_change}] rad"
+        )
+    return np.clip(u, lo, hi), outside
+
+
+def substeps_per_step(config: EmoNavConfig) -> int:
+    """Crowd periods per walking step (T / dt, validated to be an integer)."""
+    return round(config.robot.step_time / config.crowd.dt)
+
+
+def robot_at_substep(
+    start: LipState, command: np.ndarray, substep: int, config: EmoNavConfig
+) -> LipState:
+    """The robot CoM in crowd period `substep` of a walking step.
+
+    `start` is the state at the step's foot switch and `command` the step's command.
+    Period 0 sees the end of the previous step (`start` itself, walking along the old
+    heading); the last period (T/dt) is the next foot switch, `lip_step`'s result.
+    """
+    if substep == 0:
+        return start
+    r = config.robot
+    if substep == substeps_per_step(config):
+        return lip_step(start, float(command[0]), float(command[1]), r.omega, r.step_time)
+    return lip_in_step(
+        start, float(command[0]), float(command[1]), r.omega, r.step_time, substep * config.crowd.dt
+    )
+
+
+def observation_frame(
+    robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig, kind: str = "lgm"
+) -> np.ndarray:
+    """One grid-map frame (M, M) uint8 seen from the robot's CoM and heading."""
+    centers, radii, margins = obstacle_discs(crowd)
+    li = config.lidar
+    return lgm_frame(
+        np.array([robot.x, robot.y]),
+        robot.heading,
+        centers,
+        radii,
+        margins,
+        num_beams=li.num_beams,
+        grid_size=li.grid_size,
+        max_range=li.max_range,
+        min_range=li.min_range,
+        kind=kind,
+    )
+
+
+class NavigationWorld:
+    """A navigation episode on the LIP robot.
+
+    Args:
+        scenario: the episode's pedestrians, discs, start and goal.
+        config: the project configuration.
+        goal_radius: goal-reaching threshold [m]; default `config.episode.goal_radius`.
+        grid_kind: "lgm" (the paper's map), "ogm" (Cartesian baseline) or None (no map).
+    """
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        config: EmoNavConfig,
+        goal_radius: float | None = None,
+        grid_kind: str | None = "lgm",
+    ) -> None:
+        self.scenario = scenario
+        self.config = config
+        self.goal_radius = config.episode.goal_radius if goal_radius is None else goal_radius
+        self.grid_kind = grid_kind
+        self.goal_xy = np.asarray(scenario.robot_goal, dtype=float)
+        self.crowd = Crowd(scenario, config)
+        self._substeps = substeps_per_step(config)
+        self.reset()
+
+    def reset(self) -> PlannerInput:
+        """Back to the scenario's initial state; returns the first planner input."""
+        s = self.scenario
+        self.robot = LipState(
+            float(s.robot_start[0]), float(s.robot_start[1]), float(s.robot_heading), 0.0
+        )
+        self.crowd_state: CrowdState = self.crowd.initial_state()
+        self.last_command = np.zeros(2)
+        self.step_count = 0
+        self.goal_distance = float(goal_state(self.robot, self.goal_xy)[0])
+        self.tracker = EpisodeTracker(
+            self.config.episode.max_steps, self.config.robot.step_time, seed=s.seed
+        )
+        self.frames = None
+        if self.grid_kind is not None:
+            li = self.config.lidar
+            self.frames = FrameStack(li.num_frames, li.grid_size)
+            self.frames.reset(self._frame())
+        return self.planner_input()
+
+    def _frame(self) -> np.ndarray:
+        return observation_frame(
+            self.robot, self.crowd.snapshot(self.crowd_state), self.config, self.grid_kind or "lgm"
+        )
+
+    def planner_input(self) -> PlannerInput:
+        """The planner's view of the current walking step."""
+        return PlannerInput(
+            robot=self.robot,
+            goal_xy=self.goal_xy,
+            last_command=self.last_command.copy(),
+            crowd=self.crowd.snapshot(self.crowd_state),
+            lgm_stack=None if self.frames is None else self.frames.array,
+            step=self.step_count,
+        )
+
+    @property
+    def record(self) -> EpisodeRecord:
+        return self.tracker.record
+
+    def step(self, command: np.ndarray) -> tuple[StepEvaluation, str | None]:
+        """Walk one step with a valid command; returns its evaluation and the outcome
+        (success | collision | timeout) if the episode ended, else None."""
+        u, _ = check_command(command, self.config.robot)
+        start = self.robot
+        crowd = self.crowd_state
+        for j in range(self._substeps):
+            seen = robot_at_substep(start, u, j, self.config)
+            crowd = self.crowd.step(crowd, np.array([seen.x, seen.y]), lip_velocity(seen))
+        r = self.config.robot
+        self.robot = lip_step(start, float(u[0]), float(u[1]), r.omega, r.step_time)
+        self.crowd_state = crowd
+        self.last_command = u
+        self.step_count += 1
+        robot_xy = np.array([self.robot.x, self.robot.y])
+        ev = evaluate_step(
+            robot_xy,
+            self.goal_xy,
+            self.goal_distance,
+            self.crowd.snapshot(crowd),
+            r.radius,
+            self.goal_radius,
+            self.config.reward,
+        )
+        self.goal_distance = ev.goal_distance
+        outcome = self.tracker.add(ev, math.hypot(self.robot.x - start.x, self.robot.y - start.y))
+        if self.frames is not None:
+            self.frames.push(self._frame())
+        return ev, outcome

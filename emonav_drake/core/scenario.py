@@ -1,0 +1,167 @@
+"""Navigation scenarios: what the paper's environment randomises, as plain data.
+
+A `Scenario` fixes everything random about one episode: pedestrians (start, goal,
+emotion and, in the time-varying mode, an emotion schedule), static discs and the
+robot's start and goal. `sample_scenario(seed, config)` draws one as the paper does
+(§IV-B); the same seed gives the same scenario. Scenarios also load from YAML
+(`load_scenario`), with every field validated.
+
+World frame: x towards the robot's goal, y left, metres.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+from pathlib import Path
+
+import numpy as np
+
+from emonav_drake.params import EMOTION_NAMES, ConfigError, EmoNavConfig, load_typed_yaml
+
+
+@dc.dataclass
+class PedestrianSpec:
+    """One pedestrian: walks start → goal → start … at the preferred speed (ORCA)."""
+
+    start: list[float] = dc.field(default_factory=lambda: [0.0, 4.0])  # world [m]
+    goal: list[float] = dc.field(default_factory=lambda: [0.0, -4.0])  # world [m]
+    emotion: str = "neutral"  # happy | neutral | negative
+    # Time-varying mode: emotion_schedule[i] holds during [i·period, (i+1)·period).
+    # Empty: the emotion is constant.
+    emotion_schedule: list[str] = dc.field(default_factory=list)
+
+
+@dc.dataclass
+class StaticDiscSpec:
+    """A static obstacle: a disc in the world frame."""
+
+    center: list[float] = dc.field(default_factory=lambda: [0.0, 0.0])  # [m]
+    radius: float = 0.3  # [m]
+
+
+@dc.dataclass
+class Scenario:
+    """Everything random about one episode."""
+
+    pedestrians: list[PedestrianSpec] = dc.field(default_factory=list)
+    obstacles: list[StaticDiscSpec] = dc.field(default_factory=list)
+    robot_start: list[float] = dc.field(default_factory=lambda: [-4.0, 0.0])
+    robot_goal: list[float] = dc.field(default_factory=lambda: [4.0, 0.0])
+    robot_heading: float = 0.0  # initial heading [rad]
+    emotion_change_period: float = 2.0  # [s], used when a schedule is present
+    seed: int = -1  # the seed it was sampled with, −1 when written by hand
+
+    def validate(self) -> Scenario:
+        """Raise `ConfigError` naming the field if any value is invalid."""
+        for name in ("robot_start", "robot_goal"):
+            _check_point(getattr(self, name), name)
+        if not math.isfinite(self.robot_heading):
+            raise ConfigError(f"robot_heading = {self.robot_heading!r} must be finite")
+        if not (math.isfinite(self.emotion_change_period) and self.emotion_change_period > 0):
+            raise ConfigError(f"emotion_change_period = {self.emotion_change_period!r} must be > 0")
+        for i, p in enumerate(self.pedestrians):
+            _check_point(p.start, f"pedestrians[{i}].start")
+            _check_point(p.goal, f"pedestrians[{i}].goal")
+            for j, e in enumerate([p.emotion, *p.emotion_schedule]):
+                if e not in EMOTION_NAMES:
+                    where = "emotion" if j == 0 else f"emotion_schedule[{j - 1}]"
+                    raise ConfigError(
+                        f"pedestrians[{i}].{where} = {e!r} is invalid: "
+                        f"must be one of {list(EMOTION_NAMES)}"
+                    )
+        for i, o in enumerate(self.obstacles):
+            _check_point(o.center, f"obstacles[{i}].center")
+            if not (math.isfinite(o.radius) and 0.01 <= o.radius <= 5.0):
+                raise ConfigError(
+                    f"obstacles[{i}].radius = {o.radius!r} is out of range: allowed [0.01, 5.0]"
+                )
+        return self
+
+
+def _check_point(p: list[float], name: str) -> None:
+    if len(p) != 2 or not all(math.isfinite(v) and abs(v) <= 100.0 for v in p):
+        raise ConfigError(f"{name} = {p!r} is invalid: must be 2 finite numbers in [-100, 100]")
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """A scenario from a YAML file (fields as in `Scenario`), validated."""
+    return load_typed_yaml(Scenario, path=path).validate()
+
+
+def dump_scenario(scenario: Scenario) -> str:
+    """The scenario as YAML text (loadable by `load_scenario`)."""
+    from pydrake.common.yaml import yaml_dump_typed
+
+    return yaml_dump_typed(scenario)
+
+
+def sample_scenario(seed: int, config: EmoNavConfig | None = None) -> Scenario:
+    """Draw the paper's random scenario (§IV-B) with a seeded generator.
+
+    1–4 pedestrians start on a circle of radius U(3.5, 4.5) m around the origin and head
+    for the antipodal point; 1–3 static discs of radius U(0.2, 0.4) m lie in
+    x ∈ [−3, 3], y ∈ [−1.5, 1.5]; each pedestrian's emotion is drawn from
+    `crowd.emotion_probs`. Rejection sampling keeps every pair of objects (including the
+    robot at its start and goal) at least 0.2 m apart at the start, so no episode begins
+    in collision. In the time-varying mode, one pedestrian's emotion changes every
+    `emotion_change_period` seconds to a different one, for the whole episode.
+    """
+    cfg = config or EmoNavConfig()
+    c, robot = cfg.crowd, cfg.robot
+    rng = np.random.default_rng(seed)
+    gap = 0.2
+    r_ped = c.pedestrian_radius
+    # Discs already placed: (x, y, radius); the robot at start and goal.
+    placed: list[tuple[float, float, float]] = [
+        (*robot.start, robot.radius),
+        (*robot.goal, robot.radius),
+    ]
+
+    def free(x: float, y: float, r: float) -> bool:
+        return all(math.hypot(x - px, y - py) >= r + pr + gap for px, py, pr in placed)
+
+    obstacles: list[StaticDiscSpec] = []
+    for _ in range(int(rng.integers(c.min_static, c.max_static + 1))):
+        for _attempt in range(1000):
+            r = float(rng.uniform(c.static_radius_min, c.static_radius_max))
+            x = float(rng.uniform(*c.static_x_range))
+            y = float(rng.uniform(*c.static_y_range))
+            if free(x, y, r):
+                placed.append((x, y, r))
+                obstacles.append(StaticDiscSpec(center=[x, y], radius=r))
+                break
+
+    pedestrians: list[PedestrianSpec] = []
+    probs = np.asarray(c.emotion_probs, dtype=float)
+    for _ in range(int(rng.integers(c.min_pedestrians, c.max_pedestrians + 1))):
+        for _attempt in range(1000):
+            radius = float(rng.uniform(c.circle_radius_min, c.circle_radius_max))
+            angle = float(rng.uniform(0.0, 2.0 * math.pi))
+            sx, sy = radius * math.cos(angle), radius * math.sin(angle)
+            if free(sx, sy, r_ped) and free(-sx, -sy, r_ped):
+                placed += [(sx, sy, r_ped), (-sx, -sy, r_ped)]
+                emotion = EMOTION_NAMES[int(rng.choice(3, p=probs))]
+                pedestrians.append(PedestrianSpec(start=[sx, sy], goal=[-sx, -sy], emotion=emotion))
+                break
+
+    if c.time_varying_emotions and pedestrians:
+        who = int(rng.integers(len(pedestrians)))
+        horizon = cfg.episode.max_steps * robot.step_time
+        n = int(math.ceil(horizon / c.emotion_change_period)) + 1
+        current = EMOTION_NAMES.index(pedestrians[who].emotion)
+        schedule = [EMOTION_NAMES[current]]
+        for _ in range(n - 1):
+            current = (current + int(rng.integers(1, 3))) % 3  # always a different one
+            schedule.append(EMOTION_NAMES[current])
+        pedestrians[who].emotion_schedule = schedule
+
+    return Scenario(
+        pedestrians=pedestrians,
+        obstacles=obstacles,
+        robot_start=list(robot.start),
+        robot_goal=list(robot.goal),
+        robot_heading=math.atan2(robot.goal[1] - robot.start[1], robot.goal[0] - robot.start[0]),
+        emotion_change_period=c.emotion_change_period,
+        seed=int(seed),
+    )

@@ -1,0 +1,176 @@
+"""The navigation diagram: crowd + LiDAR/LGM + planner + LIP robot (+ Meshcat).
+
+    ┌──────────────┐ robot_state ┌──────────────┐ crowd ┌──────────────────────┐
+    │ LipRobotPlant├────────────►│ CrowdSystem  ├──────►│ LidarGridMapBuilder  │
+    │   (T = 0.4 s)│◄─┐          │ (dt = 0.1 s) │       │ (stack per step)     │
+    └──────┬───────┘  │ command  └──────────────┘       └─────────┬────────────┘
+           │          │          ┌──────────────────┐ lgm_stack   │
+           │          └──────────┤ NavigationPlanner│◄────────────┘
+           └────────────────────►│ (DWA / MPC / SAC)│ (+ robot_state, crowd, last_command)
+                                 └──────────────────┘
+    EpisodeMonitor (rewards, outcome, metrics) and the Meshcat visualiser listen.
+
+`build_navigation_diagram` wires it; `run_episode` simulates one episode walking step
+by walking step and returns its `EpisodeRecord` and a per-step trajectory log.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import logging
+from pathlib import Path
+
+import numpy as np
+from pydrake.geometry import Meshcat
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import Diagram, DiagramBuilder
+
+from emonav_drake.core.metrics import EpisodeRecord
+from emonav_drake.core.scenario import Scenario
+from emonav_drake.params import EmoNavConfig
+from emonav_drake.systems.crowd_system import CrowdSystem
+from emonav_drake.systems.episode_monitor import EpisodeMonitor, episode_monitor_callback
+from emonav_drake.systems.lidar_grid_map_builder import LidarGridMapBuilder
+from emonav_drake.systems.lip_robot_plant import LipRobotPlant
+from emonav_drake.systems.navigation_meshcat import NavigationMeshcatVisualizer
+from emonav_drake.systems.navigation_planner import NavigationPlanner, Planner
+
+log = logging.getLogger(__name__)
+
+
+@dc.dataclass
+class NavigationDiagram:
+    """The built diagram and handles to its systems."""
+
+    diagram: Diagram
+    robot: LipRobotPlant
+    crowd: CrowdSystem
+    grid_maps: LidarGridMapBuilder
+    planner: NavigationPlanner
+    monitor: EpisodeMonitor
+    visualizer: NavigationMeshcatVisualizer | None
+
+
+def build_navigation_diagram(
+    scenario: Scenario,
+    config: EmoNavConfig,
+    planner: Planner,
+    meshcat: Meshcat | None = None,
+    show_rays: bool = False,
+    grid_kind: str = "lgm",
+    goal_radius: float | None = None,
+) -> NavigationDiagram:
+    """Wire the navigation diagram for one scenario.
+
+    Args:
+        scenario: the episode to play.
+        config: the project configuration.
+        planner: DWA, MPC or a learned policy (anything with `plan` and `reset`).
+        meshcat: draw into this Meshcat when given.
+        show_rays: draw LiDAR rays in Meshcat.
+        grid_kind: "lgm" or "ogm" grid maps for the planner's `lgm_stack` input.
+        goal_radius: goal threshold [m]; default `config.episode.goal_radius`.
+    """
+    config.validate()
+    scenario.validate()
+    b = DiagramBuilder()
+    robot = b.AddNamedSystem("robot", LipRobotPlant(scenario, config))
+    crowd = b.AddNamedSystem("crowd", CrowdSystem(scenario, config))
+    maps = b.AddNamedSystem("grid_maps", LidarGridMapBuilder(config, grid_kind))
+    plan = b.AddNamedSystem("planner", NavigationPlanner(planner, scenario.robot_goal, config))
+    monitor = b.AddNamedSystem("monitor", EpisodeMonitor(scenario, config, goal_radius))
+    state = robot.GetOutputPort("robot_state")
+    for sys in (crowd, maps, plan, monitor):
+        b.Connect(state, sys.GetInputPort("robot_state"))
+    for sys in (maps, plan, monitor):
+        b.Connect(crowd.GetOutputPort("crowd"), sys.GetInputPort("crowd"))
+    b.Connect(maps.GetOutputPort("lgm_stack"), plan.GetInputPort("lgm_stack"))
+    b.Connect(robot.GetOutputPort("last_command"), plan.GetInputPort("last_command"))
+    b.Connect(plan.GetOutputPort("command"), robot.GetInputPort("command"))
+    vis = None
+    if meshcat is not None:
+        vis = b.AddNamedSystem(
+            "visualizer",
+            NavigationMeshcatVisualizer(meshcat, scenario, config, show_rays=show_rays),
+        )
+        b.Connect(state, vis.GetInputPort("robot_state"))
+        b.Connect(crowd.GetOutputPort("crowd"), vis.GetInputPort("crowd"))
+        b.Connect(maps.GetOutputPort("scan"), vis.GetInputPort("scan"))
+    diagram = b.Build()
+    diagram.set_name("emonav_navigation")
+    return NavigationDiagram(diagram, robot, crowd, maps, plan, monitor, vis)
+
+
+@dc.dataclass
+class StepLog:
+    """The world at every walking step t_k (k = 0 … steps)."""
+
+    robot: list[np.ndarray] = dc.field(default_factory=list)  # (x, y, θ, v)
+    pedestrians: list[np.ndarray] = dc.field(default_factory=list)  # (P, 2)
+    commands: list[np.ndarray] = dc.field(default_factory=list)  # command issued at t_k
+    rewards: list[float] = dc.field(default_factory=list)  # reward of the step ending at t_k
+
+
+def run_episode(
+    scenario: Scenario,
+    config: EmoNavConfig,
+    planner: Planner,
+    meshcat: Meshcat | None = None,
+    record_html: str | Path | None = None,
+    show_rays: bool = False,
+    grid_kind: str = "lgm",
+    goal_radius: float | None = None,
+    realtime_rate: float = 0.0,
+) -> tuple[EpisodeRecord, StepLog]:
+    """Simulate one episode of the navigation diagram.
+
+    Returns the episode's record (outcome, metrics) and the per-step log. With
+    `record_html` the run is recorded in Meshcat and written as a self-contained HTML
+    replay (a Meshcat is created if none is given).
+    """
+    if record_html is not None and meshcat is None:
+        meshcat = Meshcat()
+    planner.reset()
+    nav = build_navigation_diagram(
+        scenario, config, planner, meshcat, show_rays, grid_kind, goal_radius
+    )
+    sim = Simulator(nav.diagram)
+    sim.set_target_realtime_rate(realtime_rate)
+    ctx = sim.get_mutable_context()
+    sim.set_monitor(episode_monitor_callback(nav.diagram, nav.monitor))
+    if record_html is not None:
+        meshcat.StartRecording(set_visualizations_while_recording=False)
+    sim.Initialize()
+    T = config.robot.step_time
+    log_ = StepLog()
+    robot_port = nav.robot.GetOutputPort("robot_state")
+    crowd_port = nav.crowd.GetOutputPort("crowd")
+    cmd_port = nav.planner.GetOutputPort("command")
+    status_port = nav.monitor.GetOutputPort("status")
+
+    def snapshot(k: int) -> bool:
+        rc = nav.robot.GetMyContextFromRoot(ctx)
+        log_.robot.append(robot_port.Eval(rc).copy())
+        log_.pedestrians.append(
+            crowd_port.Eval(nav.crowd.GetMyContextFromRoot(ctx)).positions.copy()
+        )
+        status = status_port.Eval(nav.monitor.GetMyContextFromRoot(ctx))
+        if k > 0 and status.last_step is not None:
+            log_.rewards.append(status.last_step.reward)
+        if not status.done:
+            log_.commands.append(cmd_port.Eval(nav.planner.GetMyContextFromRoot(ctx)).copy())
+        return status.done
+
+    done = snapshot(0)
+    k = 0
+    while not done:
+        k += 1
+        sim.AdvanceTo(k * T)
+        done = snapshot(k)
+    record = status_port.Eval(nav.monitor.GetMyContextFromRoot(ctx)).record
+    if record_html is not None:
+        meshcat.StopRecording()
+        meshcat.PublishRecording()
+        Path(record_html).write_text(meshcat.StaticHtml())
+        log.info("wrote Meshcat replay %s", record_html)
+    return record, log_

@@ -1,0 +1,133 @@
+"""`EmoNavLIP-v0`: the paper's navigation task on the LIP robot as a Gymnasium environment.
+
+A thin front over `core.navigation.NavigationWorld` (the same code the Drake diagram
+runs), so a trajectory replayed here and in the diagram is the same.
+
+Observation (`Dict`):
+    "lgm":         uint8 (N, M, M) = (9, 100, 100): the LiDAR grid-map stack, oldest
+                   frame first (or the OGM stack with ``grid_kind="ogm"``).
+    "goal":        float32 (2,): goal distance [m] and bearing [rad, CCW from heading].
+    "last_action": float32 (2,): the previous command (u_v [m/s], u_Δθ [rad]).
+Action: float32 (2,) = (u_v, u_Δθ) with 0 ≤ u_v ≤ 0.4 m/s and |u_Δθ| ≤ 0.2 rad. A NaN
+or out-of-range action raises `CommandError` (a `ValueError`); nothing is clipped here.
+Reward: paper Eq. 6–9. `terminated` on collision or goal, `truncated` on the time limit
+(125 steps = 50 s), which is not terminal for bootstrapping.
+`reset(seed=s)` plays the scenario `sample_scenario(s)`, the same one
+`emonav sim --seed s` plays; ``options={"scenario": Scenario}`` plays a given one.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from emonav_drake.core.navigation import NavigationWorld, PlannerInput
+from emonav_drake.core.scenario import Scenario, sample_scenario
+from emonav_drake.params import EmoNavConfig, load_config
+
+
+class EmoNavLIPEnv(gym.Env):
+    """Emotion-aware social navigation with the LIP reduced-order robot.
+
+    Args:
+        config: an `EmoNavConfig`, a path to a YAML config, or None for the defaults.
+        grid_kind: "lgm" (the paper's map) or "ogm" (the Cartesian baseline).
+        goal_radius: goal threshold [m]; default `config.episode.goal_radius` (0.1 m).
+    """
+
+    metadata = {"render_modes": []}
+
+    def __init__(
+        self,
+        config: EmoNavConfig | str | None = None,
+        grid_kind: str = "lgm",
+        goal_radius: float | None = None,
+    ) -> None:
+        if grid_kind not in ("lgm", "ogm"):
+            raise ValueError(f"grid_kind = {grid_kind!r}: must be 'lgm' or 'ogm'")
+        if config is None or isinstance(config, str):
+            config = load_config(config)
+        self.config = config.validate()
+        self.grid_kind = grid_kind
+        self.goal_radius = goal_radius
+        r, li = config.robot, config.lidar
+        n, m = li.num_frames, li.grid_size
+        self.observation_space = spaces.Dict(
+            {
+                "lgm": spaces.Box(0, 255, shape=(n, m, m), dtype=np.uint8),
+                "goal": spaces.Box(
+                    np.array([0.0, -np.pi], dtype=np.float32),
+                    np.array([1000.0, np.pi], dtype=np.float32),
+                    dtype=np.float32,
+                ),
+                "last_action": spaces.Box(
+                    np.array([0.0, -r.max_heading_change], dtype=np.float32),
+                    np.array([r.max_speed, r.max_heading_change], dtype=np.float32),
+                    dtype=np.float32,
+                ),
+            }
+        )
+        self.action_space = spaces.Box(
+            np.array([0.0, -r.max_heading_change], dtype=np.float32),
+            np.array([r.max_speed, r.max_heading_change], dtype=np.float32),
+            dtype=np.float32,
+        )
+        self.world: NavigationWorld | None = None
+
+    def _observation(self) -> dict[str, np.ndarray]:
+        w = self.world
+        obs = w.planner_input()
+        return {
+            "lgm": obs.lgm_stack,
+            "goal": np.clip(
+                obs.goal_state(),
+                self.observation_space["goal"].low,
+                self.observation_space["goal"].high,
+            ).astype(np.float32),
+            "last_action": np.clip(
+                w.last_command, self.action_space.low, self.action_space.high
+            ).astype(np.float32),
+        }
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict, dict]:
+        super().reset(seed=seed)
+        scenario = (options or {}).get("scenario")
+        if scenario is None:
+            scenario_seed = seed if seed is not None else int(self.np_random.integers(2**31))
+            scenario = sample_scenario(scenario_seed, self.config)
+        elif not isinstance(scenario, Scenario):
+            raise TypeError(f"options['scenario'] must be a Scenario, got {type(scenario)}")
+        self.world = NavigationWorld(
+            scenario.validate(), self.config, goal_radius=self.goal_radius, grid_kind=self.grid_kind
+        )
+        return self._observation(), {"scenario_seed": scenario.seed}
+
+    def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
+        if self.world is None:
+            raise RuntimeError("call reset() before step()")
+        if self.world.tracker.done:
+            raise RuntimeError("the episode has ended: call reset()")
+        ev, outcome = self.world.step(np.asarray(action, dtype=float))
+        terminated = outcome in ("success", "collision")
+        truncated = outcome == "timeout"
+        info = {
+            "outcome": outcome,
+            "collision": ev.collision,
+            "reached_goal": ev.reached_goal,
+            "in_discomfort": ev.in_discomfort,
+            "idt": ev.idt,
+        }
+        if outcome is not None:
+            info["episode_record"] = self.world.record.to_json()
+        return self._observation(), ev.reward, terminated, truncated, info
+
+    def planner_input(self) -> PlannerInput:
+        """The privileged view (crowd state included) for model-based planners."""
+        if self.world is None:
+            raise RuntimeError("call reset() first")
+        return self.world.planner_input()

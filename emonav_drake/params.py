@@ -1,0 +1,320 @@
+"""One typed configuration for the whole project.
+
+Every number of the paper's Table I and of the environment (DESIGN.md §3.1–3.2) lives
+here, in plain dataclasses. Configurations load from YAML with Drake's typed loader
+(`pydrake.common.yaml.yaml_load_typed`, which already rejects unknown fields) and are
+then validated: a value outside its allowed range raises `ConfigError` naming the
+dotted field path and the range.
+
+Units are SI throughout (metres, seconds, radians).
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+from pathlib import Path
+from typing import Any
+
+# Emotion codes used everywhere (crowd, grid maps, metrics).
+HAPPY, NEUTRAL, NEGATIVE = 0, 1, 2
+EMOTION_NAMES = ("happy", "neutral", "negative")
+
+
+class ConfigError(ValueError):
+    """A configuration or scenario value is invalid; the message names the field."""
+
+
+@dc.dataclass
+class RobotParams:
+    """The reduced-order (LIP) robot and its command bounds (paper Table I, Eq. 1–2)."""
+
+    step_time: float = 0.4  # T, one walking step [s]
+    com_height: float = 1.02  # H [m]
+    gravity: float = 9.81  # g [m/s^2]
+    radius: float = 0.3  # r_robot [m]
+    max_speed: float = 0.4  # ū_v, sagittal speed bound [m/s]
+    max_heading_change: float = 0.2  # ū_Δθ, heading change per step bound [rad]
+    start: list[float] = dc.field(default_factory=lambda: [-4.0, 0.0])  # world [m]
+    goal: list[float] = dc.field(default_factory=lambda: [4.0, 0.0])  # world [m]
+
+    @property
+    def omega(self) -> float:
+        """LIP natural frequency ω = √(g/H) [1/s]."""
+        return math.sqrt(self.gravity / self.com_height)
+
+
+@dc.dataclass
+class LidarParams:
+    """The 2-D LiDAR and the grid maps built from it (DESIGN.md §3.2)."""
+
+    num_beams: int = 1800  # K, over 360°
+    max_range: float = 6.0  # L [m]
+    min_range: float = 0.27  # nearer hits are raised to this range [m]
+    grid_size: int = 100  # M (rings × sectors for the LGM, cells per side for the OGM)
+    num_frames: int = 9  # N, frames in the stack
+
+
+@dc.dataclass
+class CrowdParams:
+    """Pedestrians (ORCA), static discs and scenario sampling (paper §IV-B)."""
+
+    dt: float = 0.1  # pedestrian dynamics period [s] (10 Hz)
+    pedestrian_radius: float = 0.3  # r_ped [m]
+    preferred_speed: float = 1.0  # [m/s]
+    min_pedestrians: int = 1
+    max_pedestrians: int = 4
+    min_static: int = 1
+    max_static: int = 3
+    static_radius_min: float = 0.2  # [m]
+    static_radius_max: float = 0.4  # [m]
+    circle_radius_min: float = 3.5  # pedestrians start on this circle [m]
+    circle_radius_max: float = 4.5
+    static_x_range: list[float] = dc.field(default_factory=lambda: [-3.0, 3.0])
+    static_y_range: list[float] = dc.field(default_factory=lambda: [-1.5, 1.5])
+    goal_tolerance: float = 0.1  # a pedestrian turns round within this of its goal [m]
+    # ORCA (RVO2 semantics), the authors' settings.
+    neighbor_dist: float = 10.0
+    max_neighbors: int = 10
+    time_horizon: float = 5.0
+    time_horizon_obst: float = 5.0
+    safety_space: float = 0.2  # added to every ORCA radius [m]
+    # Emotions: probabilities of happy, neutral, negative at sampling time.
+    emotion_probs: list[float] = dc.field(default_factory=lambda: [1 / 3, 1 / 3, 1 / 3])
+    time_varying_emotions: bool = False  # one pedestrian's emotion changes periodically
+    emotion_change_period: float = 2.0  # [s]
+
+
+@dc.dataclass
+class RewardParams:
+    """Rewards, paper Eq. 6–9, and the discomfort distances of §III-C."""
+
+    collision: float = -0.6
+    discomfort: float = -0.1  # counted once per step
+    goal: float = 0.5
+    progress_gain: float = 0.3
+    static_discomfort: float = 0.2  # d_static [m]
+    happy_discomfort: float = 0.2  # [m]
+    neutral_discomfort: float = 0.35  # [m]
+    negative_discomfort: float = 0.5  # [m]
+
+    def emotion_distances(self) -> tuple[float, float, float]:
+        """Discomfort distance per emotion code (HAPPY, NEUTRAL, NEGATIVE) [m]."""
+        return (self.happy_discomfort, self.neutral_discomfort, self.negative_discomfort)
+
+
+@dc.dataclass
+class EpisodeParams:
+    """Episode rules (the authors' code): time limit, goal radii, discount."""
+
+    max_steps: int = 125  # 50 s of 0.4 s steps
+    goal_radius: float = 0.1  # d_goal, training [m]
+    eval_goal_radius: float = 0.2  # evaluation [m]
+    discount: float = 0.99  # γ
+
+
+@dc.dataclass
+class DwaParams:
+    """Dynamic Window Approach on the LIP model (the paper's DWA baseline)."""
+
+    speed_samples: int = 9
+    heading_samples: int = 11
+    horizon_steps: int = 5  # walking steps rolled out per candidate
+    goal_weight: float = 1.0
+    clearance_weight: float = 0.6
+    discomfort_weight: float = 1.0
+    speed_weight: float = 0.1
+    clearance_cap: float = 1.0  # clearance beyond this earns nothing more [m]
+
+
+@dc.dataclass
+class EmoNavConfig:
+    """Everything configurable, grouped as in the paper."""
+
+    robot: RobotParams = dc.field(default_factory=RobotParams)
+    lidar: LidarParams = dc.field(default_factory=LidarParams)
+    crowd: CrowdParams = dc.field(default_factory=CrowdParams)
+    reward: RewardParams = dc.field(default_factory=RewardParams)
+    episode: EpisodeParams = dc.field(default_factory=EpisodeParams)
+    dwa: DwaParams = dc.field(default_factory=DwaParams)
+
+    def validate(self) -> EmoNavConfig:
+        """Check every field against `_RANGES`; raise `ConfigError` naming the field."""
+        _validate_ranges(self, "", _RANGES)
+        c = self.crowd
+        _require(
+            c.min_pedestrians <= c.max_pedestrians,
+            "crowd.min_pedestrians",
+            c.min_pedestrians,
+            f"<= crowd.max_pedestrians ({c.max_pedestrians})",
+        )
+        _require(
+            c.min_static <= c.max_static,
+            "crowd.min_static",
+            c.min_static,
+            f"<= crowd.max_static ({c.max_static})",
+        )
+        _require(
+            c.static_radius_min <= c.static_radius_max,
+            "crowd.static_radius_min",
+            c.static_radius_min,
+            "<= crowd.static_radius_max",
+        )
+        _require(
+            c.circle_radius_min <= c.circle_radius_max,
+            "crowd.circle_radius_min",
+            c.circle_radius_min,
+            "<= crowd.circle_radius_max",
+        )
+        _require(
+            abs(sum(c.emotion_probs) - 1.0) < 1e-6 and min(c.emotion_probs) >= 0,
+            "crowd.emotion_probs",
+            c.emotion_probs,
+            "three non-negative values summing to 1",
+        )
+        li = self.lidar
+        _require(
+            li.num_beams % li.grid_size == 0,
+            "lidar.num_beams",
+            li.num_beams,
+            f"a multiple of lidar.grid_size ({li.grid_size})",
+        )
+        _require(
+            li.min_range < li.max_range,
+            "lidar.min_range",
+            li.min_range,
+            f"< lidar.max_range ({li.max_range})",
+        )
+        steps_per_walk = self.robot.step_time / self.crowd.dt
+        _require(
+            abs(steps_per_walk - round(steps_per_walk)) < 1e-9,
+            "crowd.dt",
+            c.dt,
+            f"a divisor of robot.step_time ({self.robot.step_time})",
+        )
+        return self
+
+
+# Allowed ranges: (low, high) inclusive; list fields: (length, low, high) for each element.
+_RANGES: dict[str, Any] = {
+    "robot.step_time": (0.05, 2.0),
+    "robot.com_height": (0.3, 2.0),
+    "robot.gravity": (1.0, 20.0),
+    "robot.radius": (0.05, 1.0),
+    "robot.max_speed": (0.01, 2.0),
+    "robot.max_heading_change": (0.01, math.pi / 2),
+    "robot.start": (2, -50.0, 50.0),
+    "robot.goal": (2, -50.0, 50.0),
+    "lidar.num_beams": (4, 36000),
+    "lidar.max_range": (0.5, 50.0),
+    "lidar.min_range": (0.0, 5.0),
+    "lidar.grid_size": (2, 1000),
+    "lidar.num_frames": (1, 64),
+    "crowd.dt": (0.01, 1.0),
+    "crowd.pedestrian_radius": (0.05, 1.0),
+    "crowd.preferred_speed": (0.0, 3.0),
+    "crowd.min_pedestrians": (0, 20),
+    "crowd.max_pedestrians": (0, 20),
+    "crowd.min_static": (0, 20),
+    "crowd.max_static": (0, 20),
+    "crowd.static_radius_min": (0.05, 2.0),
+    "crowd.static_radius_max": (0.05, 2.0),
+    "crowd.circle_radius_min": (0.5, 20.0),
+    "crowd.circle_radius_max": (0.5, 20.0),
+    "crowd.static_x_range": (2, -20.0, 20.0),
+    "crowd.static_y_range": (2, -20.0, 20.0),
+    "crowd.goal_tolerance": (0.01, 2.0),
+    "crowd.neighbor_dist": (0.1, 100.0),
+    "crowd.max_neighbors": (0, 100),
+    "crowd.time_horizon": (0.1, 30.0),
+    "crowd.time_horizon_obst": (0.1, 30.0),
+    "crowd.safety_space": (0.0, 1.0),
+    "crowd.emotion_probs": (3, 0.0, 1.0),
+    "crowd.emotion_change_period": (0.1, 100.0),
+    "reward.static_discomfort": (0.0, 3.0),
+    "reward.happy_discomfort": (0.0, 3.0),
+    "reward.neutral_discomfort": (0.0, 3.0),
+    "reward.negative_discomfort": (0.0, 3.0),
+    "episode.max_steps": (1, 100000),
+    "episode.goal_radius": (0.01, 2.0),
+    "episode.eval_goal_radius": (0.01, 2.0),
+    "episode.discount": (0.0, 1.0),
+    "dwa.speed_samples": (2, 101),
+    "dwa.heading_samples": (2, 101),
+    "dwa.horizon_steps": (1, 50),
+    "dwa.clearance_cap": (0.01, 10.0),
+}
+
+
+def _require(ok: bool, field: str, value: Any, allowed: str) -> None:
+    if not ok:
+        raise ConfigError(f"{field} = {value!r} is invalid: must be {allowed}")
+
+
+def _validate_ranges(obj: Any, prefix: str, ranges: dict[str, Any]) -> None:
+    for f in dc.fields(obj):
+        name = f"{prefix}{f.name}"
+        value = getattr(obj, f.name)
+        if dc.is_dataclass(value):
+            _validate_ranges(value, name + ".", ranges)
+            continue
+        if isinstance(value, float) and not math.isfinite(value):
+            raise ConfigError(f"{name} = {value!r} is invalid: must be a finite number")
+        spec = ranges.get(name)
+        if spec is None:
+            continue
+        if len(spec) == 3:
+            length, lo, hi = spec
+            if len(value) != length:
+                raise ConfigError(f"{name} = {value!r} is invalid: must have {length} elements")
+            for v in value:
+                if not (math.isfinite(v) and lo <= v <= hi):
+                    raise ConfigError(
+                        f"{name} = {value!r} is out of range: each element in [{lo}, {hi}]"
+                    )
+        else:
+            lo, hi = spec
+            if not lo <= value <= hi:
+                raise ConfigError(f"{name} = {value!r} is out of range: allowed [{lo}, {hi}]")
+
+
+def load_typed_yaml(
+    schema: type, path: str | Path | None = None, data: str | None = None, defaults: Any = None
+) -> Any:
+    """Load a dataclass from YAML with Drake's typed loader, re-raising as `ConfigError`.
+
+    Exactly one of `path` or `data` is given. Fields absent from the YAML keep `defaults`.
+    """
+    from pydrake.common.yaml import yaml_load_typed
+
+    if (path is None) == (data is None):
+        raise ValueError("give exactly one of path or data")
+    if path is not None:
+        path = Path(path)
+        if not path.is_file():
+            raise ConfigError(f"{path}: no such file")
+        data = path.read_text()
+    where = str(path) if path is not None else "<yaml>"
+    try:
+        return yaml_load_typed(
+            schema=schema, data=data, defaults=defaults if defaults is not None else schema()
+        )
+    except (RuntimeError, TypeError, ValueError) as e:
+        raise ConfigError(f"{where}: {e}") from None
+    except Exception as e:  # yaml syntax errors come from the yaml parser
+        raise ConfigError(f"{where}: not valid YAML for {schema.__name__}: {e}") from None
+
+
+def load_config(path: str | Path | None = None, data: str | None = None) -> EmoNavConfig:
+    """The default configuration, overridden by a YAML file or string, validated."""
+    if path is None and data is None:
+        return EmoNavConfig().validate()
+    cfg = load_typed_yaml(EmoNavConfig, path=path, data=data)
+    return cfg.validate()
+
+
+def dump_config(config: EmoNavConfig) -> str:
+    """The configuration as YAML text (loadable by `load_config`)."""
+    from pydrake.common.yaml import yaml_dump_typed
+
+    return yaml_dump_typed(config)

@@ -1,0 +1,138 @@
+"""`EpisodeMonitor`: rewards (Eq. 6–9), outcome and social metrics of a navigation episode.
+
+Input ports:
+    robot_state (4): (x, y, θ, v) of the robot CoM, world frame [m, rad, m/s].
+    crowd (abstract `CrowdSnapshot`).
+Output port:
+    status (abstract `EpisodeStatus`): the `EpisodeRecord` (outcome, steps, path length,
+        discomfort steps, IDT, …) including the walking step that ends now, and whether
+        the episode is over. At t_k it already counts step k (evaluated on the robot at
+        its foot switch and the crowd at t_k), before the periodic update stores it.
+Abstract state: the `EpisodeTracker` and the previous foot-switch position, updated at
+t_k = kT for k ≥ 1.
+
+`episode_monitor_callback(diagram, monitor)` gives a `Simulator` monitor that stops the
+simulation exactly at the walking step that ends the episode.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses as dc
+import math
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import Context, EventStatus, LeafSystem, State
+
+from emonav_drake.core.metrics import EpisodeRecord, EpisodeTracker
+from emonav_drake.core.reward import StepEvaluation, evaluate_step
+from emonav_drake.core.scenario import Scenario
+from emonav_drake.params import EmoNavConfig
+from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
+
+
+@dc.dataclass(frozen=True)
+class EpisodeStatus:
+    """The episode so far."""
+
+    record: EpisodeRecord
+    done: bool
+    last_step: StepEvaluation | None = None
+
+
+@dc.dataclass
+class _MonitorState:
+    tracker: EpisodeTracker
+    position: tuple[float, float]
+    goal_distance: float
+    last_step: StepEvaluation | None = None
+
+
+class EpisodeMonitor(LeafSystem):
+    """Evaluates every walking step of an episode.
+
+    Args:
+        scenario: for the goal and the seed.
+        config: reward parameters, time limit, robot radius, step time.
+        goal_radius: goal threshold [m]; default `config.episode.goal_radius`.
+    """
+
+    def __init__(
+        self, scenario: Scenario, config: EmoNavConfig, goal_radius: float | None = None
+    ) -> None:
+        super().__init__()
+        self._config = config
+        self._goal = np.asarray(scenario.robot_goal, dtype=float)
+        self._goal_radius = config.episode.goal_radius if goal_radius is None else goal_radius
+        self._T = config.robot.step_time
+        start = tuple(float(v) for v in scenario.robot_start)
+        init = _MonitorState(
+            tracker=EpisodeTracker(config.episode.max_steps, self._T, seed=scenario.seed),
+            position=start,
+            goal_distance=float(math.dist(start, self._goal)),
+        )
+        self._state = self.DeclareAbstractState(AbstractValue.Make(init))
+        self._robot = self.DeclareVectorInputPort("robot_state", 4)
+        self._crowd = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
+        self.DeclareAbstractOutputPort(
+            "status",
+            lambda: AbstractValue.Make(EpisodeStatus(EpisodeRecord(), False)),
+            self._calc_status,
+            {self.all_input_ports_ticket(), self.all_state_ticket(), self.time_ticket()},
+        )
+        self.DeclarePeriodicUnrestrictedUpdateEvent(self._T, self._T, self._update)
+
+    def _advanced(self, context: Context) -> _MonitorState:
+        """The monitor state including the step that ends at this time, if any."""
+        st: _MonitorState = context.get_abstract_state(self._state).get_value()
+        t = context.get_time()
+        k = round(t / self._T)
+        if st.tracker.done or k < 1 or abs(t - k * self._T) > 1e-9 or st.tracker.record.steps >= k:
+            return st
+        robot = lip_state_from_vector(self._robot.Eval(context))
+        xy = np.array([robot.x, robot.y])
+        c = self._config
+        ev = evaluate_step(
+            xy,
+            self._goal,
+            st.goal_distance,
+            self._crowd.Eval(context),
+            c.robot.radius,
+            self._goal_radius,
+            c.reward,
+        )
+        new = _MonitorState(
+            tracker=copy.deepcopy(st.tracker),
+            position=(robot.x, robot.y),
+            goal_distance=ev.goal_distance,
+            last_step=ev,
+        )
+        new.tracker.add(ev, math.dist(st.position, new.position))
+        return new
+
+    def _update(self, context: Context, state: State) -> None:
+        state.get_mutable_abstract_state(self._state).set_value(self._advanced(context))
+
+    def _calc_status(self, context: Context, output: AbstractValue) -> None:
+        st = self._advanced(context)
+        output.set_value(
+            EpisodeStatus(
+                record=copy.deepcopy(st.tracker.record),
+                done=st.tracker.done,
+                last_step=st.last_step,
+            )
+        )
+
+
+def episode_monitor_callback(diagram, monitor: EpisodeMonitor):
+    """A `Simulator.set_monitor` callback that stops when the episode is over."""
+    port = monitor.GetOutputPort("status")
+
+    def callback(root_context: Context) -> EventStatus:
+        status = port.Eval(monitor.GetMyContextFromRoot(root_context))
+        if status.done:
+            return EventStatus.ReachedTermination(diagram, f"episode {status.record.outcome}")
+        return EventStatus.Succeeded()
+
+    return callback

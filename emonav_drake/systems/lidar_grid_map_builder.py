@@ -1,0 +1,100 @@
+"""`LidarGridMapBuilder`: 1800-beam LiDAR scan → LiDAR grid map (LGM), 9-frame stack.
+
+Input ports:
+    robot_state (4): (x, y, θ, v) of the robot CoM, world frame; the LiDAR sits at the
+        CoM and beam angles are measured from θ (DESIGN.md §3.2 conventions).
+    crowd (abstract `CrowdSnapshot`): discs to scan (pedestrians and static obstacles)
+        with their discomfort margins.
+Output ports:
+    lgm_stack (abstract uint8 array (N, M, M)): the N − 1 frames stored at the previous
+        walking steps followed by the frame seen now (oldest first). Before the first
+        step the current frame is repeated N times.
+    scan (K): the LiDAR ranges now [m], clipped to [0.27, 6.0] (for visualisation).
+Abstract state: the stored frames, pushed at every walking step t_k = kT.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import BasicVector, Context, LeafSystem, State, ValueProducer
+
+from emonav_drake.core.crowd import obstacle_discs
+from emonav_drake.core.lidar import scan_discs
+from emonav_drake.core.navigation import observation_frame
+from emonav_drake.params import EmoNavConfig
+from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
+
+
+class LidarGridMapBuilder(LeafSystem):
+    """LiDAR + grid-map stack.
+
+    Args:
+        config: LiDAR (K, L, M, N) and robot step time.
+        kind: "lgm" (pie-shaped LiDAR grid map, the paper's) or "ogm" (Cartesian).
+    """
+
+    def __init__(self, config: EmoNavConfig, kind: str = "lgm") -> None:
+        super().__init__()
+        if kind not in ("lgm", "ogm"):
+            raise ValueError(f"kind = {kind!r}: must be 'lgm' or 'ogm'")
+        self._config, self._kind = config, kind
+        li = config.lidar
+        self._shape = (li.num_frames, li.grid_size, li.grid_size)
+        # Stored frames (N − 1 of them, oldest first); empty until the first step.
+        self._frames = self.DeclareAbstractState(
+            AbstractValue.Make(np.zeros((0, li.grid_size, li.grid_size), np.uint8))
+        )
+        self._robot_in = self.DeclareVectorInputPort("robot_state", 4)
+        self._crowd_in = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
+        self._frame_cache = self.DeclareCacheEntry(
+            "frame",
+            ValueProducer(
+                lambda: AbstractValue.Make(np.zeros(self._shape[1:], np.uint8)), self._calc_frame
+            ),
+            {self.all_input_ports_ticket()},
+        )
+        self.DeclareAbstractOutputPort(
+            "lgm_stack",
+            lambda: AbstractValue.Make(np.zeros(self._shape, np.uint8)),
+            self._calc_stack,
+            {self.all_input_ports_ticket(), self.all_state_ticket()},
+        )
+        self.DeclareVectorOutputPort(
+            "scan", li.num_beams, self._calc_scan, {self.all_input_ports_ticket()}
+        )
+        self.DeclarePeriodicUnrestrictedUpdateEvent(config.robot.step_time, 0.0, self._push)
+
+    def _calc_frame(self, context: Context, value: AbstractValue) -> None:
+        robot = lip_state_from_vector(self._robot_in.Eval(context))
+        crowd = self._crowd_in.Eval(context)
+        value.set_value(observation_frame(robot, crowd, self._config, self._kind))
+
+    def _stack(self, context: Context) -> np.ndarray:
+        frame = self._frame_cache.Eval(context)
+        stored = context.get_abstract_state(self._frames).get_value()
+        if len(stored) == 0:
+            return np.repeat(frame[None], self._shape[0], axis=0)
+        return np.concatenate([stored, frame[None]], axis=0)
+
+    def _calc_stack(self, context: Context, output: AbstractValue) -> None:
+        output.set_value(self._stack(context))
+
+    def _push(self, context: Context, state: State) -> None:
+        state.get_mutable_abstract_state(self._frames).set_value(self._stack(context)[1:].copy())
+
+    def _calc_scan(self, context: Context, output: BasicVector) -> None:
+        robot = lip_state_from_vector(self._robot_in.Eval(context))
+        centers, radii, _ = obstacle_discs(self._crowd_in.Eval(context))
+        li = self._config.lidar
+        output.SetFromVector(
+            scan_discs(
+                np.array([robot.x, robot.y]),
+                robot.heading,
+                centers,
+                radii,
+                num_beams=li.num_beams,
+                max_range=li.max_range,
+                min_range=li.min_range,
+            )
+        )
