@@ -9,8 +9,7 @@ dotted field path and the range.
 Units are SI throughout (metres, seconds, radians).
 """
 
-from __future__ import annotations
-
+# No `from __future__ import annotations`: Drake's typed YAML loader needs real types.
 import dataclasses as dc
 import math
 from pathlib import Path
@@ -138,7 +137,7 @@ class EmoNavConfig:
     episode: EpisodeParams = dc.field(default_factory=EpisodeParams)
     dwa: DwaParams = dc.field(default_factory=DwaParams)
 
-    def validate(self) -> EmoNavConfig:
+    def validate(self) -> "EmoNavConfig":
         """Check every field against `_RANGES`; raise `ConfigError` naming the field."""
         _validate_ranges(self, "", _RANGES)
         c = self.crowd

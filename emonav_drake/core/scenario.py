@@ -9,8 +9,7 @@ robot's start and goal. `sample_scenario(seed, config)` draws one as the paper d
 World frame: x towards the robot's goal, y left, metres.
 """
 
-from __future__ import annotations
-
+# No `from __future__ import annotations`: Drake's typed YAML loader needs real types.
 import dataclasses as dc
 import math
 from pathlib import Path
@@ -52,7 +51,7 @@ class Scenario:
     emotion_change_period: float = 2.0  # [s], used when a schedule is present
     seed: int = -1  # the seed it was sampled with, −1 when written by hand
 
-    def validate(self) -> Scenario:
+    def validate(self) -> "Scenario":
         """Raise `ConfigError` naming the field if any value is invalid."""
         for name in ("robot_start", "robot_goal"):
             _check_point(getattr(self, name), name)
