@@ -2,15 +2,15 @@ import numpy as np
 
 from emonav_drake.core.crowd import Crowd
 from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec, sample_scenario
-from emonav_drake.params import EmoNavConfig, NEGATIVE, NEUTRAL
+from emonav_drake.params import NEGATIVE, NEUTRAL, EmoNavConfig
 
 CFG = EmoNavConfig()
 FAR = np.array([100.0, 100.0])
 
 
-def _walk(crowd, state, steps, robot_xy=FAR, robot_v=np.zeros(2)):
+def _walk(crowd, state, steps):
     for _ in range(steps):
-        state = crowd.step(state, robot_xy, robot_v)
+        state = crowd.step(state, FAR, np.zeros(2))
     return state
 
 
