@@ -1,0 +1,32 @@
+"""`ReplayPlanner`: plays a fixed sequence of commands, one per walking step.
+
+Used to replay a recorded episode (e.g. the actions taken in the Gymnasium
+environment) through the Drake diagram, and as a scripted command source.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from emonav_drake.core.navigation import PlannerInput
+
+
+class ReplayPlanner:
+    """Command k of `commands` at walking step k; (0, 0) (stand still) after the end.
+
+    Args:
+        commands: (K, 2) array of (u_v [m/s], u_Δθ [rad]).
+    """
+
+    name = "replay"
+
+    def __init__(self, commands: np.ndarray) -> None:
+        self.commands = np.asarray(commands, dtype=float).reshape(-1, 2)
+
+    def reset(self) -> None:
+        """No state: the step index comes with the planner input."""
+
+    def plan(self, obs: PlannerInput) -> np.ndarray:
+        if obs.step < len(self.commands):
+            return self.commands[obs.step].copy()
+        return np.zeros(2)

@@ -1,0 +1,120 @@
+import logging
+
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+
+from emonav_drake.core.dwa import DwaPlanner
+from emonav_drake.core.navigation import CommandError
+from emonav_drake.core.replay_planner import ReplayPlanner
+from emonav_drake.core.scenario import sample_scenario
+from emonav_drake.diagrams.navigation import (
+    build_navigation_diagram,
+    run_episode,
+)
+from emonav_drake.learning.env import EmoNavLIPEnv
+from emonav_drake.params import EmoNavConfig
+from emonav_drake.systems.episode_monitor import episode_monitor_callback
+
+
+def _env_rollout(seed, config, actions=None, planner=None):
+    """Robot states, pedestrian positions, rewards and LGM stacks of an env episode."""
+    env = EmoNavLIPEnv(config, goal_radius=0.2)
+    obs, _ = env.reset(seed=seed)
+    w = env.world
+    robots, peds, rewards, stacks, taken = (
+        [np.array(w.robot)],
+        [w.crowd_state.positions],
+        [],
+        [],
+        [],
+    )
+    stacks.append(obs["lgm"])
+    k = 0
+    while True:
+        u = planner.plan(env.planner_input()) if planner else actions[k]
+        taken.append(np.asarray(u, float))
+        obs, r, term, trunc, info = env.step(u)
+        robots.append(np.array(w.robot))
+        peds.append(w.crowd_state.positions)
+        rewards.append(r)
+        stacks.append(obs["lgm"])
+        k += 1
+        if term or trunc:
+            return robots, peds, rewards, stacks, np.array(taken), info
+
+
+@pytest.mark.parametrize("time_varying", [False, True])
+def test_diagram_and_gymnasium_env_give_the_same_trajectory(time_varying):
+    cfg = EmoNavConfig()
+    cfg.crowd.time_varying_emotions = time_varying
+    seed = 12
+    rng = np.random.default_rng(0)
+    actions = np.column_stack([rng.uniform(0.2, 0.4, 40), rng.uniform(-0.2, 0.2, 40)])
+    robots, peds, rewards, _, _, info = _env_rollout(seed, cfg, actions=actions)
+    record, log = run_episode(
+        sample_scenario(seed, cfg), cfg, ReplayPlanner(actions), goal_radius=0.2
+    )
+    assert record.outcome == info["outcome"] and record.steps == len(rewards)
+    assert np.array_equal(np.array(log.robot), np.array(robots))
+    for a, b in zip(log.pedestrians, peds, strict=True):
+        assert np.array_equal(a, b)
+    assert log.rewards == rewards
+
+
+def test_dwa_episode_matches_and_the_lgm_stack_is_the_envs():
+    cfg = EmoNavConfig()
+    seed = 3
+    robots, peds, rewards, stacks, taken, info = _env_rollout(seed, cfg, planner=DwaPlanner(cfg))
+    nav = build_navigation_diagram(
+        sample_scenario(seed, cfg), cfg, DwaPlanner(cfg), goal_radius=0.2
+    )
+    sim = Simulator(nav.diagram)
+    sim.set_monitor(episode_monitor_callback(nav.diagram, nav.monitor))
+    sim.Initialize()
+    ctx = sim.get_mutable_context()
+    lgm_port = nav.grid_maps.GetOutputPort("lgm_stack")
+    for k in range(5):  # the planner sees the env's observation at every step
+        if k > 0:  # (k = 0: right after Initialize, before the events at t = 0)
+            sim.AdvanceTo(k * cfg.robot.step_time)
+        assert np.array_equal(lgm_port.Eval(nav.grid_maps.GetMyContextFromRoot(ctx)), stacks[k])
+    # the simulator's monitor stops exactly at the step that ends the episode
+    sim.AdvanceTo(100.0)
+    status = nav.monitor.GetOutputPort("status").Eval(nav.monitor.GetMyContextFromRoot(ctx))
+    assert status.done and status.record.outcome == info["outcome"] == "success"
+    assert ctx.get_time() == pytest.approx(status.record.steps * cfg.robot.step_time)
+    assert status.record.total_reward == pytest.approx(sum(rewards))
+
+
+def test_diagram_clips_out_of_range_commands_with_a_warning_and_rejects_nan(caplog):
+    cfg = EmoNavConfig()
+    cfg.episode.max_steps = 4
+    sc = sample_scenario(0, cfg)
+    with caplog.at_level(logging.WARNING):
+        record, log = run_episode(sc, cfg, ReplayPlanner([[0.9, 0.5]] * 4))
+    assert "clipped" in caplog.text
+    assert np.allclose(log.robot[2][2], 0.4)  # heading changed by the bound 0.2 per step
+    assert log.robot[2][3] == pytest.approx(0.4)  # speed clipped to 0.4
+    with pytest.raises(CommandError, match="not finite"):
+        run_episode(sc, cfg, ReplayPlanner([[np.nan, 0.0]]))
+
+
+def test_meshcat_recording_writes_a_self_contained_html(tmp_path):
+    from pydrake.geometry import Meshcat
+
+    cfg = EmoNavConfig()
+    cfg.episode.max_steps = 5
+    out = tmp_path / "replay.html"
+    meshcat = Meshcat()
+    record, _ = run_episode(
+        sample_scenario(4, cfg),
+        cfg,
+        DwaPlanner(cfg),
+        meshcat=meshcat,
+        record_html=out,
+        show_rays=True,
+    )
+    html = out.read_text()
+    assert record.steps == 5
+    assert len(html) > 10_000 and "<html" in html.lower()
+    assert meshcat.HasPath("/emonav/pedestrians/0") and meshcat.HasPath("/emonav/rays")
