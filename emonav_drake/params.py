@@ -120,8 +120,8 @@ class DwaParams:
     heading_samples: int = 11
     horizon_steps: int = 5  # walking steps rolled out per candidate
     goal_weight: float = 1.0
-    clearance_weight: float = 0.6
-    discomfort_weight: float = 1.0
+    clearance_weight: float = 1.0
+    discomfort_weight: float = 3.0
     speed_weight: float = 0.1
     clearance_cap: float = 1.0  # clearance beyond this earns nothing more [m]
 

@@ -1,0 +1,64 @@
+import json
+
+from emonav_drake.cli import main
+
+
+def test_sim_writes_the_json_outcome(tmp_path, capsys):
+    out = tmp_path / "r.json"
+    assert (
+        main(["sim", "--planner", "dwa", "--plant", "lip", "--seed", "1", "--json", str(out)]) == 0
+    )
+    r = json.loads(out.read_text())
+    assert set(r) >= {
+        "outcome",
+        "steps",
+        "nav_time",
+        "path_length",
+        "min_ped_distance",
+        "discomfort_steps",
+        "idt",
+        "seed",
+    }
+    assert r["outcome"] == "success" and r["seed"] == 1
+    assert r["nav_time"] == r["steps"] * 0.4 and len(r["idt"]) == 4
+    assert r["path_length"] >= 7.8  # (−4, 0) → within 0.2 m of (4, 0)
+    assert "success" in capsys.readouterr().out
+
+
+def test_sim_with_a_yaml_scenario_and_bad_scenarios(tmp_path, capsys):
+    sc = tmp_path / "s.yaml"
+    sc.write_text(
+        "pedestrians:\n"
+        "  - {start: [0.0, 4.0], goal: [0.0, -4.0], emotion: negative}\n"
+        "obstacles:\n"
+        "  - {center: [1.5, 0.0], radius: 0.35}\n"
+    )
+    out = tmp_path / "r.json"
+    assert main(["sim", "--seed", "9", "--scenario", str(sc), "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["outcome"] == "success"
+    sc.write_text("pedestrians:\n  - {start: [0.0, 4.0], goal: [0.0, -4.0], emotion: sad}\n")
+    assert main(["sim", "--scenario", str(sc)]) == 2
+    assert "pedestrians[0].emotion" in capsys.readouterr().err
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("robot: {max_speed: 7.0}\n")
+    assert main(["sim", "--config", str(cfg)]) == 2
+    assert "robot.max_speed" in capsys.readouterr().err
+
+
+def test_lgm_png(tmp_path):
+    png = tmp_path / "lgm.png"
+    assert main(["lgm", "--seed", "2", "--png", str(png)]) == 0
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
+
+
+def test_eval_summary(tmp_path):
+    out = tmp_path / "e.json"
+    assert (
+        main(
+            ["eval", "--planner", "dwa", "--episodes", "3", "--first-seed", "5", "--json", str(out)]
+        )
+        == 0
+    )
+    r = json.loads(out.read_text())
+    assert r["summary"]["episodes"] == 3 and len(r["episodes"]) == 3
+    assert 0.0 <= r["summary"]["SR"] <= 1.0
