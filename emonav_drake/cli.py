@@ -199,6 +199,10 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--png", type=Path, required=True)
     _add_common(g)
     g.set_defaults(func=cmd_lgm)
+
+    from emonav_drake.learning.cli_train import add_train_parser
+
+    add_train_parser(sub)
     return p
 
 

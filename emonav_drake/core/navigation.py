@@ -23,6 +23,7 @@ import numpy as np
 
 from emonav_drake.core.crowd import Crowd, CrowdSnapshot, CrowdState, obstacle_discs
 from emonav_drake.core.grid_maps import FrameStack, lgm_frame
+from emonav_drake.core.lidar import scan_discs
 from emonav_drake.core.lip import LipState, lip_in_step, lip_step, lip_velocity, wrap_angle
 from emonav_drake.core.metrics import EpisodeRecord, EpisodeTracker
 from emonav_drake.core.reward import StepEvaluation, evaluate_step
@@ -128,6 +129,26 @@ def observation_frame(
     )
 
 
+class ScanStack:
+    """The last N LiDAR scans (N, K) float32, oldest first (the LiDAR-SAC observation)."""
+
+    def __init__(self, num_frames: int, num_beams: int) -> None:
+        self._scans = np.zeros((num_frames, num_beams), np.float32)
+
+    def reset(self, scan: np.ndarray) -> np.ndarray:
+        self._scans[:] = scan
+        return self.array
+
+    def push(self, scan: np.ndarray) -> np.ndarray:
+        self._scans[:-1] = self._scans[1:]
+        self._scans[-1] = scan
+        return self.array
+
+    @property
+    def array(self) -> np.ndarray:
+        return self._scans.copy()
+
+
 class NavigationWorld:
     """A navigation episode on the LIP robot.
 
@@ -135,7 +156,8 @@ class NavigationWorld:
         scenario: the episode's pedestrians, discs, start and goal.
         config: the project configuration.
         goal_radius: goal-reaching threshold [m]; default `config.episode.goal_radius`.
-        grid_kind: "lgm" (the paper's map), "ogm" (Cartesian baseline) or None (no map).
+        grid_kind: "lgm" (the paper's map), "ogm" (Cartesian baseline), "scan" (stacked
+            raw LiDAR scans, the LiDAR-SAC baseline) or None (no observation map).
     """
 
     def __init__(
@@ -168,16 +190,30 @@ class NavigationWorld:
             self.config.episode.max_steps, self.config.robot.step_time, seed=s.seed
         )
         self.frames = None
-        if self.grid_kind is not None:
-            li = self.config.lidar
+        li = self.config.lidar
+        if self.grid_kind == "scan":
+            self.frames = ScanStack(li.num_frames, li.num_beams)
+            self.frames.reset(self._frame())
+        elif self.grid_kind is not None:
             self.frames = FrameStack(li.num_frames, li.grid_size)
             self.frames.reset(self._frame())
         return self.planner_input()
 
     def _frame(self) -> np.ndarray:
-        return observation_frame(
-            self.robot, self.crowd.snapshot(self.crowd_state), self.config, self.grid_kind or "lgm"
-        )
+        snapshot = self.crowd.snapshot(self.crowd_state)
+        if self.grid_kind == "scan":
+            centers, radii, _ = obstacle_discs(snapshot)
+            li = self.config.lidar
+            return scan_discs(
+                np.array([self.robot.x, self.robot.y]),
+                self.robot.heading,
+                centers,
+                radii,
+                li.num_beams,
+                li.max_range,
+                li.min_range,
+            )
+        return observation_frame(self.robot, snapshot, self.config, self.grid_kind or "lgm")
 
     def planner_input(self) -> PlannerInput:
         """The planner's view of the current walking step."""

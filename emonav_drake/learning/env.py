@@ -34,7 +34,8 @@ class EmoNavLIPEnv(gym.Env):
 
     Args:
         config: an `EmoNavConfig`, a path to a YAML config, or None for the defaults.
-        grid_kind: "lgm" (the paper's map) or "ogm" (the Cartesian baseline).
+        grid_kind: "lgm" (the paper's map), "ogm" (the Cartesian baseline) or "scan"
+            (stacked raw scans under the key "scan", float32 (N, K) [m]: LiDAR-SAC).
         goal_radius: goal threshold [m]; default `config.episode.goal_radius` (0.1 m).
     """
 
@@ -46,8 +47,8 @@ class EmoNavLIPEnv(gym.Env):
         grid_kind: str = "lgm",
         goal_radius: float | None = None,
     ) -> None:
-        if grid_kind not in ("lgm", "ogm"):
-            raise ValueError(f"grid_kind = {grid_kind!r}: must be 'lgm' or 'ogm'")
+        if grid_kind not in ("lgm", "ogm", "scan"):
+            raise ValueError(f"grid_kind = {grid_kind!r}: must be 'lgm', 'ogm' or 'scan'")
         if config is None or isinstance(config, str):
             config = load_config(config)
         self.config = config.validate()
@@ -55,9 +56,15 @@ class EmoNavLIPEnv(gym.Env):
         self.goal_radius = goal_radius
         r, li = config.robot, config.lidar
         n, m = li.num_frames, li.grid_size
+        # The map observation's key: "lgm" for grid maps (LGM or OGM), "scan" for scans.
+        self.map_key = "scan" if grid_kind == "scan" else "lgm"
+        if grid_kind == "scan":
+            map_space = spaces.Box(0.0, li.max_range, shape=(n, li.num_beams), dtype=np.float32)
+        else:
+            map_space = spaces.Box(0, 255, shape=(n, m, m), dtype=np.uint8)
         self.observation_space = spaces.Dict(
             {
-                "lgm": spaces.Box(0, 255, shape=(n, m, m), dtype=np.uint8),
+                self.map_key: map_space,
                 "goal": spaces.Box(
                     np.array([0.0, -np.pi], dtype=np.float32),
                     np.array([1000.0, np.pi], dtype=np.float32),
@@ -81,7 +88,7 @@ class EmoNavLIPEnv(gym.Env):
         w = self.world
         obs = w.planner_input()
         return {
-            "lgm": obs.lgm_stack,
+            self.map_key: obs.lgm_stack,
             "goal": np.clip(
                 obs.goal_state(),
                 self.observation_space["goal"].low,

@@ -1,0 +1,167 @@
+"""Soft actor-critic with the shared LGM encoder (paper §III-D), readable top to bottom.
+
+* Critic: twin Q networks on [encoder features, vector state, action]; the encoder is
+  trained by the critic loss only.
+* Actor: its conv layers are the critic's (tied weights); the actor loss detaches the
+  conv features, so no actor gradient reaches the shared encoder (paper: "copied to the
+  actor network without gradient computations").
+* Targets: a target critic (its own encoder copy) updated by Polyak averaging with
+  τ_critic = 0.01 for the Q networks and τ_encoder = 0.05 for the encoder, every
+  `target_update_freq` updates; the actor is updated every `actor_update_freq` updates.
+* Entropy: automatic temperature tuning towards −|A| with its own optimiser.
+
+Actions inside the agent are in [−1, 1]²; `to_command` maps them to (u_v, u_Δθ).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+import torch
+from torch.nn import functional as F
+
+from emonav_drake.learning.config import SacConfig
+from emonav_drake.learning.networks import Actor, Critic, LgmEncoder, ScanEncoder
+
+
+def make_encoder(cfg: SacConfig, beams: int = 1800, max_range: float = 6.0) -> torch.nn.Module:
+    """The encoder for the configured observation variant."""
+    if cfg.grid_kind == "scan":
+        return ScanEncoder(cfg.num_frames, beams, max_range, cfg.features, cfg.filters)
+    return LgmEncoder(cfg.num_frames, cfg.grid_size, cfg.features, cfg.filters, cfg.pool)
+
+
+class SacAgent:
+    """The SAC learner.
+
+    Args:
+        cfg: hyper-parameters (one `SacConfig`).
+        bounds: (ū_v, ū_Δθ) to map actions in [−1, 1]² to commands.
+    """
+
+    def __init__(self, cfg: SacConfig, bounds: tuple[float, float]) -> None:
+        self.cfg = cfg
+        self.bounds = bounds
+        self.device = torch.device(cfg.device)
+        self.critic = Critic(make_encoder(cfg), cfg.hidden).to(self.device)
+        self.critic_target = copy.deepcopy(self.critic)
+        self.actor = Actor(make_encoder(cfg), cfg.hidden).to(self.device)
+        self.actor.encoder.copy_conv_weights_from(self.critic.encoder)  # tied convs
+        self.log_alpha = torch.tensor(
+            math.log(cfg.init_alpha), device=self.device, requires_grad=True
+        )
+        self.target_entropy = -2.0
+        # The actor optimiser skips the tied conv weights: only the critic trains them.
+        conv_ids = {id(p) for p in self.critic.encoder.convs.parameters()}
+        actor_params = [p for p in self.actor.parameters() if id(p) not in conv_ids]
+        self.actor_optim = torch.optim.Adam(actor_params, lr=cfg.lr, betas=(cfg.beta1, 0.999))
+        self.critic_optim = torch.optim.Adam(
+            self.critic.parameters(), lr=cfg.lr, betas=(cfg.beta1, 0.999)
+        )
+        self.alpha_optim = torch.optim.Adam(
+            [self.log_alpha], lr=cfg.alpha_lr, betas=(cfg.alpha_beta1, 0.999)
+        )
+        self.updates = 0
+
+    @property
+    def alpha(self) -> torch.Tensor:
+        return self.log_alpha.exp()
+
+    def to_command(self, action: np.ndarray) -> np.ndarray:
+        """[−1, 1]² → (u_v ∈ [0, ū_v], u_Δθ ∈ [−ū_Δθ, ū_Δθ])."""
+        a = np.clip(action, -1.0, 1.0)
+        return np.array([(a[0] + 1.0) / 2.0 * self.bounds[0], a[1] * self.bounds[1]])
+
+    def to_action(self, command: np.ndarray) -> np.ndarray:
+        """Inverse of `to_command`."""
+        return np.array(
+            [2.0 * command[0] / self.bounds[0] - 1.0, command[1] / self.bounds[1]], np.float32
+        )
+
+    @torch.no_grad()
+    def act(self, obs: np.ndarray, state: np.ndarray, deterministic: bool) -> np.ndarray:
+        """An action in [−1, 1]² for one observation (sampled, or the mean)."""
+        o = torch.as_tensor(obs[None], device=self.device)
+        s = torch.as_tensor(state[None], device=self.device)
+        action, _, mean = self.actor.sample(o, s)
+        return (mean if deterministic else action)[0].cpu().numpy()
+
+    def update(self, batch: dict[str, torch.Tensor]) -> dict[str, float]:
+        """One SAC update on a batch (obs, state, action, reward, next_obs, next_state,
+        not_done); returns the losses."""
+        cfg = self.cfg
+        obs, state, action = batch["obs"], batch["state"], batch["action"]
+        reward, not_done = batch["reward"], batch["not_done"]
+        next_obs, next_state = batch["next_obs"], batch["next_state"]
+
+        # Critic: soft Bellman target with the target critic and the current policy.
+        with torch.no_grad():
+            next_action, next_logp, _ = self.actor.sample(next_obs, next_state)
+            tq1, tq2 = self.critic_target(next_obs, next_state, next_action)
+            target_v = torch.min(tq1, tq2) - self.alpha.detach() * next_logp
+            target_q = reward + not_done * cfg.discount * target_v
+        q1, q2 = self.critic(obs, state, action)
+        critic_loss = F.mse_loss(q1, target_q) + F.mse_loss(q2, target_q)
+        self.critic_optim.zero_grad(set_to_none=True)
+        critic_loss.backward()
+        self.critic_optim.step()
+        info = {"critic_loss": critic_loss.item()}
+
+        # Actor and temperature, every `actor_update_freq` updates; encoder detached.
+        if self.updates % cfg.actor_update_freq == 0:
+            pi, logp, _ = self.actor.sample(obs, state, detach_encoder=True)
+            aq1, aq2 = self.critic(obs, state, pi, detach_encoder=True)
+            actor_loss = (self.alpha.detach() * logp - torch.min(aq1, aq2)).mean()
+            self.actor_optim.zero_grad(set_to_none=True)
+            actor_loss.backward()
+            self.actor_optim.step()
+            alpha_loss = (self.alpha * (-logp - self.target_entropy).detach()).mean()
+            self.alpha_optim.zero_grad(set_to_none=True)
+            alpha_loss.backward()
+            self.alpha_optim.step()
+            info |= {
+                "actor_loss": actor_loss.item(),
+                "alpha": self.alpha.item(),
+                "entropy": -logp.mean().item(),
+            }
+
+        # Targets: separate Polyak rates for the Q heads and the encoder.
+        if self.updates % cfg.target_update_freq == 0:
+            soft_update(self.critic.q1, self.critic_target.q1, cfg.critic_tau)
+            soft_update(self.critic.q2, self.critic_target.q2, cfg.critic_tau)
+            soft_update(self.critic.encoder, self.critic_target.encoder, cfg.encoder_tau)
+        self.updates += 1
+        return info
+
+    def state_dict(self) -> dict:
+        return {
+            "critic": self.critic.state_dict(),
+            "critic_target": self.critic_target.state_dict(),
+            "actor": self.actor.state_dict(),
+            "log_alpha": self.log_alpha.detach().clone(),
+            "actor_optim": self.actor_optim.state_dict(),
+            "critic_optim": self.critic_optim.state_dict(),
+            "alpha_optim": self.alpha_optim.state_dict(),
+            "updates": self.updates,
+        }
+
+    def load_state_dict(self, st: dict) -> None:
+        self.critic.load_state_dict(st["critic"])
+        self.critic_target.load_state_dict(st["critic_target"])
+        self.actor.load_state_dict(st["actor"])
+        self.actor.encoder.copy_conv_weights_from(self.critic.encoder)
+        with torch.no_grad():
+            self.log_alpha.copy_(st["log_alpha"])
+        self.actor_optim.load_state_dict(st["actor_optim"])
+        self.critic_optim.load_state_dict(st["critic_optim"])
+        self.alpha_optim.load_state_dict(st["alpha_optim"])
+        self.updates = st["updates"]
+
+
+@torch.no_grad()
+def soft_update(net: torch.nn.Module, target: torch.nn.Module, tau: float) -> None:
+    """target ← τ·net + (1 − τ)·target."""
+    for p, tp in zip(net.parameters(), target.parameters(), strict=True):
+        tp.lerp_(p, tau)

@@ -1,0 +1,166 @@
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from emonav_drake.core.dwa import DwaPlanner
+from emonav_drake.core.navigation import NavigationWorld
+from emonav_drake.core.scenario import sample_scenario
+from emonav_drake.learning.config import DaggerConfig, SacConfig
+from emonav_drake.learning.dagger import Demonstrations, FrameStore, Student, run_episode_collect
+from emonav_drake.learning.networks import Actor, Critic, LgmEncoder
+from emonav_drake.learning.policy import PolicyError, PolicyPlanner, load_policy, save_policy
+from emonav_drake.learning.sac import SacAgent
+from emonav_drake.learning.sac_trainer import train_sac
+from emonav_drake.params import EmoNavConfig
+
+
+def n_params(m):
+    return sum(p.numel() for p in m.parameters())
+
+
+def test_encoder_shapes_and_parameter_counts_match_the_paper():
+    enc = LgmEncoder(frames=9, size=100)
+    assert enc.sizes == [100, 49, 47, 45, 43]
+    assert enc.flat == 32 * 43 * 43 == 59_168
+    out = enc(torch.zeros(2, 9, 100, 100, dtype=torch.uint8))
+    assert out.shape == (2, 50) and out.abs().max() <= 1.0  # tanh
+    convs = (9 * 9 * 32 + 32) + 3 * (32 * 9 * 32 + 32)
+    assert n_params(enc) == convs + (59_168 * 50 + 50) + 2 * 50  # conv + FC + LayerNorm
+    hidden = 1024
+    q = (50 + 4 + 2) * hidden + hidden + hidden * hidden + hidden + hidden + 1
+    assert n_params(Critic(enc)) == n_params(enc) + 2 * q
+    a = (50 + 4) * hidden + hidden + hidden * hidden + hidden + hidden * 4 + 4
+    assert n_params(Actor(LgmEncoder())) == n_params(enc) + a
+    assert LgmEncoder(pool=2).sizes == [50, 24, 22, 20, 18]
+
+
+def _batch(b=4, size=100, frames=9):
+    g = torch.Generator().manual_seed(0)
+    return {
+        "obs": torch.randint(0, 256, (b, frames, size, size), dtype=torch.uint8, generator=g),
+        "state": torch.randn(b, 4, generator=g),
+        "action": torch.rand(b, 2, generator=g) * 2 - 1,
+        "reward": torch.randn(b, 1, generator=g),
+        "next_obs": torch.randint(0, 256, (b, frames, size, size), dtype=torch.uint8, generator=g),
+        "next_state": torch.randn(b, 4, generator=g),
+        "not_done": torch.ones(b, 1),
+    }
+
+
+def test_encoder_is_trained_by_the_critic_only():
+    cfg = SacConfig(hidden=32, pool=4, grid_size=100)
+    agent = SacAgent(cfg, (0.4, 0.2))
+    convs = agent.critic.encoder.convs
+    assert agent.actor.encoder.convs[0].weight is convs[0].weight  # tied
+    b = _batch()
+    # actor loss: no gradient reaches the shared convs
+    pi, logp, _ = agent.actor.sample(b["obs"], b["state"], detach_encoder=True)
+    q1, q2 = agent.critic(b["obs"], b["state"], pi, detach_encoder=True)
+    (logp - torch.min(q1, q2)).mean().backward()
+    assert all(p.grad is None for p in convs.parameters())
+    assert agent.actor.trunk[0].weight.grad is not None
+    # critic loss: gradients reach them
+    q1, _ = agent.critic(b["obs"], b["state"], b["action"])
+    q1.mean().backward()
+    assert all(p.grad is not None and p.grad.abs().sum() > 0 for p in convs.parameters())
+    # a full update changes the convs only through the critic optimiser
+    before = convs[0].weight.detach().clone()
+    agent.update(_batch())
+    assert not torch.equal(before, convs[0].weight)
+
+
+def _tiny_cfg(**kw):
+    base = dict(
+        total_steps=120,
+        random_steps=40,
+        replay_size=500,
+        batch_size=8,
+        hidden=32,
+        pool=4,
+        eval_every=60,
+        eval_episodes=1,
+        checkpoint_every=50,
+        seed=3,
+        threads=1,
+    )
+    base.update(kw)
+    return SacConfig(**base)
+
+
+def test_tiny_sac_run_resumes_bit_for_bit(tmp_path):
+    cfg = _tiny_cfg()
+    full = train_sac(tmp_path / "full", cfg, progress=False)
+    assert (tmp_path / "full" / "checkpoint.pt").is_file()
+    assert (tmp_path / "full" / "learning_curve.csv").read_text().count("\n") == 3  # header+2
+    train_sac(tmp_path / "split", cfg, stop_at=73, progress=False)  # interrupted mid-episode
+    resumed = train_sac(tmp_path / "split", cfg, resume=True, progress=False)
+    a, b = full.state_dict(), resumed.state_dict()
+    for key in ("critic", "critic_target", "actor"):
+        for name, tensor in a[key].items():
+            assert torch.equal(tensor, b[key][name]), f"{key}.{name} differs"
+    assert torch.equal(a["log_alpha"], b["log_alpha"]) and a["updates"] == b["updates"] > 0
+    # the written policy loads and acts within the bounds
+    planner = PolicyPlanner(tmp_path / "full" / "policy.pt")
+    u = planner.act(np.zeros((9, 100, 100), np.uint8), np.array([8.0, 0.0]), np.zeros(2))
+    assert 0 <= u[0] <= 0.4 and abs(u[1]) <= 0.2
+
+
+def test_scan_variant_runs(tmp_path):
+    cfg = _tiny_cfg(grid_kind="scan", total_steps=60, random_steps=30, eval_every=60)
+    agent = train_sac(tmp_path / "scan", cfg, progress=False)
+    assert agent.updates == 30
+
+
+def test_a_distillation_step_lowers_the_imitation_loss_on_held_out_labels():
+    torch.manual_seed(0)
+    env_cfg = EmoNavConfig()
+    expert = DwaPlanner(env_cfg)
+    cfg = DaggerConfig(pool=4, hidden=64, lr=1e-3)
+    student = Student(cfg, env_cfg, expert.candidates)
+    rng = np.random.default_rng(0)
+    train, held = Demonstrations(FrameStore(100)), Demonstrations(FrameStore(100))
+    for i in range(4):
+        w = NavigationWorld(sample_scenario(10**6 + i, env_cfg), env_cfg, goal_radius=0.2)
+        run_episode_collect(w, expert, None, 1.0, train, rng)
+    w = NavigationWorld(sample_scenario(10**6 + 99, env_cfg), env_cfg, goal_radius=0.2)
+    run_episode_collect(w, expert, None, 1.0, held, rng)
+
+    def held_loss():
+        with torch.no_grad():
+            return float(student.loss(held.store.frames, *held.arrays()))
+
+    before = held_loss()
+    student.train(train, 150, 32, rng, "test")
+    assert held_loss() < 0.8 * before
+    assert before == pytest.approx(math.log(len(expert.candidates)), rel=0.15)  # ~uniform
+
+
+def test_policy_checkpoint_errors_are_clear(tmp_path):
+    with pytest.raises(PolicyError, match="does not exist"):
+        load_policy(tmp_path / "none.pt")
+    bad = tmp_path / "bad.pt"
+    bad.write_bytes(b"not a checkpoint at all")
+    with pytest.raises(PolicyError, match="not a readable"):
+        load_policy(bad)
+    torch.save({"format": "something-else"}, bad)
+    with pytest.raises(PolicyError, match="emonav-policy"):
+        load_policy(bad)
+    enc = {"type": "lgm", "frames": 9, "size": 100, "pool": 4}
+    model = Actor(LgmEncoder(9, 100, pool=4), hidden=16)
+    meta = {
+        "kind": "gaussian",
+        "encoder": enc,
+        "hidden": 16,
+        "observation": {"grid_kind": "lgm", "num_frames": 9, "grid_size": 100},
+        "bounds": [0.4, 0.2],
+    }
+    good = tmp_path / "good.pt"
+    save_policy(good, model, meta)
+    planner = PolicyPlanner(good)
+    with pytest.raises(PolicyError, match=r"\(9, 100, 100\)"):
+        planner.act(np.zeros((1, 100, 100), np.uint8), np.zeros(2), np.zeros(2))
+    save_policy(bad, model, meta | {"hidden": 32})  # metadata disagrees with the weights
+    with pytest.raises(PolicyError, match="do not match"):
+        load_policy(bad)
