@@ -21,6 +21,12 @@ from emonav_drake.params import ConfigError, EmoNavConfig, load_config
 def _add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--config", type=Path, help="YAML configuration overriding the defaults")
     p.add_argument(
+        "--checkpoint",
+        type=Path,
+        help="policy checkpoint for --planner sac (default: the shipped policy)",
+    )
+    p.add_argument("--device", default="cpu", help="torch device for --planner sac")
+    p.add_argument(
         "--time-varying",
         action="store_true",
         help="one pedestrian's emotion changes every 2 s (paper §IV-F)",
@@ -52,13 +58,14 @@ def _write_json(path: Path, data: dict) -> None:
 
 def cmd_sim(args: argparse.Namespace) -> int:
     from emonav_drake.diagrams.navigation import run_episode
-    from emonav_drake.planners import make_planner
+    from emonav_drake.planners import configure_for, make_planner
 
     if args.plant != "lip":
         raise ConfigError(f"--plant {args.plant}: only 'lip' is available in this version")
     cfg = _config(args)
     scenario = _scenario(args, cfg)
-    planner = make_planner(args.planner, cfg)
+    planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
+    grid_kind = configure_for(planner, cfg)
     meshcat = None
     if args.meshcat or args.record:
         from pydrake.geometry import Meshcat
@@ -76,6 +83,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
         show_rays=args.rays,
         goal_radius=cfg.episode.eval_goal_radius,
         realtime_rate=1.0 if args.meshcat else 0.0,
+        grid_kind=grid_kind,
     )
     wall = time.perf_counter() - t0
     out = record.to_json()
@@ -100,17 +108,22 @@ def cmd_eval(args: argparse.Namespace) -> int:
     from emonav_drake.core.metrics import format_summary, summarize
     from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation import run_episode
-    from emonav_drake.planners import make_planner
+    from emonav_drake.planners import configure_for, make_planner
 
     if args.plant != "lip":
         raise ConfigError(f"--plant {args.plant}: only 'lip' is available in this version")
     cfg = _config(args)
-    planner = make_planner(args.planner, cfg)
+    planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
+    grid_kind = configure_for(planner, cfg)
     records = []
     seeds = range(args.first_seed, args.first_seed + args.episodes)
     for seed in tqdm(seeds, desc=f"{args.planner}/{args.plant}", unit="ep"):
         rec, _ = run_episode(
-            sample_scenario(seed, cfg), cfg, planner, goal_radius=cfg.episode.eval_goal_radius
+            sample_scenario(seed, cfg),
+            cfg,
+            planner,
+            goal_radius=cfg.episode.eval_goal_radius,
+            grid_kind=grid_kind,
         )
         records.append(rec)
     summary = summarize(records)
@@ -203,6 +216,12 @@ def build_parser() -> argparse.ArgumentParser:
     from emonav_drake.learning.cli_train import add_train_parser
 
     add_train_parser(sub)
+    from emonav_drake.cli_emotion import add_emotion_parser
+
+    add_emotion_parser(sub)
+    from emonav_drake.cli_walk import add_walk_parser
+
+    add_walk_parser(sub)
     return p
 
 

@@ -11,14 +11,36 @@ from emonav_drake.params import EmoNavConfig
 PLANNERS = ("dwa", "mpc", "sac")
 
 
-def make_planner(name: str, config: EmoNavConfig, **kwargs):
-    """Create the planner called `name` ("dwa"; "mpc" and "sac" once built)."""
+def make_planner(name: str, config: EmoNavConfig, checkpoint=None, device: str = "cpu"):
+    """Create the planner called `name`: "dwa", "mpc", or "sac" (a trained policy;
+    `checkpoint` defaults to the policy shipped with the package)."""
     if name == "dwa":
         from emonav_drake.core.dwa import DwaPlanner
 
         return DwaPlanner(config)
-    if name in PLANNERS:
-        raise NotImplementedError(
-            f"planner {name!r} is not available yet in this version; available: ['dwa']"
-        )
+    if name == "mpc":
+        from emonav_drake.core.mpc import MpcPlanner
+
+        return MpcPlanner(config)
+    if name == "sac":
+        from emonav_drake.learning.policy import PolicyPlanner
+
+        return PolicyPlanner(checkpoint, device=device)
     raise ValueError(f"unknown planner {name!r}: choose one of {list(PLANNERS)}")
+
+
+def configure_for(planner, config: EmoNavConfig) -> str:
+    """Adapt the diagram's observation settings to a learned policy; return the grid kind.
+
+    A policy checkpoint records the observation it was trained on (grid kind, frames,
+    grid size); the LiDAR grid-map builder must produce exactly that.
+    """
+    expected = getattr(planner, "expected_shape", None)
+    if expected is None:
+        return "lgm"
+    config.lidar.num_frames, config.lidar.grid_size = expected[0], expected[1]
+    if planner.grid_kind not in ("lgm", "ogm"):
+        raise ValueError(
+            f"policy observation {planner.grid_kind!r} is not available in the diagram yet"
+        )
+    return planner.grid_kind

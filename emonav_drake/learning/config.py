@@ -19,7 +19,7 @@ class DaggerConfig:
     grad_steps_first: int = 3000
     grad_steps_per_round: int = 2000
     batch_size: int = 64
-    lr: float = 5e-4
+    lr: float = 1e-3
     weight_decay: float = 1e-5
     hidden: int = 256
     pool: int = 2  # max-pool factor before the encoder (1 = paper resolution)
@@ -28,6 +28,9 @@ class DaggerConfig:
     eval_seed_offset: int = 500_000  # held-out seeds for the per-round evaluation
     goal_radius: float = 0.2
     grid_kind: str = "lgm"
+    mirror_augment: bool = True  # mirror half of every batch left-right (LGM only)
+    heading_noise_prob: float = 0.5  # fraction of training episodes starting off course
+    heading_noise: float = 1.5  # their initial heading error, uniform in ± this [rad]
     device: str = "cpu"
     threads: int = 1  # batch-1 acting is fastest on one thread
 
@@ -68,4 +71,5 @@ class SacConfig:
     num_frames: int = 9
     grid_size: int = 100
     goal_radius: float = 0.1
-    compile: bool = False  # torch.compile the update (helps on CUDA; slow to warm up)
+    reuse_features: bool = True  # the actor step reuses the critic pass's conv features
+    channels_last: bool = False  # NHWC memory format for the conv stacks

@@ -108,6 +108,10 @@ class Student:
             self.model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay
         )
         self.commands = commands
+        # The LGM is exactly left-right symmetric (beam i ↔ K − 1 − i, sector i ↔ M − 1 − i):
+        # mirrored samples double the data and make the student's choices symmetric.
+        self.mirror_augment = cfg.mirror_augment and cfg.grid_kind == "lgm"
+        self.mirrored = np.array([command_index(commands, c * [1.0, -1.0]) for c in commands])
         self.device = cfg.device
         self.bounds = (env_cfg.robot.max_speed, env_cfg.robot.max_heading_change)
 
@@ -119,9 +123,22 @@ class Student:
         return int(logits.argmax())
 
     def loss(
-        self, frames: np.ndarray, windows: np.ndarray, states: np.ndarray, labels: np.ndarray
+        self,
+        frames: np.ndarray,
+        windows: np.ndarray,
+        states: np.ndarray,
+        labels: np.ndarray,
+        mirror: np.ndarray | None = None,
     ) -> torch.Tensor:
-        obs = torch.from_numpy(frames[windows]).to(self.device)
+        """Cross-entropy on a batch; rows where `mirror` is True are mirrored left↔right."""
+        stacks = frames[windows]
+        if mirror is not None and mirror.any():
+            stacks, states, labels = stacks.copy(), states.copy(), labels.copy()
+            stacks[mirror] = stacks[mirror][:, :, ::-1, :]  # sector i ↔ M − 1 − i
+            states[mirror, 1] *= -1.0  # goal bearing
+            states[mirror, 3] *= -1.0  # last heading change
+            labels[mirror] = self.mirrored[labels[mirror]]
+        obs = torch.from_numpy(np.ascontiguousarray(stacks)).to(self.device)
         logits = self.model(obs, torch.from_numpy(states).to(self.device))
         return F.cross_entropy(logits, torch.from_numpy(labels).to(self.device))
 
@@ -135,7 +152,8 @@ class Student:
         losses = []
         for _ in tqdm(range(steps), desc=desc, unit="upd", leave=False):
             idx = rng.integers(0, len(labels), batch)
-            loss = self.loss(frames, windows[idx], states[idx], labels[idx])
+            mirror = rng.random(batch) < 0.5 if self.mirror_augment else None
+            loss = self.loss(frames, windows[idx], states[idx], labels[idx], mirror)
             self.optim.zero_grad(set_to_none=True)
             loss.backward()
             self.optim.step()
@@ -250,6 +268,8 @@ def train_dagger(
         for _ in tqdm(range(episodes), desc=f"round {rnd} rollouts", unit="ep", leave=False):
             sc = sample_scenario(cfg.train_seed_offset + episode_counter, env_cfg)
             episode_counter += 1
+            if rng.random() < cfg.heading_noise_prob:  # start off course: learn to seek the goal
+                sc.robot_heading += float(rng.uniform(-cfg.heading_noise, cfg.heading_noise))
             world = NavigationWorld(
                 sc, env_cfg, goal_radius=cfg.goal_radius, grid_kind=cfg.grid_kind
             )

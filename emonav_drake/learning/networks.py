@@ -66,12 +66,20 @@ class LgmEncoder(nn.Module):
         self.fc = nn.Linear(self.flat, features)
         self.norm = nn.LayerNorm(features)
         self.features = features
+        self.channels_last = False
+
+    def use_channels_last(self) -> None:
+        """Run the convs in NHWC memory format (often faster on CPU with oneDNN)."""
+        self.channels_last = True
+        self.convs.to(memory_format=torch.channels_last)
 
     def conv_features(self, obs: torch.Tensor) -> torch.Tensor:
         """The flattened conv output (B, flat) of a uint8 or float stack."""
         x = obs.float() / 255.0
         if self.pool > 1:
             x = F.max_pool2d(x, self.pool)
+        if self.channels_last:
+            x = x.contiguous(memory_format=torch.channels_last)
         for conv in self.convs:
             x = F.relu(conv(x))
         return x.flatten(1)
@@ -176,8 +184,12 @@ class Actor(nn.Module):
         actor's own FC/LayerNorm and MLP but never the conv layers it shares with the critic.
         """
         conv = self.encoder.conv_features(obs)
-        if detach_encoder:
-            conv = conv.detach()
+        return self.from_conv(conv.detach() if detach_encoder else conv, state)
+
+    def from_conv(
+        self, conv: torch.Tensor, state: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Mean and log-std from precomputed conv features (B, flat)."""
         mu, log_std = self.trunk(torch.cat([self.encoder.head(conv), state], dim=1)).chunk(2, 1)
         # Smoothly bound log-std to [LOG_STD_MIN, LOG_STD_MAX] (SAC-AE style).
         log_std = torch.tanh(log_std)
@@ -188,7 +200,18 @@ class Actor(nn.Module):
         self, obs: torch.Tensor, state: torch.Tensor, detach_encoder: bool = False
     ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """A reparameterised sample, its log-probability (B, 1) and the squashed mean."""
-        mu, log_std = self(obs, state, detach_encoder)
+        return self._squashed_sample(*self(obs, state, detach_encoder))
+
+    def sample_from_conv(
+        self, conv: torch.Tensor, state: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """`sample` from precomputed conv features."""
+        return self._squashed_sample(*self.from_conv(conv, state))
+
+    @staticmethod
+    def _squashed_sample(
+        mu: torch.Tensor, log_std: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         std = log_std.exp()
         noise = torch.randn_like(mu)
         pre = mu + noise * std
@@ -215,10 +238,14 @@ class Critic(nn.Module):
         action: torch.Tensor,
         detach_encoder: bool = False,
     ) -> tuple[torch.Tensor, torch.Tensor]:
-        f = self.encoder(obs)
-        if detach_encoder:
-            f = f.detach()
-        x = torch.cat([f, state, action], dim=1)
+        conv = self.encoder.conv_features(obs)
+        return self.from_conv(conv.detach() if detach_encoder else conv, state, action)
+
+    def from_conv(
+        self, conv: torch.Tensor, state: torch.Tensor, action: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Both Q values from precomputed conv features (B, flat)."""
+        x = torch.cat([self.encoder.head(conv), state, action], dim=1)
         return self.q1(x), self.q2(x)
 
 
@@ -231,10 +258,15 @@ class CategoricalPolicy(nn.Module):
         hidden: MLP width.
     """
 
-    def __init__(self, encoder: nn.Module, num_commands: int, hidden: int = 256) -> None:
+    def __init__(
+        self, encoder: nn.Module, num_commands: int, hidden: int = 256, state_features: int = 64
+    ) -> None:
         super().__init__()
         self.encoder = encoder
-        self.trunk = mlp(encoder.features + VECTOR_STATE, hidden, num_commands)
+        # The 4-D vector state gets its own embedding so that goal-seeking is not drowned
+        # by the 50 map features (a plain concatenation learned to ignore the goal).
+        self.state_embed = nn.Sequential(nn.Linear(VECTOR_STATE, state_features), nn.ReLU())
+        self.trunk = mlp(encoder.features + state_features, hidden, num_commands)
 
     def forward(self, obs: torch.Tensor, state: torch.Tensor) -> torch.Tensor:
-        return self.trunk(torch.cat([self.encoder(obs), state], dim=1))
+        return self.trunk(torch.cat([self.encoder(obs), self.state_embed(state)], dim=1))

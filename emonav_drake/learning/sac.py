@@ -48,6 +48,9 @@ class SacAgent:
         self.critic = Critic(make_encoder(cfg), cfg.hidden).to(self.device)
         self.critic_target = copy.deepcopy(self.critic)
         self.actor = Actor(make_encoder(cfg), cfg.hidden).to(self.device)
+        if cfg.channels_last and isinstance(self.critic.encoder, LgmEncoder):
+            for enc in (self.critic.encoder, self.critic_target.encoder, self.actor.encoder):
+                enc.use_channels_last()
         self.actor.encoder.copy_conv_weights_from(self.critic.encoder)  # tied convs
         self.log_alpha = torch.tensor(
             math.log(cfg.init_alpha), device=self.device, requires_grad=True
@@ -97,12 +100,20 @@ class SacAgent:
         next_obs, next_state = batch["next_obs"], batch["next_state"]
 
         # Critic: soft Bellman target with the target critic and the current policy.
+        # Each conv stack runs once per batch: the online convs on obs (with gradient, for
+        # the critic) and on next_obs (for the policy's next action), the target convs on
+        # next_obs. With `reuse_features` the actor step reuses the obs features, detached
+        # (they predate this update's critic step by one Adam step); without it the actor
+        # re-encodes obs with the freshly updated convs, as SAC-AE does.
+        conv = self.critic.encoder.conv_features(obs)
         with torch.no_grad():
-            next_action, next_logp, _ = self.actor.sample(next_obs, next_state)
-            tq1, tq2 = self.critic_target(next_obs, next_state, next_action)
+            next_conv = self.critic.encoder.conv_features(next_obs)  # = the actor's convs
+            next_action, next_logp, _ = self.actor.sample_from_conv(next_conv, next_state)
+            target_conv = self.critic_target.encoder.conv_features(next_obs)
+            tq1, tq2 = self.critic_target.from_conv(target_conv, next_state, next_action)
             target_v = torch.min(tq1, tq2) - self.alpha.detach() * next_logp
             target_q = reward + not_done * cfg.discount * target_v
-        q1, q2 = self.critic(obs, state, action)
+        q1, q2 = self.critic.from_conv(conv, state, action)
         critic_loss = F.mse_loss(q1, target_q) + F.mse_loss(q2, target_q)
         self.critic_optim.zero_grad(set_to_none=True)
         critic_loss.backward()
@@ -111,8 +122,13 @@ class SacAgent:
 
         # Actor and temperature, every `actor_update_freq` updates; encoder detached.
         if self.updates % cfg.actor_update_freq == 0:
-            pi, logp, _ = self.actor.sample(obs, state, detach_encoder=True)
-            aq1, aq2 = self.critic(obs, state, pi, detach_encoder=True)
+            if cfg.reuse_features:
+                actor_conv = conv.detach()
+            else:
+                with torch.no_grad():
+                    actor_conv = self.critic.encoder.conv_features(obs)
+            pi, logp, _ = self.actor.sample_from_conv(actor_conv, state)
+            aq1, aq2 = self.critic.from_conv(actor_conv, state, pi)
             actor_loss = (self.alpha.detach() * logp - torch.min(aq1, aq2)).mean()
             self.actor_optim.zero_grad(set_to_none=True)
             actor_loss.backward()
