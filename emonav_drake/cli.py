@@ -27,6 +27,12 @@ def _add_common(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--device", default="cpu", help="torch device for --planner sac")
     p.add_argument(
+        "--emotion-estimate",
+        type=Path,
+        help="YAML EmotionEstimateParams: perceive emotions through a confusion "
+        "matrix (mode: confusion) instead of the ground truth",
+    )
+    p.add_argument(
         "--time-varying",
         action="store_true",
         help="one pedestrian's emotion changes every 2 s (paper §IV-F)",
@@ -48,6 +54,15 @@ def _scenario(args: argparse.Namespace, cfg: EmoNavConfig):
         sc.seed = args.seed if sc.seed < 0 else sc.seed
         return sc
     return sample_scenario(args.seed, cfg)
+
+
+def _emotion_estimate(args: argparse.Namespace):
+    if not getattr(args, "emotion_estimate", None):
+        return None
+    from emonav_drake.params import load_typed_yaml
+    from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+
+    return load_typed_yaml(EmotionEstimateParams, path=args.emotion_estimate).validate()
 
 
 def _write_json(path: Path, data: dict) -> None:
@@ -84,6 +99,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
         goal_radius=cfg.episode.eval_goal_radius,
         realtime_rate=1.0 if args.meshcat else 0.0,
         grid_kind=grid_kind,
+        emotion_estimate=_emotion_estimate(args),
     )
     wall = time.perf_counter() - t0
     out = record.to_json()
@@ -115,6 +131,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     cfg = _config(args)
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
     grid_kind = configure_for(planner, cfg)
+    estimate = _emotion_estimate(args)
     records = []
     seeds = range(args.first_seed, args.first_seed + args.episodes)
     for seed in tqdm(seeds, desc=f"{args.planner}/{args.plant}", unit="ep"):
@@ -124,6 +141,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
             planner,
             goal_radius=cfg.episode.eval_goal_radius,
             grid_kind=grid_kind,
+            emotion_estimate=estimate,
         )
         records.append(rec)
     summary = summarize(records)

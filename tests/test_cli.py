@@ -62,3 +62,16 @@ def test_eval_summary(tmp_path):
     r = json.loads(out.read_text())
     assert r["summary"]["episodes"] == 3 and len(r["episodes"]) == 3
     assert 0.0 <= r["summary"]["SR"] <= 1.0
+
+
+def test_sim_with_misclassified_emotions(tmp_path):
+    est = tmp_path / "est.yaml"
+    est.write_text(
+        "mode: confusion\nseed: 4\n"
+        "confusion: [[0.6, 0.3, 0.1], [0.2, 0.6, 0.2], [0.1, 0.3, 0.6]]\n"
+    )
+    out = tmp_path / "r.json"
+    assert main(["sim", "--seed", "4", "--emotion-estimate", str(est), "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["outcome"] in ("success", "collision", "timeout")
+    est.write_text("mode: confusion\nconfusion: [[2.0, 0.0, 0.0], [0, 1, 0], [0, 0, 1]]\n")
+    assert main(["sim", "--seed", "4", "--emotion-estimate", str(est)]) == 2

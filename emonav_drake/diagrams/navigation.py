@@ -28,7 +28,9 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.systems.crowd_system import CrowdSystem
+from emonav_drake.systems.emotion_estimate_source import AddEmotionEstimateSource
 from emonav_drake.systems.episode_monitor import EpisodeMonitor, episode_monitor_callback
 from emonav_drake.systems.lidar_grid_map_builder import LidarGridMapBuilder
 from emonav_drake.systems.lip_robot_plant import LipRobotPlant
@@ -59,6 +61,7 @@ def build_navigation_diagram(
     show_rays: bool = False,
     grid_kind: str = "lgm",
     goal_radius: float | None = None,
+    emotion_estimate: EmotionEstimateParams | None = None,
 ) -> NavigationDiagram:
     """Wire the navigation diagram for one scenario.
 
@@ -70,6 +73,10 @@ def build_navigation_diagram(
         show_rays: draw LiDAR rays in Meshcat.
         grid_kind: "lgm" or "ogm" grid maps for the planner's `lgm_stack` input.
         goal_radius: goal threshold [m]; default `config.episode.goal_radius`.
+        emotion_estimate: where the perceived emotions come from (default: ground truth).
+            In "confusion" mode an `EmotionEstimateSource` between the crowd and the grid
+            maps / planner feeds them misclassified emotions; the episode monitor keeps
+            the ground truth, so the metrics measure real discomfort.
     """
     config.validate()
     scenario.validate()
@@ -82,8 +89,15 @@ def build_navigation_diagram(
     state = robot.GetOutputPort("robot_state")
     for sys in (crowd, maps, plan, monitor):
         b.Connect(state, sys.GetInputPort("robot_state"))
-    for sys in (maps, plan, monitor):
-        b.Connect(crowd.GetOutputPort("crowd"), sys.GetInputPort("crowd"))
+    perceivers = [maps.GetInputPort("crowd"), plan.GetInputPort("crowd")]
+    if emotion_estimate is not None and emotion_estimate.mode != "ground_truth":
+        AddEmotionEstimateSource(
+            b, crowd.GetOutputPort("crowd"), perceivers, config, emotion_estimate
+        )
+    else:
+        for port in perceivers:
+            b.Connect(crowd.GetOutputPort("crowd"), port)
+    b.Connect(crowd.GetOutputPort("crowd"), monitor.GetInputPort("crowd"))
     b.Connect(maps.GetOutputPort("lgm_stack"), plan.GetInputPort("lgm_stack"))
     b.Connect(robot.GetOutputPort("last_command"), plan.GetInputPort("last_command"))
     b.Connect(plan.GetOutputPort("command"), robot.GetInputPort("command"))
@@ -121,6 +135,7 @@ def run_episode(
     grid_kind: str = "lgm",
     goal_radius: float | None = None,
     realtime_rate: float = 0.0,
+    emotion_estimate: EmotionEstimateParams | None = None,
 ) -> tuple[EpisodeRecord, StepLog]:
     """Simulate one episode of the navigation diagram.
 
@@ -132,7 +147,7 @@ def run_episode(
         meshcat = Meshcat()
     planner.reset()
     nav = build_navigation_diagram(
-        scenario, config, planner, meshcat, show_rays, grid_kind, goal_radius
+        scenario, config, planner, meshcat, show_rays, grid_kind, goal_radius, emotion_estimate
     )
     sim = Simulator(nav.diagram)
     sim.set_target_realtime_rate(realtime_rate)
