@@ -33,7 +33,31 @@ def conv_out(size: int, kernel: int = 3, stride: int = 1) -> int:
     return (size - kernel) // stride + 1
 
 
-class LgmEncoder(nn.Module):
+class _ConvEncoder(nn.Module):
+    """Conv stack → FC → LayerNorm → tanh; subclasses build `convs`, `fc`, `norm` and
+    define `conv_features` (the flattened conv output)."""
+
+    convs: nn.ModuleList
+    features: int
+
+    def conv_features(self, obs: torch.Tensor) -> torch.Tensor:
+        raise NotImplementedError
+
+    def head(self, conv: torch.Tensor) -> torch.Tensor:
+        """FC → LayerNorm → tanh on conv features (B, flat) → (B, features)."""
+        return torch.tanh(self.norm(self.fc(conv)))
+
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        return self.head(self.conv_features(obs))
+
+    def copy_conv_weights_from(self, other: _ConvEncoder) -> None:
+        """Tie the conv layers to `other`'s (the actor shares the critic's convs)."""
+        for mine, theirs in zip(self.convs, other.convs, strict=True):
+            mine.weight = theirs.weight
+            mine.bias = theirs.bias
+
+
+class LgmEncoder(_ConvEncoder):
     """CNN encoder over the grid-map stack (paper Eq. 5a).
 
     Args:
@@ -84,20 +108,8 @@ class LgmEncoder(nn.Module):
             x = F.relu(conv(x))
         return x.flatten(1)
 
-    def head(self, conv: torch.Tensor) -> torch.Tensor:
-        return torch.tanh(self.norm(self.fc(conv)))
 
-    def forward(self, obs: torch.Tensor) -> torch.Tensor:
-        return self.head(self.conv_features(obs))
-
-    def copy_conv_weights_from(self, other: LgmEncoder) -> None:
-        """Tie the conv layers to `other`'s (the actor shares the critic's convs)."""
-        for mine, theirs in zip(self.convs, other.convs, strict=True):
-            mine.weight = theirs.weight
-            mine.bias = theirs.bias
-
-
-class ScanEncoder(nn.Module):
+class ScanEncoder(_ConvEncoder):
     """1-D CNN over stacked LiDAR scans (B, N, K) for the LiDAR-SAC baseline.
 
     Args:
@@ -137,17 +149,6 @@ class ScanEncoder(nn.Module):
         for conv in self.convs:
             x = F.relu(conv(x))
         return x.flatten(1)
-
-    def head(self, conv: torch.Tensor) -> torch.Tensor:
-        return torch.tanh(self.norm(self.fc(conv)))
-
-    def forward(self, obs: torch.Tensor) -> torch.Tensor:
-        return self.head(self.conv_features(obs))
-
-    def copy_conv_weights_from(self, other: ScanEncoder) -> None:
-        for mine, theirs in zip(self.convs, other.convs, strict=True):
-            mine.weight = theirs.weight
-            mine.bias = theirs.bias
 
 
 def mlp(inputs: int, hidden: int, outputs: int, layers: int = 2) -> nn.Sequential:
