@@ -127,6 +127,80 @@ class DwaParams:
 
 
 @dc.dataclass
+class MpcParams:
+    """MPC on the LIP model solved with OSQP (the model-based baseline, `core/mpc.py`)."""
+
+    horizon_steps: int = 8  # walking steps of T in the horizon
+    scp_iterations: int = 3  # QPs per planning step (re-linearisations)
+    # Costs (per walking step of the horizon).
+    goal_weight: float = 1.0  # on |p_k − p_k^ref|² [1/m²]
+    terminal_weight: float = 4.0  # extra weight on |p_N − p_N^ref|²
+    reference_lead: float = 1.0  # reference p_k^ref runs this far ahead of full speed [m]
+    speed_smoothness_weight: float = 2.0  # on (u_v,k − u_v,k−1)² [(s/m)²]
+    turn_smoothness_weight: float = 2.0  # on (u_Δθ,k − u_Δθ,k−1)² [1/rad²]
+    turn_weight: float = 0.2  # on u_Δθ,k² [1/rad²]
+    discomfort_weight: float = 20.0  # slack penalty per metre inside a discomfort zone
+    collision_weight: float = 200.0  # slack penalty per metre of predicted late contact
+    slack_quadratic_weight: float = 1.0  # small quadratic term on every slack [1/m²]
+    prediction_discount: float = 0.85  # pedestrian penalties weighted by this^k
+    # Margins.
+    collision_margin: float = 0.05  # added to r_obstacle + r_robot for contact [m]
+    discomfort_margin: float = 0.03  # added to the discomfort zones [m]
+    hard_pedestrian_steps: int = 2  # pedestrian contact is a hard constraint this far
+    # Guide path around the static discs (grid Dijkstra), followed by the reference.
+    guide_resolution: float = 0.1  # [m]
+    guide_padding: float = 3.0  # grid margin around robot, goal and discs [m]
+    guide_zone_cost: float = 3.0  # cost factor of cells inside a disc's discomfort zone
+    # SCP and initial guess.
+    trust_region: float = 0.12  # |u_Δθ − ū_Δθ| per SCP iteration [rad]
+    seed_headings: int = 7  # seed headings: offsets spread over ±seed_max_offset
+    seed_max_offset: float = 1.2  # [rad]
+    previous_plan_bonus: float = 0.05  # hysteresis for the previous plan (relative cost)
+    # Fallback and solver.
+    fallback_speed_scale: float = 0.5  # fallback: u_v = this × current speed, keep heading
+    osqp_eps: float = 1e-3  # absolute and relative tolerances (solutions are polished)
+    osqp_max_iter: int = 400
+    time_limit: float = 0.1  # OSQP wall-clock limit per QP [s] (3 QPs stay within a step)
+
+
+@dc.dataclass
+class WalkingParams:
+    """Full-order Digit walking: gait, ALIP planner, passivity controller, model options.
+
+    Gains of the passivity law τ = M̄ q̈_r + C̄ q̇_r + Ḡ − K_D s (DESIGN.md §3.4): the task
+    error e decays through q̇_r = q̇_d − Λ e (rates `lambda_*` [1/s]) and s = q̇ − q̇_r is
+    damped by the joint-space K_D (`kd_leg` [N·m·s/rad]).
+    """
+
+    step_time: float = 0.4  # T [s]
+    step_width: float = 0.22  # W, lateral distance between the feet [m]
+    clearance: float = 0.08  # swing-foot apex above the ground [m]
+    touchdown_speed: float = 0.2  # swing foot vertical speed at touchdown [m/s]
+    early_touchdown: float = 0.9  # a touchdown is accepted after this fraction of T
+    torso_height: float = 1.0  # torso origin above the ground [m]
+    torso_pitch: float = 0.0  # torso pitch target (+ leans forward) [rad]
+    stand_time: float = 0.4  # double support before the first step [s]
+    speed_integral_gain: float = 0.3  # per-step integrator on the speed error
+    lateral_step_min: float = 0.12  # lateral step clamp from the stance foot [m]
+    lateral_step_max: float = 0.45
+    max_step_length: float = 0.45  # sagittal step clamp from the stance foot [m]
+    lambda_orientation: float = 12.0  # torso orientation [1/s]
+    lambda_height: float = 10.0  # torso height [1/s]
+    lambda_horizontal: float = 2.0  # CoM horizontal vs the LIP (ankle actuation) [1/s]
+    lambda_swing: float = 20.0  # swing foot position and orientation [1/s]
+    # K_D per leg joint: hip roll, hip yaw, hip pitch, knee, toe pitch, toe roll.
+    kd_leg: list[float] = dc.field(default_factory=lambda: [60.0, 20.0, 60.0, 60.0, 6.0, 6.0])
+    kd_arm: float = 20.0  # arms held by PD when not welded [N·m·s/rad]
+    kp_arm: float = 200.0  # [N·m/rad]
+    ankle_torque_fraction: float = 0.8  # stance toe torque bound, fraction of its limit
+    planner_period: float = 0.005  # ALIP foot-placement update [s]
+    time_step: float = 0.001  # plant and controller period [s]
+    friction: float = 1.0  # ground friction coefficient
+    arms: str = "welded"  # "welded" (fixed at the held pose) or "held" (PD-controlled)
+    fall_height: float = 0.6  # torso origin below this ends the run as a fall [m]
+
+
+@dc.dataclass
 class EmoNavConfig:
     """Everything configurable, grouped as in the paper."""
 
@@ -136,6 +210,8 @@ class EmoNavConfig:
     reward: RewardParams = dc.field(default_factory=RewardParams)
     episode: EpisodeParams = dc.field(default_factory=EpisodeParams)
     dwa: DwaParams = dc.field(default_factory=DwaParams)
+    mpc: MpcParams = dc.field(default_factory=MpcParams)
+    walking: WalkingParams = dc.field(default_factory=WalkingParams)
 
     def validate(self) -> "EmoNavConfig":
         """Check every field against `_RANGES`; raise `ConfigError` naming the field."""
@@ -183,6 +259,14 @@ class EmoNavConfig:
             "lidar.min_range",
             li.min_range,
             f"< lidar.max_range ({li.max_range})",
+        )
+        w = self.walking
+        _require(w.arms in ("welded", "held"), "walking.arms", w.arms, '"welded" or "held"')
+        _require(
+            w.lateral_step_min < w.lateral_step_max,
+            "walking.lateral_step_min",
+            w.lateral_step_min,
+            "< walking.lateral_step_max",
         )
         steps_per_walk = self.robot.step_time / self.crowd.dt
         _require(
@@ -242,6 +326,56 @@ _RANGES: dict[str, Any] = {
     "dwa.heading_samples": (2, 101),
     "dwa.horizon_steps": (1, 50),
     "dwa.clearance_cap": (0.01, 10.0),
+    "walking.step_time": (0.2, 1.0),
+    "walking.step_width": (0.1, 0.5),
+    "walking.clearance": (0.01, 0.3),
+    "walking.touchdown_speed": (0.0, 1.0),
+    "walking.early_touchdown": (0.5, 1.0),
+    "walking.torso_height": (0.7, 1.1),
+    "walking.torso_pitch": (-0.5, 0.5),
+    "walking.stand_time": (0.0, 1.0e6),
+    "walking.speed_integral_gain": (0.0, 1.0),
+    "walking.lateral_step_min": (0.0, 0.5),
+    "walking.lateral_step_max": (0.1, 1.0),
+    "walking.max_step_length": (0.05, 1.0),
+    "walking.lambda_orientation": (0.0, 200.0),
+    "walking.lambda_height": (0.0, 200.0),
+    "walking.lambda_horizontal": (0.0, 200.0),
+    "walking.lambda_swing": (0.0, 200.0),
+    "walking.kd_leg": (6, 0.0, 1000.0),
+    "walking.kd_arm": (0.0, 1000.0),
+    "walking.kp_arm": (0.0, 10000.0),
+    "walking.ankle_torque_fraction": (0.0, 1.0),
+    "walking.planner_period": (0.001, 0.1),
+    "walking.time_step": (0.0002, 0.005),
+    "walking.friction": (0.1, 2.0),
+    "walking.fall_height": (0.2, 1.0),
+    "mpc.horizon_steps": (2, 40),
+    "mpc.scp_iterations": (1, 20),
+    "mpc.goal_weight": (0.0, 1e4),
+    "mpc.terminal_weight": (0.0, 1e4),
+    "mpc.reference_lead": (0.0, 100.0),
+    "mpc.guide_resolution": (0.01, 1.0),
+    "mpc.guide_padding": (0.5, 50.0),
+    "mpc.guide_zone_cost": (1.0, 100.0),
+    "mpc.speed_smoothness_weight": (0.0, 1e4),
+    "mpc.turn_smoothness_weight": (0.0, 1e4),
+    "mpc.turn_weight": (0.0, 1e4),
+    "mpc.discomfort_weight": (0.0, 1e6),
+    "mpc.collision_weight": (0.0, 1e6),
+    "mpc.slack_quadratic_weight": (1e-6, 1e4),
+    "mpc.prediction_discount": (0.01, 1.0),
+    "mpc.collision_margin": (0.0, 1.0),
+    "mpc.discomfort_margin": (0.0, 1.0),
+    "mpc.hard_pedestrian_steps": (0, 40),
+    "mpc.trust_region": (0.01, math.pi),
+    "mpc.seed_headings": (1, 41),
+    "mpc.seed_max_offset": (0.0, math.pi),
+    "mpc.previous_plan_bonus": (0.0, 1.0),
+    "mpc.fallback_speed_scale": (0.0, 1.0),
+    "mpc.osqp_eps": (1e-8, 1e-1),
+    "mpc.osqp_max_iter": (10, 100000),
+    "mpc.time_limit": (1e-4, 10.0),
 }
 
 

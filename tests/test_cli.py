@@ -67,8 +67,7 @@ def test_eval_summary(tmp_path):
 def test_sim_with_misclassified_emotions(tmp_path):
     est = tmp_path / "est.yaml"
     est.write_text(
-        "mode: confusion\nseed: 4\n"
-        "confusion: [[0.6, 0.3, 0.1], [0.2, 0.6, 0.2], [0.1, 0.3, 0.6]]\n"
+        "mode: confusion\nseed: 4\nconfusion: [[0.6, 0.3, 0.1], [0.2, 0.6, 0.2], [0.1, 0.3, 0.6]]\n"
     )
     out = tmp_path / "r.json"
     assert main(["sim", "--seed", "4", "--emotion-estimate", str(est), "--json", str(out)]) == 0
