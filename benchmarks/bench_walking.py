@@ -1,0 +1,54 @@
+"""Closed-loop walking throughput: real-time factor and controller tick, on one core.
+
+    .venv/bin/python benchmarks/bench_walking.py [--seconds 10] [--repeats 3] [--core N]
+
+Runs the full walking diagram (Digit plant at 1 ms with SAP + ALIP planner at 200 Hz +
+passivity controller at 1 kHz + per-step random commands, no Meshcat) `--repeats` times
+pinned to one CPU core, and prints per run and as medians: the real-time factor
+(simulated / wall seconds) and the controller's median tick (one `actuation` output
+evaluation, i.e. all plant queries + the law). Budgets (DESIGN.md §4): real-time factor
+≥ 1 (aim ≥ 3), median tick ≤ 0.3 ms. The machine is shared: read the medians.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+
+import numpy as np
+
+from emonav_drake.diagrams.walking import run_walk
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seconds", type=float, default=10.0, help="simulated seconds per run")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--core", type=int, default=None, help="CPU to pin to (default: last)")
+    args = ap.parse_args()
+    core = args.core if args.core is not None else max(os.sched_getaffinity(0))
+    os.sched_setaffinity(0, {core})
+    rtfs, ticks, p90 = [], [], []
+    for k in range(args.repeats):
+        r = run_walk(args.seconds, seed=k, command="random", record_timing=True)
+        t = np.asarray(r.tick_seconds) * 1e3
+        rtfs.append(r.real_time_factor)
+        ticks.append(float(np.median(t)))
+        p90.append(float(np.percentile(t, 90)))
+        print(
+            f"run {k}: {'FELL ' if r.fell else ''}{r.sim_seconds:.1f} s simulated in "
+            f"{r.wall_seconds:.2f} s -> real-time factor {r.real_time_factor:.2f}x; "
+            f"controller tick median {ticks[-1]:.3f} ms, p90 {p90[-1]:.3f} ms "
+            f"({len(t)} ticks)"
+        )
+    print(
+        f"core {core}, {args.repeats} runs x {args.seconds:.0f} s random commands: "
+        f"median real-time factor {statistics.median(rtfs):.2f}x (budget >= 1, aim >= 3); "
+        f"median controller tick {statistics.median(ticks):.3f} ms (budget <= 0.3 ms); "
+        f"p90 tick {statistics.median(p90):.3f} ms"
+    )
+
+
+if __name__ == "__main__":
+    main()
