@@ -9,7 +9,7 @@ Output port:
         the episode is over. At t_k it already counts step k (evaluated on the robot at
         its foot switch and the crowd at t_k), before the periodic update stores it.
 Abstract state: the `EpisodeTracker` and the previous foot-switch position, updated at
-t_k = kT for k ≥ 1.
+t_k = kT (a no-op at k = 0).
 
 `episode_monitor_callback(diagram, monitor)` gives a `Simulator` monitor that stops the
 simulation exactly at the walking step that ends the episode.
@@ -81,7 +81,10 @@ class EpisodeMonitor(LeafSystem):
             self._calc_status,
             {self.all_input_ports_ticket(), self.all_state_ticket(), self.time_ticket()},
         )
-        self.DeclarePeriodicUnrestrictedUpdateEvent(self._T, self._T, self._update)
+        # Offset 0, like the plant and the crowd, so the event times are the same floats
+        # (k·T); an offset of T gives T + (k−1)·T, which differs from k·T by an ulp for
+        # some k and would run this update after the others. At t = 0 it does nothing.
+        self.DeclarePeriodicUnrestrictedUpdateEvent(self._T, 0.0, self._update)
 
     def _advanced(self, context: Context) -> _MonitorState:
         """The monitor state including the step that ends at this time, if any."""
