@@ -190,3 +190,17 @@ def test_policy_drives_the_drake_diagram_within_bounds(tmp_path):
     assert len(cmds) == record.steps == 8
     assert (cmds[:, 0] >= 0).all() and (cmds[:, 0] <= 0.4).all()
     assert (np.abs(cmds[:, 1]) <= 0.2).all()
+
+
+def test_shipped_policy_navigates(tmp_path):
+    """`emonav sim --planner sac` works out of the box and the policy reaches the goal."""
+    import json
+
+    from emonav_drake.cli import main
+
+    out = tmp_path / "r.json"
+    outcomes = []
+    for seed in range(6):
+        assert main(["sim", "--planner", "sac", "--seed", str(seed), "--json", str(out)]) == 0
+        outcomes.append(json.loads(out.read_text())["outcome"])
+    assert outcomes.count("success") >= 5, outcomes
