@@ -231,9 +231,10 @@ def build_parser() -> argparse.ArgumentParser:
     _add_common(g)
     g.set_defaults(func=cmd_lgm)
 
-    from emonav_drake.learning.cli_train import add_train_parser
+    from emonav_drake.learning.cli_train import add_export_parser, add_train_parser
 
     add_train_parser(sub)
+    add_export_parser(sub)
     from emonav_drake.cli_emotion import add_emotion_parser
 
     add_emotion_parser(sub)

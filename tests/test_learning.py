@@ -204,3 +204,18 @@ def test_shipped_policy_navigates(tmp_path):
         assert main(["sim", "--planner", "sac", "--seed", str(seed), "--json", str(out)]) == 0
         outcomes.append(json.loads(out.read_text())["outcome"])
     assert outcomes.count("success") >= 5, outcomes
+
+
+def test_torchscript_export_matches_the_checkpoint(tmp_path):
+    from emonav_drake.cli import main
+    from emonav_drake.learning.policy import DEFAULT_POLICY
+
+    out = tmp_path / "policy.ts"
+    assert main(["export", "--out", str(out)]) == 0
+    scripted = torch.jit.load(str(out))
+    model, _ = load_policy(DEFAULT_POLICY)
+    g = torch.Generator().manual_seed(0)
+    obs = (torch.rand(1, 9, 100, 100, generator=g) < 0.03).to(torch.uint8) * 255
+    state = torch.tensor([[0.8, 0.1, 1.0, -0.5]])
+    with torch.no_grad():
+        assert torch.allclose(scripted(obs, state), model(obs, state), atol=1e-5)

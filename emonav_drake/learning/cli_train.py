@@ -48,3 +48,21 @@ def cmd_train(args: argparse.Namespace) -> int:
         cfg.total_steps = args.steps
     train_sac(out, cfg, resume=args.resume is not None)
     return 0
+
+
+def add_export_parser(sub: argparse._SubParsersAction) -> None:
+    e = sub.add_parser("export", help="export a policy checkpoint to TorchScript")
+    e.add_argument("checkpoint", type=Path, nargs="?", help="default: the shipped policy")
+    e.add_argument("--out", type=Path, required=True, help="TorchScript file to write")
+    e.set_defaults(func=cmd_export)
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from emonav_drake.learning.policy import DEFAULT_POLICY, export_torchscript
+
+    path = export_torchscript(args.checkpoint or DEFAULT_POLICY, args.out)
+    print(
+        f"TorchScript written to {path} (inputs: uint8 stack (1, N, M, M), vector state "
+        "(1, 4) = [d/10, phi/pi, v/0.4, dtheta/0.2])"
+    )
+    return 0
