@@ -88,7 +88,9 @@ def env_steps_per_second(steps: int, reference: bool) -> float:
     env = EmoNavLIPEnv()
     saved = crowd_module.orca_velocities
     if reference:
-        crowd_module.orca_velocities = orca_velocities_reference
+        crowd_module.orca_velocities = lambda *a, check_inputs=True, **k: orca_velocities_reference(
+            *a, **k
+        )
         import emonav_drake.core.navigation as nav
 
         saved_frame = nav.lgm_frame

@@ -349,3 +349,20 @@ def test_bad_obstacles_and_params_raise_value_error() -> None:
         OrcaParams(max_neighbors=-1)
     with pytest.raises(ValueError, match="neighbor_dist"):
         OrcaParams(neighbor_dist=float("nan"))
+
+
+def test_unchecked_path_gives_the_same_velocities():
+    rng = np.random.default_rng(7)
+    pos = rng.uniform(-3, 3, (8, 2))
+    vel = rng.uniform(-1, 1, (8, 2))
+    pref = -pos / np.linalg.norm(pos, axis=1, keepdims=True)
+    args = (pos, vel, np.full(8, 0.5), pref, np.ones(8), 0.1, OrcaParams())
+    kw = dict(
+        obstacle_centers=np.array([[0.0, 0.5]]),
+        obstacle_radii=np.array([0.3]),
+        visible=~np.eye(8, dtype=bool),
+        active=np.ones(8, dtype=bool),
+    )
+    checked = orca_velocities(*args, **kw)
+    unchecked = orca_velocities(*args, **kw, check_inputs=False)
+    assert np.array_equal(checked, unchecked)

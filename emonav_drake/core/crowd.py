@@ -17,6 +17,7 @@ World frame, metres, seconds, m/s. Emotion codes: HAPPY 0, NEUTRAL 1, NEGATIVE 2
 from __future__ import annotations
 
 import dataclasses as dc
+import math
 
 import numpy as np
 
@@ -128,10 +129,12 @@ class Crowd:
             return dc.replace(state, substep=state.substep + 1)
         goals, origins = state.goals.copy(), state.origins.copy()
         # Turn round at the goal: swap the route's ends.
-        arrived = np.linalg.norm(goals - state.positions, axis=1) < self.goal_tolerance
-        goals[arrived], origins[arrived] = state.origins[arrived], state.goals[arrived]
         to_goal = goals - state.positions
-        dist = np.linalg.norm(to_goal, axis=1)
+        arrived = np.hypot(to_goal[:, 0], to_goal[:, 1]) < self.goal_tolerance
+        if arrived.any():
+            goals[arrived], origins[arrived] = state.origins[arrived], state.goals[arrived]
+            to_goal = goals - state.positions
+        dist = np.hypot(to_goal[:, 0], to_goal[:, 1])
         # Preferred velocity: towards the goal, slowing to arrive exactly in one period.
         speed = np.minimum(self.preferred_speed, dist / self.dt)
         pref = to_goal * (speed / np.maximum(dist, 1e-9))[:, None]
@@ -141,9 +144,8 @@ class Crowd:
         pref_all = np.vstack([pref, robot_velocity[None, :]])
         # The paper's rule: a pedestrian sees the robot only when it is faster than it.
         visible = self._visible.copy()
-        visible[:-1, -1] = np.linalg.norm(state.velocities, axis=1) > float(
-            np.linalg.norm(robot_velocity)
-        )
+        ped_speed = np.hypot(state.velocities[:, 0], state.velocities[:, 1])
+        visible[:-1, -1] = ped_speed > math.hypot(robot_velocity[0], robot_velocity[1])
         new_v = orca_velocities(
             positions,
             velocities,
@@ -156,6 +158,7 @@ class Crowd:
             obstacle_radii=self.static_radii,
             visible=visible,
             active=self._active,
+            check_inputs=False,  # arrays built here, float64/bool, shapes fixed per crowd
         )[:-1]
         substep = state.substep + 1
         return CrowdState(

@@ -106,6 +106,7 @@ def orca_velocities(
     obstacle_radii: np.ndarray | None = None,
     visible: np.ndarray | None = None,
     active: np.ndarray | None = None,
+    check_inputs: bool = True,
 ) -> np.ndarray:
     """Compute the ORCA velocities of ``n`` agents for one synchronous step.
 
@@ -123,6 +124,9 @@ def orca_velocities(
             into account. Default: all ``True`` (the diagonal is always ignored).
         active: ``(n,)`` bool; velocities are only computed for active agents, inactive
             ones get their given velocity back unchanged. Default: all ``True``.
+        check_inputs: validate shapes, finiteness and ranges (default). Callers that
+            build well-formed float64/bool arrays themselves every step (the crowd) may
+            pass ``False``: then every array argument must be given, as the right type.
 
     Returns:
         ``(n, 2)`` new velocities, world frame, m/s. Active agents' speeds never exceed
@@ -131,19 +135,23 @@ def orca_velocities(
     Raises:
         ValueError: on wrongly shaped, non-finite or out-of-range input.
     """
-    (pos, vel, rad, pref, vmax, dt, obs_c, obs_r, vis, act) = _validated_inputs(
-        positions,
-        velocities,
-        radii,
-        pref_velocities,
-        max_speeds,
-        dt,
-        params,
-        obstacle_centers,
-        obstacle_radii,
-        visible,
-        active,
-    )
+    if not check_inputs:
+        pos, vel, rad, pref, vmax = (positions, velocities, radii, pref_velocities, max_speeds)
+        obs_c, obs_r, vis, act = obstacle_centers, obstacle_radii, visible, active
+    else:
+        (pos, vel, rad, pref, vmax, dt, obs_c, obs_r, vis, act) = _validated_inputs(
+            positions,
+            velocities,
+            radii,
+            pref_velocities,
+            max_speeds,
+            dt,
+            params,
+            obstacle_centers,
+            obstacle_radii,
+            visible,
+            active,
+        )
     new_velocities = vel.copy()
     agents = np.flatnonzero(act)
     if agents.size == 0:
