@@ -446,8 +446,13 @@ def load_config(path: str | Path | None = None, data: str | None = None) -> EmoN
     return cfg.validate()
 
 
-def dump_config(config: EmoNavConfig) -> str:
-    """The configuration as YAML text (loadable by `load_config`)."""
+def dump_typed_yaml(obj: Any) -> str:
+    """A dataclass as YAML text (loadable by `load_typed_yaml`)."""
     from pydrake.common.yaml import yaml_dump_typed
 
-    return yaml_dump_typed(config)
+    return yaml_dump_typed(obj)
+
+
+def dump_config(config: EmoNavConfig) -> str:
+    """The configuration as YAML text (loadable by `load_config`)."""
+    return dump_typed_yaml(config)

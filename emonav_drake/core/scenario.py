@@ -16,7 +16,13 @@ from pathlib import Path
 
 import numpy as np
 
-from emonav_drake.params import EMOTION_NAMES, ConfigError, EmoNavConfig, load_typed_yaml
+from emonav_drake.params import (
+    EMOTION_NAMES,
+    ConfigError,
+    EmoNavConfig,
+    dump_typed_yaml,
+    load_typed_yaml,
+)
 
 
 @dc.dataclass
@@ -90,9 +96,7 @@ def load_scenario(path: str | Path) -> Scenario:
 
 def dump_scenario(scenario: Scenario) -> str:
     """The scenario as YAML text (loadable by `load_scenario`)."""
-    from pydrake.common.yaml import yaml_dump_typed
-
-    return yaml_dump_typed(scenario)
+    return dump_typed_yaml(scenario)
 
 
 def sample_scenario(seed: int, config: EmoNavConfig | None = None) -> Scenario:
