@@ -219,3 +219,18 @@ def test_torchscript_export_matches_the_checkpoint(tmp_path):
     state = torch.tensor([[0.8, 0.1, 1.0, -0.5]])
     with torch.no_grad():
         assert torch.allclose(scripted(obs, state), model(obs, state), atol=1e-5)
+
+
+def test_drlvo_variant_observation_and_training(tmp_path):
+    from emonav_drake.core.kinematic_maps import pedestrian_velocity_map
+
+    # A pedestrian 2 m ahead walking to the robot's left at 1 m/s (robot heading +90°).
+    vmap = pedestrian_velocity_map(
+        np.zeros(2), math.pi / 2, np.array([[0.0, 2.0]]), np.array([[-1.0, 0.0]]), 0.3
+    )
+    row, col = int((2.0 + 6.0) / 0.12), int((6.0 - 0.0) / 0.12)
+    assert vmap[0, row, col] == 128 and vmap[1, row, col] == 255  # v_x 0, v_y +1 m/s
+    assert (vmap != 128).any(axis=0).sum() == pytest.approx(math.pi * 0.3**2 / 0.12**2, rel=0.3)
+    cfg = _tiny_cfg(grid_kind="drlvo", num_frames=1, total_steps=60, random_steps=30, eval_every=60)
+    agent = train_sac(tmp_path / "drlvo", cfg, progress=False)
+    assert agent.updates == 30 and agent.critic.encoder.convs[0].in_channels == 3

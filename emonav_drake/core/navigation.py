@@ -23,6 +23,7 @@ import numpy as np
 
 from emonav_drake.core.crowd import Crowd, CrowdSnapshot, CrowdState, obstacle_discs
 from emonav_drake.core.grid_maps import FrameStack, lgm_frame
+from emonav_drake.core.kinematic_maps import drlvo_image
 from emonav_drake.core.lidar import scan_discs
 from emonav_drake.core.lip import LipState, lip_in_step, lip_step, lip_velocity, wrap_angle
 from emonav_drake.core.metrics import EpisodeRecord, EpisodeTracker
@@ -149,6 +150,20 @@ class ScanStack:
         return self._scans.copy()
 
 
+class LatestFrame:
+    """Holds only the newest observation frame (observations without a frame stack)."""
+
+    def reset(self, frame: np.ndarray) -> np.ndarray:
+        self._frame = frame
+        return self.array
+
+    push = reset
+
+    @property
+    def array(self) -> np.ndarray:
+        return self._frame.copy()
+
+
 class NavigationWorld:
     """A navigation episode on the LIP robot.
 
@@ -157,7 +172,8 @@ class NavigationWorld:
         config: the project configuration.
         goal_radius: goal-reaching threshold [m]; default `config.episode.goal_radius`.
         grid_kind: "lgm" (the paper's map), "ogm" (Cartesian baseline), "scan" (stacked
-            raw LiDAR scans, the LiDAR-SAC baseline) or None (no observation map).
+            raw LiDAR scans, the LiDAR-SAC baseline), "drlvo" (scan OGM + pedestrian
+            velocity map, (1, 3, M, M), the DRL-VO* baseline) or None (no map).
     """
 
     def __init__(
@@ -191,7 +207,10 @@ class NavigationWorld:
         )
         self.frames = None
         li = self.config.lidar
-        if self.grid_kind == "scan":
+        if self.grid_kind == "drlvo":
+            self.frames = LatestFrame()
+            self.frames.reset(self._frame())
+        elif self.grid_kind == "scan":
             self.frames = ScanStack(li.num_frames, li.num_beams)
             self.frames.reset(self._frame())
         elif self.grid_kind is not None:
@@ -201,6 +220,23 @@ class NavigationWorld:
 
     def _frame(self) -> np.ndarray:
         snapshot = self.crowd.snapshot(self.crowd_state)
+        if self.grid_kind == "drlvo":
+            centers, radii, margins = obstacle_discs(snapshot)
+            li = self.config.lidar
+            return drlvo_image(
+                np.array([self.robot.x, self.robot.y]),
+                self.robot.heading,
+                centers,
+                radii,
+                margins,
+                snapshot.positions,
+                snapshot.velocities,
+                snapshot.radius,
+                li.num_beams,
+                li.grid_size,
+                li.max_range,
+                li.min_range,
+            )[None]
         if self.grid_kind == "scan":
             centers, radii, _ = obstacle_discs(snapshot)
             li = self.config.lidar

@@ -35,7 +35,9 @@ class EmoNavLIPEnv(gym.Env):
     Args:
         config: an `EmoNavConfig`, a path to a YAML config, or None for the defaults.
         grid_kind: "lgm" (the paper's map), "ogm" (the Cartesian baseline) or "scan"
-            (stacked raw scans under the key "scan", float32 (N, K) [m]: LiDAR-SAC).
+            (stacked raw scans under the key "scan", float32 (N, K) [m]: LiDAR-SAC) or
+            "drlvo" (key "image", uint8 (1, 3, M, M): scan OGM + pedestrian velocity map,
+            the DRL-VO* baseline; see `core/kinematic_maps.py`).
         goal_radius: goal threshold [m]; default `config.episode.goal_radius` (0.1 m).
     """
 
@@ -47,8 +49,8 @@ class EmoNavLIPEnv(gym.Env):
         grid_kind: str = "lgm",
         goal_radius: float | None = None,
     ) -> None:
-        if grid_kind not in ("lgm", "ogm", "scan"):
-            raise ValueError(f"grid_kind = {grid_kind!r}: must be 'lgm', 'ogm' or 'scan'")
+        if grid_kind not in ("lgm", "ogm", "scan", "drlvo"):
+            raise ValueError(f"grid_kind = {grid_kind!r}: must be 'lgm', 'ogm', 'scan' or 'drlvo'")
         if config is None or isinstance(config, str):
             config = load_config(config)
         self.config = config.validate()
@@ -57,8 +59,10 @@ class EmoNavLIPEnv(gym.Env):
         r, li = config.robot, config.lidar
         n, m = li.num_frames, li.grid_size
         # The map observation's key: "lgm" for grid maps (LGM or OGM), "scan" for scans.
-        self.map_key = "scan" if grid_kind == "scan" else "lgm"
-        if grid_kind == "scan":
+        self.map_key = {"scan": "scan", "drlvo": "image"}.get(grid_kind, "lgm")
+        if grid_kind == "drlvo":
+            map_space = spaces.Box(0, 255, shape=(1, 3, m, m), dtype=np.uint8)
+        elif grid_kind == "scan":
             map_space = spaces.Box(0.0, li.max_range, shape=(n, li.num_beams), dtype=np.float32)
         else:
             map_space = spaces.Box(0, 255, shape=(n, m, m), dtype=np.uint8)

@@ -98,7 +98,12 @@ class LgmEncoder(_ConvEncoder):
         self.convs.to(memory_format=torch.channels_last)
 
     def conv_features(self, obs: torch.Tensor) -> torch.Tensor:
-        """The flattened conv output (B, flat) of a uint8 or float stack."""
+        """The flattened conv output (B, flat) of a uint8 or float stack.
+
+        A (B, N, C, M, M) stack of multi-channel frames (DRL-VO*) is read as N·C planes.
+        """
+        if obs.dim() == 5:
+            obs = obs.flatten(1, 2)
         x = obs.float() / 255.0
         if self.pool > 1:
             x = F.max_pool2d(x, self.pool)

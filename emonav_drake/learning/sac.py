@@ -30,6 +30,8 @@ def make_encoder(cfg: SacConfig, beams: int = 1800, max_range: float = 6.0) -> t
     """The encoder for the configured observation variant."""
     if cfg.grid_kind == "scan":
         return ScanEncoder(cfg.num_frames, beams, max_range, cfg.features, cfg.filters)
+    if cfg.grid_kind == "drlvo":  # one (3, M, M) image: its channels are the input planes
+        return LgmEncoder(3 * cfg.num_frames, cfg.grid_size, cfg.features, cfg.filters, cfg.pool)
     return LgmEncoder(cfg.num_frames, cfg.grid_size, cfg.features, cfg.filters, cfg.pool)
 
 

@@ -52,7 +52,7 @@ class _Episode:
 
     def __init__(self, replay: FrameReplayBuffer, obs: dict, bounds: tuple[float, float]):
         self.replay, self.bounds = replay, bounds
-        self.key = "scan" if "scan" in obs else "lgm"
+        self.key = next(k for k in ("scan", "image", "lgm") if k in obs)
         fid = replay.add_frame(obs[self.key][-1])
         self.window = np.full(replay.num_frames, fid, np.int64)
         self.state = vector_state(obs["goal"], obs["last_action"], bounds)
@@ -84,18 +84,23 @@ def evaluate(agent: SacAgent, cfg: SacConfig, episodes: int) -> dict:
 
 
 def policy_meta(cfg: SacConfig, env: EmoNavLIPEnv) -> dict:
-    enc = (
-        {"type": "scan", "frames": cfg.num_frames, "features": cfg.features, "filters": cfg.filters}
-        if cfg.grid_kind == "scan"
-        else {
-            "type": "lgm",
+    if cfg.grid_kind == "scan":
+        enc = {
+            "type": "scan",
             "frames": cfg.num_frames,
+            "features": cfg.features,
+            "filters": cfg.filters,
+        }
+    else:
+        planes = cfg.num_frames * (3 if cfg.grid_kind == "drlvo" else 1)
+        enc = {
+            "type": "lgm",
+            "frames": planes,
             "size": cfg.grid_size,
             "features": cfg.features,
             "filters": cfg.filters,
             "pool": cfg.pool,
         }
-    )
     r = env.config.robot
     return {
         "kind": "gaussian",
