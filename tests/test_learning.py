@@ -234,3 +234,14 @@ def test_drlvo_variant_observation_and_training(tmp_path):
     cfg = _tiny_cfg(grid_kind="drlvo", num_frames=1, total_steps=60, random_steps=30, eval_every=60)
     agent = train_sac(tmp_path / "drlvo", cfg, progress=False)
     assert agent.updates == 30 and agent.critic.encoder.convs[0].in_channels == 3
+
+
+def test_lndnl_variant_shares_its_lstm_and_trains(tmp_path):
+    cfg = _tiny_cfg(
+        grid_kind="scan", encoder="lstm", total_steps=60, random_steps=30, eval_every=60
+    )
+    agent = train_sac(tmp_path / "lndnl", cfg, progress=False)
+    assert agent.actor.encoder.lstm is agent.critic.encoder.lstm
+    assert agent.updates == 30
+    planner = PolicyPlanner(tmp_path / "lndnl" / "policy.pt")
+    assert planner.meta["encoder"]["type"] == "scan_lstm"

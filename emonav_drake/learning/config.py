@@ -65,11 +65,12 @@ class SacConfig:
     eval_episodes: int = 100
     eval_seed_offset: int = 10_000_000
     checkpoint_every: int = 10_000
-    # Observation variant: "lgm" (paper), "ogm" (OGM baseline), "scan" (LiDAR-SAC);
-    # num_frames 1 = Single-LGM.
+    # Observation variant: "lgm" (paper), "ogm" (OGM baseline), "scan" (LiDAR-SAC; with
+    # encoder "lstm": LNDNL), "drlvo" (DRL-VO*); num_frames 1 = Single-LGM.
     grid_kind: str = "lgm"
     num_frames: int = 9
     grid_size: int = 100
+    encoder: str = "cnn"  # "lstm" with grid_kind "scan" = LNDNL (LSTM over normalised scans)
     goal_radius: float = 0.1
     reuse_features: bool = True  # the actor step reuses the critic pass's conv features
     channels_last: bool = False  # NHWC memory format for the conv stacks

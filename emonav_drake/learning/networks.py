@@ -156,6 +156,46 @@ class ScanEncoder(_ConvEncoder):
         return x.flatten(1)
 
 
+class ScanLstmEncoder(_ConvEncoder):
+    """LNDNL's encoder: an LSTM over the normalised scans of the stack (B, N, K).
+
+    Each scan is min-pooled over `pool` neighbouring beams (the nearest return wins),
+    divided by the range limit, embedded by a linear layer, and the N embeddings run
+    through an LSTM; its last hidden state goes through FC → 50 → LayerNorm → tanh. The
+    embedding and the LSTM play the role of the conv layers (shared with the actor).
+    """
+
+    def __init__(
+        self,
+        frames: int = 9,
+        beams: int = 1800,
+        max_range: float = 6.0,
+        features: int = 50,
+        hidden: int = 64,
+        pool: int = 10,
+    ) -> None:
+        super().__init__()
+        self.max_range, self.pool = max_range, pool
+        self.embed = nn.Linear(beams // pool, 128)
+        self.lstm = nn.LSTM(128, hidden, batch_first=True)
+        self.convs = nn.ModuleList([self.embed, self.lstm])
+        self.flat = hidden
+        self.fc = nn.Linear(hidden, features)
+        self.norm = nn.LayerNorm(features)
+        self.features = features
+
+    def conv_features(self, obs: torch.Tensor) -> torch.Tensor:
+        x = obs.float() / self.max_range  # (B, N, K)
+        x = -F.max_pool1d(-x, self.pool)  # min-pool over beams
+        _, (h, _) = self.lstm(F.relu(self.embed(x)))
+        return h[-1]
+
+    def copy_conv_weights_from(self, other: _ConvEncoder) -> None:
+        """Share the embedding and LSTM modules with `other`."""
+        self.embed, self.lstm = other.embed, other.lstm
+        self.convs = nn.ModuleList([self.embed, self.lstm])
+
+
 def mlp(inputs: int, hidden: int, outputs: int, layers: int = 2) -> nn.Sequential:
     """`layers` hidden layers of `hidden` units with ReLU."""
     mods: list[nn.Module] = []

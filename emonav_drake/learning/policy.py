@@ -27,7 +27,13 @@ import numpy as np
 import torch
 
 from emonav_drake.core.navigation import PlannerInput
-from emonav_drake.learning.networks import Actor, CategoricalPolicy, LgmEncoder, ScanEncoder
+from emonav_drake.learning.networks import (
+    Actor,
+    CategoricalPolicy,
+    LgmEncoder,
+    ScanEncoder,
+    ScanLstmEncoder,
+)
 
 FORMAT = "emonav-policy/1"
 DEFAULT_POLICY = Path(__file__).resolve().parent.parent / "data" / "policy_lgm.pt"
@@ -58,6 +64,8 @@ def build_encoder(spec: dict[str, Any]) -> torch.nn.Module:
         return LgmEncoder(**args)
     if spec["type"] == "scan":
         return ScanEncoder(**args)
+    if spec["type"] == "scan_lstm":
+        return ScanLstmEncoder(**args)
     raise PolicyError(f"unknown encoder type {spec['type']!r}")
 
 

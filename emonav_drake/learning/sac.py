@@ -23,11 +23,19 @@ import torch
 from torch.nn import functional as F
 
 from emonav_drake.learning.config import SacConfig
-from emonav_drake.learning.networks import Actor, Critic, LgmEncoder, ScanEncoder
+from emonav_drake.learning.networks import (
+    Actor,
+    Critic,
+    LgmEncoder,
+    ScanEncoder,
+    ScanLstmEncoder,
+)
 
 
 def make_encoder(cfg: SacConfig, beams: int = 1800, max_range: float = 6.0) -> torch.nn.Module:
     """The encoder for the configured observation variant."""
+    if cfg.grid_kind == "scan" and cfg.encoder == "lstm":  # LNDNL
+        return ScanLstmEncoder(cfg.num_frames, beams, max_range, cfg.features)
     if cfg.grid_kind == "scan":
         return ScanEncoder(cfg.num_frames, beams, max_range, cfg.features, cfg.filters)
     if cfg.grid_kind == "drlvo":  # one (3, M, M) image: its channels are the input planes

@@ -84,7 +84,9 @@ def evaluate(agent: SacAgent, cfg: SacConfig, episodes: int) -> dict:
 
 
 def policy_meta(cfg: SacConfig, env: EmoNavLIPEnv) -> dict:
-    if cfg.grid_kind == "scan":
+    if cfg.grid_kind == "scan" and cfg.encoder == "lstm":
+        enc = {"type": "scan_lstm", "frames": cfg.num_frames, "features": cfg.features}
+    elif cfg.grid_kind == "scan":
         enc = {
             "type": "scan",
             "frames": cfg.num_frames,
