@@ -299,21 +299,19 @@ def train_dagger(
             f"[{t_collect:.0f}+{t_train:.0f}+{entry['eval_s']:.0f} s]",
             flush=True,
         )
+        round_meta = {
+            **meta,
+            "provenance": {
+                "route": "dagger",
+                "round": rnd,
+                "config": dc.asdict(cfg),
+                "eval_SR": summary["SR"],
+            },
+        }
+        save_policy(out / f"policy_round{rnd}.pt", student.model, round_meta)
         if summary["SR"] >= best_sr:
             best_sr = summary["SR"]
-            save_policy(
-                out / "policy.pt",
-                student.model,
-                {
-                    **meta,
-                    "provenance": {
-                        "route": "dagger",
-                        "round": rnd,
-                        "config": dc.asdict(cfg),
-                        "eval_SR": summary["SR"],
-                    },
-                },
-            )
+            save_policy(out / "policy.pt", student.model, round_meta)
         atomic_torch_save(
             {
                 "model": student.model.state_dict(),
