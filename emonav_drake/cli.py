@@ -73,10 +73,9 @@ def _write_json(path: Path, data: dict) -> None:
 
 def cmd_sim(args: argparse.Namespace) -> int:
     from emonav_drake.diagrams.navigation import run_episode
+    from emonav_drake.diagrams.navigation_digit import run_digit_episode
     from emonav_drake.planners import configure_for, make_planner
 
-    if args.plant != "lip":
-        raise ConfigError(f"--plant {args.plant}: only 'lip' is available in this version")
     cfg = _config(args)
     scenario = _scenario(args, cfg)
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
@@ -89,18 +88,34 @@ def cmd_sim(args: argparse.Namespace) -> int:
         if args.meshcat:
             print(f"Meshcat: {meshcat.web_url()}")
     t0 = time.perf_counter()
-    record, _ = run_episode(
-        scenario,
-        cfg,
-        planner,
-        meshcat=meshcat,
-        record_html=args.record,
-        show_rays=args.rays,
-        goal_radius=cfg.episode.eval_goal_radius,
-        realtime_rate=1.0 if args.meshcat else 0.0,
-        grid_kind=grid_kind,
-        emotion_estimate=_emotion_estimate(args),
-    )
+    if args.plant == "digit":
+        if args.record or args.emotion_estimate or args.rays:
+            raise ConfigError(
+                "--plant digit: --record, --rays and --emotion-estimate are "
+                "available with --plant lip only in this version"
+            )
+        record = run_digit_episode(
+            scenario,
+            cfg,
+            planner,
+            meshcat=meshcat,
+            grid_kind=grid_kind,
+            goal_radius=cfg.episode.eval_goal_radius,
+            realtime_rate=1.0 if args.meshcat else 0.0,
+        )
+    else:
+        record, _ = run_episode(
+            scenario,
+            cfg,
+            planner,
+            meshcat=meshcat,
+            record_html=args.record,
+            show_rays=args.rays,
+            goal_radius=cfg.episode.eval_goal_radius,
+            realtime_rate=1.0 if args.meshcat else 0.0,
+            grid_kind=grid_kind,
+            emotion_estimate=_emotion_estimate(args),
+        )
     wall = time.perf_counter() - t0
     out = record.to_json()
     out["seed"] = scenario.seed
@@ -124,25 +139,36 @@ def cmd_eval(args: argparse.Namespace) -> int:
     from emonav_drake.core.metrics import format_summary, summarize
     from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation import run_episode
+    from emonav_drake.diagrams.navigation_digit import run_digit_episode
     from emonav_drake.planners import configure_for, make_planner
 
-    if args.plant != "lip":
-        raise ConfigError(f"--plant {args.plant}: only 'lip' is available in this version")
     cfg = _config(args)
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
     grid_kind = configure_for(planner, cfg)
     estimate = _emotion_estimate(args)
+    if args.plant == "digit" and estimate is not None:
+        raise ConfigError("--emotion-estimate is available with --plant lip only")
     records = []
     seeds = range(args.first_seed, args.first_seed + args.episodes)
     for seed in tqdm(seeds, desc=f"{args.planner}/{args.plant}", unit="ep"):
-        rec, _ = run_episode(
-            sample_scenario(seed, cfg),
-            cfg,
-            planner,
-            goal_radius=cfg.episode.eval_goal_radius,
-            grid_kind=grid_kind,
-            emotion_estimate=estimate,
-        )
+        scenario = sample_scenario(seed, cfg)
+        if args.plant == "digit":
+            rec = run_digit_episode(
+                scenario,
+                cfg,
+                planner,
+                grid_kind=grid_kind,
+                goal_radius=cfg.episode.eval_goal_radius,
+            )
+        else:
+            rec, _ = run_episode(
+                scenario,
+                cfg,
+                planner,
+                goal_radius=cfg.episode.eval_goal_radius,
+                grid_kind=grid_kind,
+                emotion_estimate=estimate,
+            )
         records.append(rec)
     summary = summarize(records)
     print(format_summary(summary))

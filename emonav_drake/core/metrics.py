@@ -18,14 +18,14 @@ import numpy as np
 
 from emonav_drake.core.reward import StepEvaluation
 
-SUCCESS, COLLISION, TIMEOUT = "success", "collision", "timeout"
+SUCCESS, COLLISION, TIMEOUT, FALL = "success", "collision", "timeout", "fall"
 
 
 @dc.dataclass
 class EpisodeRecord:
     """The outcome and social metrics of one episode (the `--json` of `emonav sim`)."""
 
-    outcome: str = TIMEOUT  # success | collision | timeout
+    outcome: str = TIMEOUT  # success | collision | timeout | fall (full-order robot)
     steps: int = 0
     nav_time: float = 0.0  # [s]
     path_length: float = 0.0  # [m]
@@ -94,6 +94,7 @@ def summarize(records: list[EpisodeRecord]) -> dict:
         "SR": outcomes.count(SUCCESS) / n,
         "collision_rate": outcomes.count(COLLISION) / n,
         "timeout_rate": outcomes.count(TIMEOUT) / n,
+        "fall_rate": outcomes.count(FALL) / n,
         "NT_mean": float(nt.mean()) if nt.size else None,
         "NT_std": float(nt.std()) if nt.size else None,
         "DT": int(sum(r.discomfort_steps for r in records)),
@@ -107,8 +108,9 @@ def format_summary(s: dict) -> str:
     """One line in the paper's notation."""
     nt = "n/a" if s["NT_mean"] is None else f"{s['NT_mean']:.2f} ± {s['NT_std']:.2f}"
     idt = s["IDT"]
+    fall = f"fall {s['fall_rate']:.3f}  " if s.get("fall_rate") else ""
     return (
         f"SR {s['SR']:.3f}  collision {s['collision_rate']:.3f}  timeout "
-        f"{s['timeout_rate']:.3f}  NT {nt} s  DT {s['DT']}  "
+        f"{s['timeout_rate']:.3f}  {fall}NT {nt} s  DT {s['DT']}  "
         f"IDT [{idt[0]}; {idt[1]}, {idt[2]}, {idt[3]}]  ({s['episodes']} episodes)"
     )

@@ -42,6 +42,7 @@ class NavigationMeshcatVisualizer(LeafSystem):
         config: radii and discomfort distances.
         show_rays: draw the LiDAR rays (needs the `scan` input connected).
         publish_period: drawing period [s].
+        draw_robot: draw the LIP robot's column (off when the full-order Digit is drawn).
     """
 
     def __init__(
@@ -51,11 +52,13 @@ class NavigationMeshcatVisualizer(LeafSystem):
         config: EmoNavConfig,
         show_rays: bool = False,
         publish_period: float = 0.1,
+        draw_robot: bool = True,
     ) -> None:
         super().__init__()
         self._meshcat = meshcat
         self._config = config
         self._show_rays = show_rays
+        self._draw_robot = draw_robot
         self._num_peds = len(scenario.pedestrians)
         self._robot = self.DeclareVectorInputPort("robot_state", 4)
         self._crowd = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
@@ -67,12 +70,13 @@ class NavigationMeshcatVisualizer(LeafSystem):
     def _draw_static_scene(self, scenario: Scenario) -> None:
         m, c = self._meshcat, self._config
         m.Delete(_PREFIX)
-        m.SetObject(
-            f"{_PREFIX}/robot/body", Cylinder(c.robot.radius, 1.0), Rgba(0.25, 0.45, 0.85, 1.0)
-        )
-        m.SetTransform(f"{_PREFIX}/robot/body", RigidTransform([0, 0, 0.5]))
-        m.SetObject(f"{_PREFIX}/robot/nose", Sphere(0.08), Rgba(0.1, 0.1, 0.1, 1.0))
-        m.SetTransform(f"{_PREFIX}/robot/nose", RigidTransform([c.robot.radius, 0, 0.9]))
+        if self._draw_robot:
+            m.SetObject(
+                f"{_PREFIX}/robot/body", Cylinder(c.robot.radius, 1.0), Rgba(0.25, 0.45, 0.85, 1.0)
+            )
+            m.SetTransform(f"{_PREFIX}/robot/body", RigidTransform([0, 0, 0.5]))
+            m.SetObject(f"{_PREFIX}/robot/nose", Sphere(0.08), Rgba(0.1, 0.1, 0.1, 1.0))
+            m.SetTransform(f"{_PREFIX}/robot/nose", RigidTransform([c.robot.radius, 0, 0.9]))
         goal = scenario.robot_goal
         m.SetObject(f"{_PREFIX}/goal", Cylinder(0.2, 0.01), Rgba(0.1, 0.8, 0.2, 0.6))
         m.SetTransform(f"{_PREFIX}/goal", RigidTransform([goal[0], goal[1], 0.005]))
@@ -102,9 +106,10 @@ class NavigationMeshcatVisualizer(LeafSystem):
     def _publish(self, context: Context) -> EventStatus:
         m, t = self._meshcat, context.get_time()
         x, y, th, _ = self._robot.Eval(context)
-        m.SetTransform(
-            f"{_PREFIX}/robot", RigidTransform(RotationMatrix.MakeZRotation(th), [x, y, 0.0]), t
-        )
+        if self._draw_robot:
+            m.SetTransform(
+                f"{_PREFIX}/robot", RigidTransform(RotationMatrix.MakeZRotation(th), [x, y, 0.0]), t
+            )
         crowd = self._crowd.Eval(context)
         for i in range(self._num_peds):
             path = f"{_PREFIX}/pedestrians/{i}"
