@@ -89,11 +89,12 @@ def cmd_sim(args: argparse.Namespace) -> int:
             print(f"Meshcat: {meshcat.web_url()}")
     t0 = time.perf_counter()
     if args.plant == "digit":
-        if args.record or args.emotion_estimate or args.rays:
+        if args.emotion_estimate or args.rays:
             raise ConfigError(
-                "--plant digit: --record, --rays and --emotion-estimate are "
-                "available with --plant lip only in this version"
+                "--plant digit: --rays and --emotion-estimate are available "
+                "with --plant lip only in this version"
             )
+
         record = run_digit_episode(
             scenario,
             cfg,
@@ -102,6 +103,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
             grid_kind=grid_kind,
             goal_radius=cfg.episode.eval_goal_radius,
             realtime_rate=1.0 if args.meshcat else 0.0,
+            record_html=args.record,
         )
     else:
         record, _ = run_episode(

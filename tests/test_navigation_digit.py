@@ -34,3 +34,13 @@ def test_sim_with_the_full_order_digit(tmp_path):
     r = json.loads(out.read_text())
     assert r["outcome"] == "timeout" and r["steps"] == 6  # walking, not fallen
     assert 0.3 < r["path_length"] < 6 * 0.4 * 0.45  # Digit walked forward, at LIP-like speed
+
+
+def test_digit_episode_records_a_meshcat_replay(tmp_path):
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("episode: {max_steps: 3}\n")
+    html = tmp_path / "digit.html"
+    args = ["sim", "--plant", "digit", "--seed", "1", "--config", str(cfg), "--record", str(html)]
+    assert main(args) == 0
+    text = html.read_text()
+    assert len(text) > 50_000 and "<html" in text.lower()

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses as dc
 import math
+from pathlib import Path
 
 import numpy as np
 from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams, Role
@@ -117,9 +118,12 @@ def run_digit_episode(
     grid_kind: str = "lgm",
     goal_radius: float | None = None,
     realtime_rate: float = 0.0,
+    record_html: str | Path | None = None,
 ) -> EpisodeRecord:
     """Simulate one navigation episode with the full-order Digit; returns its record
     (outcome success | collision | timeout | fall)."""
+    if record_html is not None and meshcat is None:
+        meshcat = Meshcat()
     planner.reset()
     nd = build_digit_navigation_diagram(scenario, config, planner, meshcat, grid_kind, goal_radius)
     sim = Simulator(nd.diagram)
@@ -128,7 +132,24 @@ def run_digit_episode(
     plant = nd.model.plant
     plant_ctx = plant.GetMyMutableContextFromRoot(ctx)
     plant.SetPositionsAndVelocities(plant_ctx, nd.initial_state)
+    if record_html is not None:
+        meshcat.StartRecording(set_visualizations_while_recording=False)
     sim.Initialize()
+    record = _simulate_until_done(sim, nd, config)
+    if record_html is not None:
+        meshcat.StopRecording()
+        meshcat.PublishRecording()
+        Path(record_html).write_text(meshcat.StaticHtml())
+    return record
+
+
+def _simulate_until_done(
+    sim: Simulator, nd: DigitNavigationDiagram, config: EmoNavConfig
+) -> EpisodeRecord:
+    """Advance walking step by walking step until the monitor or a fall ends the episode."""
+    ctx = sim.get_mutable_context()
+    plant = nd.model.plant
+    plant_ctx = plant.GetMyMutableContextFromRoot(ctx)
     status_port = nd.monitor.GetOutputPort("status")
     monitor_ctx = nd.monitor.GetMyContextFromRoot(ctx)
     torso_z = nd.model.base_q[6]
