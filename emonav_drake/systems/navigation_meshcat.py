@@ -23,7 +23,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import Context, EventStatus, LeafSystem
 
 from emonav_drake.core.scenario import Scenario
-from emonav_drake.params import EmoNavConfig
+from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 
 EMOTION_RGBA = (
     Rgba(0.20, 0.75, 0.30, 1.0),
@@ -77,6 +77,11 @@ class NavigationMeshcatVisualizer(LeafSystem):
             m.SetTransform(f"{_PREFIX}/robot/body", RigidTransform([0, 0, 0.5]))
             m.SetObject(f"{_PREFIX}/robot/nose", Sphere(0.08), Rgba(0.1, 0.1, 0.1, 1.0))
             m.SetTransform(f"{_PREFIX}/robot/nose", RigidTransform([c.robot.radius, 0, 0.9]))
+            x0, y0 = scenario.robot_start
+            m.SetTransform(
+                f"{_PREFIX}/robot",
+                RigidTransform(RotationMatrix.MakeZRotation(scenario.robot_heading), [x0, y0, 0.0]),
+            )
         goal = scenario.robot_goal
         m.SetObject(f"{_PREFIX}/goal", Cylinder(0.2, 0.01), Rgba(0.1, 0.8, 0.2, 0.6))
         m.SetTransform(f"{_PREFIX}/goal", RigidTransform([goal[0], goal[1], 0.005]))
@@ -91,10 +96,16 @@ class NavigationMeshcatVisualizer(LeafSystem):
             )
             m.SetTransform(path, RigidTransform([o.center[0], o.center[1], 0.0]))
         dist = c.reward.emotion_distances()
-        for i in range(self._num_peds):
+        for i, ped in enumerate(scenario.pedestrians):
             path = f"{_PREFIX}/pedestrians/{i}"
-            m.SetObject(f"{path}/body", Cylinder(c.crowd.pedestrian_radius, 1.7), EMOTION_RGBA[1])
+            # The scene as it starts (what a replay shows before it plays): the initial
+            # emotion's colour and only its discomfort ring; `_publish` animates changes.
+            first = EMOTION_NAMES.index(ped.emotion)
+            m.SetObject(
+                f"{path}/body", Cylinder(c.crowd.pedestrian_radius, 1.7), EMOTION_RGBA[first]
+            )
             m.SetTransform(f"{path}/body", RigidTransform([0, 0, 0.85]))
+            m.SetTransform(path, RigidTransform([ped.start[0], ped.start[1], 0.0]))
             for e in range(3):
                 rgba = EMOTION_RGBA[e]
                 m.SetObject(
@@ -102,6 +113,7 @@ class NavigationMeshcatVisualizer(LeafSystem):
                     Cylinder(c.crowd.pedestrian_radius + dist[e], 0.01),
                     Rgba(rgba.r(), rgba.g(), rgba.b(), 0.3),
                 )
+                m.SetProperty(f"{path}/ring{e}", "visible", e == first)
 
     def _publish(self, context: Context) -> EventStatus:
         m, t = self._meshcat, context.get_time()
