@@ -90,11 +90,11 @@ def _tiny_cfg(**kw):
 
 
 def test_tiny_sac_run_resumes_bit_for_bit(tmp_path):
-    cfg = _tiny_cfg()
+    cfg = _tiny_cfg(total_steps=300, random_steps=100, eval_every=150)
     full = train_sac(tmp_path / "full", cfg, progress=False)
     assert (tmp_path / "full" / "checkpoint.pt").is_file()
     assert (tmp_path / "full" / "learning_curve.csv").read_text().count("\n") == 3  # header+2
-    train_sac(tmp_path / "split", cfg, stop_at=73, progress=False)  # interrupted mid-episode
+    train_sac(tmp_path / "split", cfg, stop_at=173, progress=False)  # interrupted mid-episode
     resumed = train_sac(tmp_path / "split", cfg, resume=True, progress=False)
     a, b = full.state_dict(), resumed.state_dict()
     for key in ("critic", "critic_target", "actor"):
