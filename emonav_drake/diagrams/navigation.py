@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from pydrake.geometry import Meshcat
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
@@ -51,6 +51,57 @@ class NavigationDiagram:
     planner: NavigationPlanner
     monitor: EpisodeMonitor
     visualizer: NavigationMeshcatVisualizer | None
+
+
+@dc.dataclass
+class NavigationStack:
+    """The robot-independent part of a navigation diagram."""
+
+    crowd: CrowdSystem
+    grid_maps: LidarGridMapBuilder
+    planner: NavigationPlanner
+    monitor: EpisodeMonitor
+
+
+def AddNavigationStack(
+    builder: DiagramBuilder,
+    scenario: Scenario,
+    config: EmoNavConfig,
+    planner: Planner,
+    robot_state: OutputPort,
+    last_command: OutputPort,
+    grid_kind: str = "lgm",
+    goal_radius: float | None = None,
+    emotion_estimate: EmotionEstimateParams | None = None,
+) -> NavigationStack:
+    """Add crowd, grid maps, planner and episode monitor, wired to a robot.
+
+    Args:
+        builder: the diagram builder.
+        robot_state: the robot's (x, y, θ, v) output (LIP plant or Digit's CoM state).
+        last_command: the command in force (the previous step's at a foot switch).
+        Others: as `build_navigation_diagram`.
+    The caller connects the planner's `command` output to its robot.
+    """
+    b = builder
+    crowd = b.AddNamedSystem("crowd", CrowdSystem(scenario, config))
+    maps = b.AddNamedSystem("grid_maps", LidarGridMapBuilder(config, grid_kind))
+    plan = b.AddNamedSystem("planner", NavigationPlanner(planner, scenario.robot_goal, config))
+    monitor = b.AddNamedSystem("monitor", EpisodeMonitor(scenario, config, goal_radius))
+    for sys in (crowd, maps, plan, monitor):
+        b.Connect(robot_state, sys.GetInputPort("robot_state"))
+    perceivers = [maps.GetInputPort("crowd"), plan.GetInputPort("crowd")]
+    if emotion_estimate is not None and emotion_estimate.mode != "ground_truth":
+        AddEmotionEstimateSource(
+            b, crowd.GetOutputPort("crowd"), perceivers, config, emotion_estimate
+        )
+    else:
+        for port in perceivers:
+            b.Connect(crowd.GetOutputPort("crowd"), port)
+    b.Connect(crowd.GetOutputPort("crowd"), monitor.GetInputPort("crowd"))
+    b.Connect(maps.GetOutputPort("lgm_stack"), plan.GetInputPort("lgm_stack"))
+    b.Connect(last_command, plan.GetInputPort("last_command"))
+    return NavigationStack(crowd, maps, plan, monitor)
 
 
 def build_navigation_diagram(
@@ -82,24 +133,19 @@ def build_navigation_diagram(
     scenario.validate()
     b = DiagramBuilder()
     robot = b.AddNamedSystem("robot", LipRobotPlant(scenario, config))
-    crowd = b.AddNamedSystem("crowd", CrowdSystem(scenario, config))
-    maps = b.AddNamedSystem("grid_maps", LidarGridMapBuilder(config, grid_kind))
-    plan = b.AddNamedSystem("planner", NavigationPlanner(planner, scenario.robot_goal, config))
-    monitor = b.AddNamedSystem("monitor", EpisodeMonitor(scenario, config, goal_radius))
     state = robot.GetOutputPort("robot_state")
-    for sys in (crowd, maps, plan, monitor):
-        b.Connect(state, sys.GetInputPort("robot_state"))
-    perceivers = [maps.GetInputPort("crowd"), plan.GetInputPort("crowd")]
-    if emotion_estimate is not None and emotion_estimate.mode != "ground_truth":
-        AddEmotionEstimateSource(
-            b, crowd.GetOutputPort("crowd"), perceivers, config, emotion_estimate
-        )
-    else:
-        for port in perceivers:
-            b.Connect(crowd.GetOutputPort("crowd"), port)
-    b.Connect(crowd.GetOutputPort("crowd"), monitor.GetInputPort("crowd"))
-    b.Connect(maps.GetOutputPort("lgm_stack"), plan.GetInputPort("lgm_stack"))
-    b.Connect(robot.GetOutputPort("last_command"), plan.GetInputPort("last_command"))
+    stack = AddNavigationStack(
+        b,
+        scenario,
+        config,
+        planner,
+        state,
+        robot.GetOutputPort("last_command"),
+        grid_kind,
+        goal_radius,
+        emotion_estimate,
+    )
+    crowd, maps, plan, monitor = stack.crowd, stack.grid_maps, stack.planner, stack.monitor
     b.Connect(plan.GetOutputPort("command"), robot.GetInputPort("command"))
     vis = None
     if meshcat is not None:

@@ -29,6 +29,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
+from emonav_drake.diagrams.navigation import AddNavigationStack
 from emonav_drake.diagrams.walking import standing_com_height
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.systems.alip_footstep_planner import AlipFootstepPlanner
@@ -36,9 +37,9 @@ from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.digit_navigation_bridge import CommandHold, DigitComState
 from emonav_drake.systems.digit_plant import AddDigitPlant, DigitModel, standing_state
 from emonav_drake.systems.episode_monitor import EpisodeMonitor
-from emonav_drake.systems.lidar_grid_map_builder import LidarGridMapBuilder
 from emonav_drake.systems.navigation_meshcat import NavigationMeshcatVisualizer
 from emonav_drake.systems.navigation_planner import NavigationPlanner, Planner
+from emonav_drake.systems.passivity_controller import PassivityController
 
 FALL = "fall"
 
@@ -70,27 +71,26 @@ def build_digit_navigation_diagram(
     model = AddDigitPlant(b, wp)
     height = standing_com_height(model)
     alip = b.AddNamedSystem("alip", AlipFootstepPlanner(model, wp, config.robot, height))
-    from emonav_drake.systems.passivity_controller import PassivityController
-
     controller = b.AddNamedSystem("controller", PassivityController(model, wp))
     com = b.AddNamedSystem("com", DigitComState(model))
     hold = b.AddNamedSystem("command_hold", CommandHold(config.robot.step_time))
-    crowd = b.AddNamedSystem("crowd", CrowdSystem(scenario, config))
-    maps = b.AddNamedSystem("grid_maps", LidarGridMapBuilder(config, grid_kind))
-    nav = b.AddNamedSystem("planner", NavigationPlanner(planner, scenario.robot_goal, config))
-    monitor = b.AddNamedSystem("monitor", EpisodeMonitor(scenario, config, goal_radius))
     plant = model.plant
     for sys in (alip, controller, com):
         b.Connect(plant.get_state_output_port(), sys.GetInputPort("state"))
     b.Connect(alip.GetOutputPort("targets"), controller.GetInputPort("targets"))
     b.Connect(controller.GetOutputPort("actuation"), plant.get_actuation_input_port())
-    for sys in (crowd, maps, nav, monitor):
-        b.Connect(com.GetOutputPort("robot_state"), sys.GetInputPort("robot_state"))
-    for sys in (maps, nav, monitor):
-        b.Connect(crowd.GetOutputPort("crowd"), sys.GetInputPort("crowd"))
-    b.Connect(maps.GetOutputPort("lgm_stack"), nav.GetInputPort("lgm_stack"))
+    stack = AddNavigationStack(
+        b,
+        scenario,
+        config,
+        planner,
+        com.GetOutputPort("robot_state"),
+        hold.GetOutputPort("command"),
+        grid_kind,
+        goal_radius,
+    )
+    crowd, nav, monitor = stack.crowd, stack.planner, stack.monitor
     b.Connect(nav.GetOutputPort("command"), hold.GetInputPort("command"))
-    b.Connect(hold.GetOutputPort("command"), nav.GetInputPort("last_command"))
     b.Connect(hold.GetOutputPort("command"), alip.GetInputPort("command"))
     if meshcat is not None:
         MeshcatVisualizer.AddToBuilder(
