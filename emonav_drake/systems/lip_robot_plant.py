@@ -43,7 +43,6 @@ class LipRobotPlant(LeafSystem):
         self._config = config
         self._dt = config.crowd.dt
         self._substeps = round(config.robot.step_time / self._dt)
-        self.clipped_commands = 0
         x0, y0 = (float(v) for v in scenario.robot_start)
         th0 = float(scenario.robot_heading)
         T = config.robot.step_time
@@ -64,7 +63,6 @@ class LipRobotPlant(LeafSystem):
         command = self.get_input_port(0).Eval(context)
         u, clipped = check_command(command, self._config.robot, clip=True)
         if clipped:
-            self.clipped_commands += 1
             log.warning(
                 "LipRobotPlant: command %s out of bounds at t = %.2f s, clipped to %s",
                 np.asarray(command).tolist(),
