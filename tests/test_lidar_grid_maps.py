@@ -7,7 +7,6 @@ import math
 import numpy as np
 import pytest
 
-from benchmarks.reference.lgm_reference import lgm_frame_reference
 from emonav_drake.core.grid_maps import (
     FrameStack,
     lgm_cell_area,
@@ -23,9 +22,16 @@ from emonav_drake.core.grid_maps import (
     ogm_ring_circle_cell_counts,
     resolution_crossing_rings,
 )
-from emonav_drake.core.lidar import beam_angles, scan_discs
+from emonav_drake.core.lidar import (
+    AUTHORS_BEAM_STEP,
+    beam_angles,
+    beam_step,
+    beam_table,
+    scan_discs,
+)
 
 K, M, L, RMIN = 1800, 100, 6.0, 0.27
+STEP = 0.003490659  # the authors' beam angle step at K = 1800
 
 
 def polar(distance: float, bearing_deg: float) -> list[list[float]]:
@@ -39,13 +45,20 @@ def cells(grid: np.ndarray, value: int) -> set[tuple[int, int]]:
 
 
 def disc_ranges_by_hand(distance: float, radius: float, bearing_deg: float) -> np.ndarray:
-    """Closed-form ranges to one disc: d·cos θ − √(r² − d² sin² θ) where |d sin θ| ≤ r."""
+    """Closed-form ranges to one disc, θ the beam's angle to the centre's bearing.
+
+    Origin outside (d > r): entry point d·cos θ − √(r² − d² sin² θ) where |d sin θ| ≤ r and
+    cos θ > 0. Origin inside (d < r): every beam, exit point d·cos θ + √(r² − d² sin² θ).
+    """
     theta = beam_angles(K) - math.radians(bearing_deg)
     perp = distance * np.sin(theta)
     along = distance * np.cos(theta)
-    inside = (np.abs(perp) <= radius) & (along > 0)
     ranges = np.full(K, L)
-    ranges[inside] = along[inside] - np.sqrt(radius**2 - perp[inside] ** 2)
+    if distance < radius:
+        ranges = along + np.sqrt(radius**2 - perp**2)
+    else:
+        hit = (np.abs(perp) <= radius) & (along > 0)
+        ranges[hit] = along[hit] - np.sqrt(radius**2 - perp[hit] ** 2)
     return np.clip(ranges, RMIN, L)
 
 
@@ -55,10 +68,32 @@ def disc_ranges_by_hand(distance: float, radius: float, bearing_deg: float) -> n
 def test_beam_angles_follow_the_authors_convention():
     a = beam_angles()
     assert a.shape == (K,)
-    assert np.allclose(np.diff(a), math.radians(0.2))
-    assert a[0] == pytest.approx(math.radians(-179.9))  # just behind, on the right
-    assert a[-1] == pytest.approx(math.radians(179.9))
-    assert a[899] == pytest.approx(math.radians(-0.1)) and a[900] == pytest.approx(0.001745, 1e-3)
+    # The authors' constant, not 2π/1800 = 0.0034906585…, and exactly so.
+    assert AUTHORS_BEAM_STEP == STEP == beam_step(K) != 2.0 * math.pi / K
+    assert a[900] - a[899] == STEP
+    assert a[0] == -899.5 * STEP and a[-1] == 899.5 * STEP
+    assert a[899] == -0.5 * STEP and a[900] == 0.5 * STEP
+    assert np.allclose(np.diff(a), STEP, rtol=0.0, atol=1e-15)
+    assert a[0] == pytest.approx(math.radians(-179.9), abs=1e-6)  # just behind, on the right
+    assert a[-1] == pytest.approx(math.radians(179.9), abs=1e-6)
+    # The 1800 rounded steps overshoot 2π by 8.9e-7 rad: the seam gap is that much narrower.
+    assert 2.0 * math.pi - (a[-1] - a[0]) == pytest.approx(STEP - 8.93e-7, abs=1e-9)
+    # beam_table holds the same angles and math.cos/math.sin of each, read-only.
+    angles, cos, sin = beam_table(K)
+    assert np.array_equal(angles, a) and not angles.flags.writeable
+    assert cos[123] == math.cos((123 - 899.5) * STEP) and sin[7] == math.sin((7 - 899.5) * STEP)
+
+
+def test_other_beam_counts_keep_two_pi_over_k():
+    for k in (1, 4, 360, 900, 3600):
+        assert beam_step(k) == 2.0 * math.pi / k
+        a = beam_angles(k)
+        assert np.array_equal(a, (np.arange(k) - (k - 1) / 2) * (2.0 * math.pi / k))
+    assert beam_angles(4).tolist() == pytest.approx(
+        [-0.75 * math.pi, -0.25 * math.pi, 0.25 * math.pi, 0.75 * math.pi]
+    )
+    with pytest.raises(ValueError):
+        beam_step(0)
 
 
 def test_single_disc_straight_ahead_hits_the_hand_computed_beams_and_cells():
@@ -84,8 +119,10 @@ def test_single_disc_straight_ahead_hits_the_hand_computed_beams_and_cells():
 
 def test_disc_on_the_left_lands_three_quarters_up_the_rows():
     ranges = scan_discs((0.0, 0.0), 0.0, polar(2.0, 90.0), [0.3])
-    # +90° is between beams 1349 and 1350 (899.5 + 450) → rows 74 and 75.
-    assert ranges[1349] == pytest.approx(1.7, abs=1e-4) and ranges[1350] == ranges[1349]
+    # +90° is between beams 1349 and 1350 (899.5 + 450) → rows 74 and 75; with the rounded
+    # step the two are 4e-7 rad off symmetric, so their ranges agree to ~1e-8 m only.
+    assert ranges[1349] == pytest.approx(1.7, abs=1e-4)
+    assert ranges[1350] == pytest.approx(ranges[1349], abs=1e-7)
     grid = lgm_frame((0.0, 0.0), 0.0, polar(2.0, 90.0), [0.3], [0.0])
     rows = {r for r, _ in cells(grid, 255)}
     assert rows == set(range(1307 // 18, 1392 // 18 + 1)) == set(range(72, 78))
@@ -140,13 +177,96 @@ def test_discomfort_never_overwrites_collision():
 # --------------------------------------------------------------------------- clipping
 
 
-@pytest.mark.parametrize("center", [[0.3, 0.0], [0.1, 0.05], [0.0, 0.0]])
-def test_disc_touching_or_containing_the_origin_hits_every_beam_at_min_range(center):
-    ranges = scan_discs((0.0, 0.0), 0.0, [center], [0.3])
-    assert np.all(ranges == RMIN)
-    grid = lgm_frame((0.0, 0.0), 0.0, [center], [0.3], [0.2])
-    assert cells(grid, 255) == {(row, 4) for row in range(M)}  # ⌊0.27/0.06⌋ = 4
-    assert np.count_nonzero(grid == 127) == 0
+def test_inside_a_discomfort_disc_every_beam_shows_where_it_leaves_the_zone():
+    """Robot at the origin heading +x, pedestrian (0.3 m) at (0.5, 0) with a 0.5 m
+    discomfort distance: the robot is 0.2 m outside the body, inside the 0.8 m zone."""
+    centre, body, margin = [[0.5, 0.0]], [0.3], [0.5]
+    exit_ranges = scan_discs((0.0, 0.0), 0.0, centre, [0.8])
+    # Exit distance b + √(r² − d² + b²), b = 0.5 cos θ: ahead 0.5 + 0.8, behind 0.8 − 0.5,
+    # sideways √(0.8² − 0.5²). Beams 899/900 are ∓0.1° off ahead, 0/1799 ∓0.1° off behind,
+    # 1349/1350 straddle +90° and 449/450 −90°.
+    assert exit_ranges[899] == pytest.approx(1.3, abs=1e-5) and exit_ranges[900] == exit_ranges[899]
+    assert exit_ranges[0] == pytest.approx(0.3, abs=1e-5) and exit_ranges[1799] == exit_ranges[0]
+    side = math.sqrt(0.8**2 - 0.5**2)
+    assert side == pytest.approx(0.6245, abs=1e-4)
+    for pair in ((1349, 1350), (449, 450)):
+        assert exit_ranges[list(pair)].mean() == pytest.approx(side, abs=1e-5)
+    np.testing.assert_allclose(exit_ranges, disc_ranges_by_hand(0.5, 0.8, 0.0), atol=1e-12)
+    assert exit_ranges.min() > RMIN and exit_ranges.max() < L  # no beam clipped
+
+    grid = lgm_frame((0.0, 0.0), 0.0, centre, body, margin)
+    body_ranges = scan_discs((0.0, 0.0), 0.0, centre, body)
+    collision = {(i // 18, int(body_ranges[i] / 0.06)) for i in np.flatnonzero(body_ranges < L)}
+    assert cells(grid, 255) == collision
+    exit_cells = {(i // 18, int(exit_ranges[i] / 0.06)) for i in range(K)}
+    assert cells(grid, 127) == exit_cells - collision
+    # Ahead ⌊1.3/0.06⌋ = 21, behind ⌊0.3/0.06⌋ = 5, sideways ⌊0.6245/0.06⌋ = 10.
+    assert {(49, 21), (50, 21), (0, 5), (99, 5), (74, 10), (75, 10), (24, 10), (25, 10)} <= (
+        cells(grid, 127)
+    )
+    # Every row shows the exit contour, none the old full ring at ⌊0.27/0.06⌋ = 4.
+    assert {r for r, _ in cells(grid, 127)} == set(range(M))
+    assert min(c for _, c in cells(grid, 127)) == 5
+    assert not (grid[:, 4] == 127).any()
+    # The contour is an ellipse-like curve: farthest ahead, nearest behind.
+    far = {r: max(c for rr, c in cells(grid, 127) if rr == r) for r in range(M)}
+    assert max(far.values()) == far[49] == far[50] == 21 and far[0] == far[99] == 5
+
+
+def test_concentric_disc_gives_a_full_ring_at_its_radius():
+    ranges = scan_discs((1.0, -2.0), 0.7, [[1.0, -2.0]], [0.3])
+    assert np.all(ranges == 0.3)  # b = 0: the exit root is √(r²) exactly
+    grid = lgm_frame((1.0, -2.0), 0.7, [[1.0, -2.0]], [0.3], [0.2])
+    assert cells(grid, 255) == {(row, 5) for row in range(M)}  # ⌊0.3/0.06⌋ = 5
+    assert cells(grid, 127) == {(row, 8) for row in range(M)}  # ⌊0.5/0.06⌋ = 8
+
+
+def test_inside_a_disc_the_range_is_still_the_minimum_over_discs():
+    zone = ([0.5, 0.0], 0.8)  # contains the origin; exits 1.3 ahead, 0.6245 sideways
+    ahead = ([1.0, 0.0], 0.2)  # entry at 0.8 ahead: nearer than the zone's exit
+    left = ([0.0, 1.0], 0.2)  # entry at 0.8 on the left: farther than the exit (0.6245)
+    other_zone = ([-0.2, 0.0], 0.6)  # contains the origin too; exits 0.4 ahead, 0.8 behind,
+    # √(0.6² − 0.2²) = 0.5657 sideways
+    discs = [zone, ahead, left, other_zone]
+    ranges = scan_discs((0.0, 0.0), 0.0, [c for c, _ in discs], [r for _, r in discs])
+    alone = [scan_discs((0.0, 0.0), 0.0, [c], [r]) for c, r in discs]
+    assert np.array_equal(ranges, np.minimum.reduce(alone))
+    assert ranges[899] == pytest.approx(0.4, abs=1e-5)  # the second zone's exit wins ahead
+    assert ranges[0] == pytest.approx(0.3, abs=1e-5)  # the first zone's exit wins behind
+    # Left: the nearer of the two exits wins; the disc on the left is farther than both.
+    assert ranges[1349] == alone[3][1349] < alone[0][1349] < alone[2][1349] < L
+    assert ranges[1349] == pytest.approx(math.sqrt(0.6**2 - 0.2**2), abs=2e-3)
+    two = scan_discs((0.0, 0.0), 0.0, [zone[0], ahead[0]], [zone[1], ahead[1]])
+    assert two[899] == pytest.approx(0.8, abs=1e-5)  # ahead: the nearer disc's entry wins
+    assert two[0] == pytest.approx(0.3, abs=1e-5)
+    # In the LGM: pedestrian body 0.3 + margin 0.5 (the zone) and the small disc ahead.
+    grid = lgm_frame((0.0, 0.0), 0.0, [zone[0], ahead[0]], [0.3, 0.2], [0.5, 0.0])
+    body = scan_discs((0.0, 0.0), 0.0, [zone[0], ahead[0]], [0.3, 0.2])
+    collision = {(i // 18, int(body[i] / 0.06)) for i in np.flatnonzero(body < L)}
+    assert cells(grid, 255) == collision
+    assert cells(grid, 127) == {(i // 18, int(two[i] / 0.06)) for i in range(K)} - collision
+    assert (49, 13) in cells(grid, 127) and (49, 21) not in cells(grid, 127)  # 0.8, not 1.3
+
+
+def test_exit_beyond_max_range_returns_max_range():
+    ranges = scan_discs((0.0, 0.0), 0.0, [[1.0, 0.0]], [5.5])  # exits: 6.5 ahead, 4.5 behind
+    assert ranges[899] == ranges[900] == L
+    assert ranges[0] == pytest.approx(4.5, abs=1e-5)
+    np.testing.assert_allclose(ranges, disc_ranges_by_hand(1.0, 5.5, 0.0), atol=1e-12)
+    assert np.all(scan_discs((0.0, 0.0), 0.0, [[0.2, 0.1]], [6.5]) == L)  # exits all > 6 m
+    assert not lgm_frame((0.0, 0.0), 0.0, [[0.2, 0.1]], [6.5], [0.0]).any()
+
+
+def test_origin_on_the_circle_keeps_the_smallest_positive_root():
+    """d = r: the roots are 0 and 2b; 0 is not ahead of the LiDAR, so beams into the disc
+    (b > 0) hit it at 2b where they leave it, the others miss."""
+    ranges = scan_discs((0.0, 0.0), 0.0, [[0.3, 0.0]], [0.3])  # d² == r² exactly
+    b = 0.3 * beam_table(K)[1]
+    expected = np.where(b > 0.0, np.clip(2.0 * b, RMIN, L), L)
+    np.testing.assert_allclose(ranges, expected, atol=1e-12)
+    assert ranges[899] == pytest.approx(0.6, abs=1e-6)
+    assert ranges[450] == RMIN and ranges[449] == L  # −89.9°: 2b ≈ 1e-3 m; −90.1°: behind
+    assert np.all(ranges[:450] == L) and np.all(ranges[1350:] == L)
 
 
 def test_near_hit_is_raised_to_min_range():
@@ -284,6 +404,71 @@ def test_frame_stack_reset_and_push():
 # --------------------------------------------------------------------------- reference
 
 
+def ranges_per_beam(origin, heading, centers, radii, num_beams=K, max_range=L, min_range=RMIN):
+    """Plain-Python per-beam ranges: every beam against every disc, smallest positive root.
+
+    Same formulas in the same floating-point order as the fast cast (centres rotated into
+    the robot frame, math.cos/math.sin per beam, b = c·u, disc = r² − (d² − b²)), so the
+    two must agree bit for bit; it shares no code with `emonav_drake.core.lidar`.
+    """
+    step = 0.003490659 if num_beams == 1800 else 2.0 * math.pi / num_beams
+    ox, oy = float(origin[0]), float(origin[1])
+    ch, sh = math.cos(heading), math.sin(heading)
+    discs = []
+    for (cx, cy), r in zip(centers, radii, strict=True):
+        dx, dy = float(cx) - ox, float(cy) - oy
+        discs.append((ch * dx + sh * dy, ch * dy - sh * dx, float(r)))
+    ranges = []
+    for i in range(num_beams):
+        angle = (i - (num_beams - 1) / 2) * step
+        ux, uy = math.cos(angle), math.sin(angle)
+        best = math.inf
+        for px, py, r in discs:
+            d2, r2 = px * px + py * py, r * r
+            b = px * ux + py * uy
+            disc = r2 - (d2 - b * b)
+            if d2 > r2:  # outside: the entry root b − √disc, if real and ahead
+                if b <= 0.0 or disc < 0.0:
+                    continue
+                t = b - math.sqrt(disc)
+            else:  # inside: the exit root b + √disc; on the circle only if b > 0
+                if d2 == r2 and b <= 0.0:
+                    continue
+                t = b + math.sqrt(max(disc, 0.0))
+            best = min(best, t)
+        ranges.append(max(min(best, max_range), min_range))
+    return ranges
+
+
+def frame_per_beam(
+    origin, heading, centers, radii, margins, num_beams=K, grid_size=M, kind="lgm"
+) -> np.ndarray:
+    """Per-beam grid frame from `ranges_per_beam`: 255 real hits, then 127 where not 255."""
+    centers = np.asarray(centers, dtype=float).reshape(-1, 2)
+    inflated = [float(r) + float(m) for r, m in zip(radii, margins, strict=True)]
+    hit = ranges_per_beam(origin, heading, centers, radii, num_beams)
+    infl = ranges_per_beam(origin, heading, centers, inflated, num_beams)
+    step = 0.003490659 if num_beams == 1800 else 2.0 * math.pi / num_beams
+    grid = np.zeros((grid_size, grid_size), dtype=np.uint8)
+    for value, ranges in ((255, hit), (127, infl)):
+        for i, rng in enumerate(ranges):
+            if rng >= L:
+                continue
+            if kind == "lgm":
+                row = i // (num_beams // grid_size)
+                col = min(int(rng / (L / grid_size)), grid_size - 1)
+            else:
+                angle = (i - (num_beams - 1) / 2) * step
+                x, y = rng * math.cos(angle), rng * math.sin(angle)
+                cell = 2.0 * L / grid_size
+                row = min(max(math.floor((x + L) / cell), 0), grid_size - 1)
+                col = min(max(math.floor((L - y) / cell), 0), grid_size - 1)
+            if value == 127 and grid[row, col] == 255:
+                continue
+            grid[row, col] = value
+    return grid
+
+
 def random_scene(rng: np.random.Generator):
     origin = rng.uniform(-5.0, 5.0, 2)
     heading = rng.uniform(-math.pi, math.pi)
@@ -310,23 +495,34 @@ def test_fast_frame_equals_the_per_beam_reference_on_random_scenes():
         scene = random_scene(rng)
         kind = "ogm" if trial % 5 == 4 else "lgm"
         fast = lgm_frame(*scene, kind=kind)
-        ref = lgm_frame_reference(*scene, kind=kind)
+        ref = frame_per_beam(*scene, kind=kind)
         assert np.array_equal(fast, ref), f"trial {trial} ({kind}) differs"
 
 
 def test_fast_frame_equals_reference_for_edge_cases():
     cases = [
-        ([[0.3, 0.0]], [0.3], [0.2]),  # touching the origin
-        ([[0.55, 0.0]], [0.3], [0.25]),  # inflated disc touches the origin
+        ([[0.3, 0.0]], [0.3], [0.2]),  # origin on the circle; inside the inflated disc
+        ([[0.55, 0.0]], [0.3], [0.25]),  # origin on the inflated circle
+        ([[0.5, 0.0]], [0.3], [0.5]),  # inside the discomfort zone only
+        ([[0.1, 0.05]], [0.3], [0.2]),  # inside both
+        ([[0.0, 0.0]], [0.3], [0.2]),  # concentric
+        ([[0.5, 0.0], [1.0, 0.0], [-0.2, 0.0]], [0.3, 0.2, 0.3], [0.5, 0.0, 0.3]),  # mixed
+        ([[1.0, 0.0]], [5.5], [0.0]),  # inside, some exits beyond max range
         ([[6.3, 0.0]], [0.3], [0.0]),  # nearest surface exactly at max range
         ([[-2.0, 0.0], [-2.0, 1e-3]], [0.3, 0.3], [0.5, 0.2]),  # overlapping, behind
         ([[0.31, 0.0]], [0.3], [0.0]),  # 1 cm away: nearly 180° wide
+        ([[-0.31, 1e-4]], [0.3], [0.1]),  # same, behind across the seam; inside inflated
     ]
     for centers, radii, margins in cases:
         for kind in ("lgm", "ogm"):
             fast = lgm_frame((0.0, 0.0), 0.0, centers, radii, margins, kind=kind)
-            ref = lgm_frame_reference((0.0, 0.0), 0.0, centers, radii, margins, kind=kind)
+            ref = frame_per_beam((0.0, 0.0), 0.0, centers, radii, margins, kind=kind)
             assert np.array_equal(fast, ref), (centers, kind)
+    # The scans themselves, bit for bit, also for a beam count other than 1800.
+    for centers, radii, _ in cases:
+        for k in (1800, 360):
+            fast = scan_discs((0.0, 0.0), 0.0, centers, radii, num_beams=k)
+            assert fast.tolist() == ranges_per_beam((0.0, 0.0), 0.0, centers, radii, k)
 
 
 # --------------------------------------------------------------------------- validation

@@ -7,8 +7,9 @@ frames (``np.array_equal``).
 
 To make an exact comparison meaningful, this code evaluates the same formulas in the
 same floating-point order as the fast code (disc centres rotated into the robot frame,
-``math.cos``/``math.sin`` per beam, hit = t − √(r² − (d² − t²))); it shares no code
-with it.
+``math.cos``/``math.sin`` per beam, hit = the smallest positive root t ∓ √(r² − (d² − t²)),
+i.e. the exit point when the LiDAR is inside a disc; the authors' beam step 0.003490659
+rad for 1800 beams); it shares no code with it.
 """
 
 from __future__ import annotations
@@ -16,6 +17,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+
+def _step(num_beams: int) -> float:
+    """The authors' beam step for 1800 beams, 2π/K otherwise."""
+    return 0.003490659 if num_beams == 1800 else 2.0 * math.pi / num_beams
 
 
 def _ranges_reference(
@@ -31,20 +37,21 @@ def _ranges_reference(
         discs.append((ch * dx + sh * dy, ch * dy - sh * dx, float(r)))
     ranges = []
     for i in range(num_beams):
-        angle = (i - (num_beams - 1) / 2) * (2.0 * math.pi / num_beams)
+        angle = (i - (num_beams - 1) / 2) * _step(num_beams)
         ux, uy = math.cos(angle), math.sin(angle)
         best = math.inf
         for px, py, r in discs:
             d2 = px * px + py * py
             r2 = r * r
-            if d2 <= r2:
-                best = 0.0  # the LiDAR is inside (or on) the disc
-                continue
             t = px * ux + py * uy
             disc = r2 - (d2 - t * t)
-            if t <= 0.0 or disc < 0.0:
+            if disc < 0.0:
                 continue
-            best = min(best, t - math.sqrt(disc))
+            root = math.sqrt(disc)
+            for hit in (t - root, t + root):  # the smallest positive root
+                if hit > 0.0:
+                    best = min(best, hit)
+                    break
         ranges.append(max(min(best, max_range), min_range))
     return ranges
 
@@ -79,7 +86,7 @@ def lgm_frame_reference(
                 row = i // (num_beams // grid_size)
                 col = min(int(rng / (max_range / grid_size)), grid_size - 1)
             elif kind == "ogm":
-                angle = (i - (num_beams - 1) / 2) * (2.0 * math.pi / num_beams)
+                angle = (i - (num_beams - 1) / 2) * _step(num_beams)
                 x, y = rng * math.cos(angle), rng * math.sin(angle)
                 cell = 2.0 * max_range / grid_size
                 row = min(max(math.floor((x + max_range) / cell), 0), grid_size - 1)

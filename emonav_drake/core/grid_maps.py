@@ -1,27 +1,32 @@
 """LiDAR grid maps (LGM, the paper's pie-shaped map) and occupancy grid maps (OGM), numpy only.
 
 Both maps are ``uint8 (M, M)`` images built from two scans of the same discs (see
-`emonav_drake.core.lidar` for the beam conventions): the real scan, and a scan of the
-discs inflated by their discomfort margins (pedestrian radius + emotion distance, static
-radius + 0.2 m; the caller passes the margins). Each beam marks only the cell of its hit:
+`emonav_drake.core.lidar` for the beam angles, the clipping and the exit-point rule for a
+disc that contains the robot): the real scan, and a scan of the discs inflated by their
+discomfort margins (pedestrian radius + emotion distance, static radius + 0.2 m; the
+caller passes the margins). Each beam marks only the cell of its hit:
 
 * 255 — the hit of the real scan (collision area, red in the paper);
 * 127 — the hit of the inflated scan, where the cell is not already 255 (discomfort zone);
 * 0 — everything else. A beam whose range equals ``max_range`` marks nothing.
 
-The robot's own radius plays no part.
+The robot's own radius plays no part. When the robot stands inside an inflated disc, that
+disc's 127 cells trace, beam by beam, where the beam leaves the discomfort zone.
 
-LGM (paper Section III-C, DESIGN.md §3.2): row = angular sector ``⌊i/(K/M)⌋`` of beam i
-(row 0 just behind on the right, rows M/2 − 1 and M/2 either side of straight ahead, CCW
+LGM (paper Section III-C): row = angular sector ``⌊i/(K/M)⌋`` of beam i (row 0 just
+behind on the right, rows M/2 − 1 and M/2 either side of straight ahead, CCW
 increasing), column = ring ``⌊range/(L/M)⌋`` capped at M − 1 (column 0 at the robot), with
-L = ``max_range``.
+L = ``max_range``. With the paper's K = 1800, M = 100, L = 6 m: 18 beams per row, rings
+0.06 m wide, and ``min_range`` 0.27 m lands in column 4.
 
 OGM baseline: a 2L × 2L Cartesian square in the robot frame (x forward, y left) with
-cell side h = 2L/M; the hit point ``(x, y) = range·(cos a, sin a)`` lands in
-row ``⌊(x + L)/h⌋`` (row index grows forward) and column ``⌊(L − y)/h⌋`` (column index
-grows to the robot's right), both clipped to 0…M−1.
+cell side h = 2L/M; the hit point ``(x, y) = range·(cos a, sin a)`` of beam angle a lands
+in row ``⌊(x + L)/h⌋`` (row index grows forward) and column ``⌊(L − y)/h⌋`` (column index
+grows to the robot's right), both clipped to 0…M−1 (12 × 12 m and 0.12 m cells for the
+paper's values).
 
-Frames are stacked oldest first in `FrameStack`.
+Frames are stacked oldest first in `FrameStack` (N = 9 in the paper; the first frame of an
+episode fills every slot).
 
 The module also holds the paper's resolution comparison between the two maps (Eq. 2 and
 the text after it); see `resolution_crossing_rings`.

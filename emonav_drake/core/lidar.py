@@ -1,21 +1,48 @@
 """Simulated 2-D LiDAR: ray casting from the robot against discs (numpy only).
 
-Conventions (DESIGN.md §3.2, shared with the authors' code so frames are comparable):
+The conventions are those of the paper authors' simulator, so that our frames can be
+compared with theirs pixel for pixel (see ``docs/lidar_grid_maps.md``):
 
-* K beams over 360°, 2π/K apart. Beam i points at ``(i − (K−1)/2)·2π/K`` radians from the
-  robot's heading, counter-clockwise positive: with K = 1800, beam 0 is just behind on the
-  right (−179.9°), straight ahead falls between beams 899 and 900 (∓0.1°) and beam 1799 is
-  just behind on the left (+179.9°).
-* A range is the distance [m] from the LiDAR origin to the nearest disc surface along the
-  beam, clipped to ``[min_range, max_range]``: a nearer hit is raised to ``min_range``
-  (and is still a hit); a beam with no hit, or whose hit is at or beyond ``max_range``,
-  returns exactly ``max_range``, which grid maps read as "nothing here".
-* A disc that contains the LiDAR origin, or touches it (centre distance ≤ radius), is hit
-  by every beam at range 0, i.e. every beam returns ``min_range``.
+* **Beams.** K beams around the robot. Beam i points at ``(i − (K−1)/2)·step`` radians
+  from the robot's heading, counter-clockwise positive, with ``step = beam_step(K)``. For
+  the paper's K = 1800 the step is the authors' constant ``AUTHORS_BEAM_STEP =
+  0.003490659`` rad, their rounding of 2π/1800 = 0.00349065850…; for any other K it is
+  2π/K. With K = 1800, beam 0 is just behind on the right (−899.5 steps ≈ −179.9°),
+  straight ahead falls between beams 899 and 900 (∓ half a step ≈ ∓0.1°) and beam 1799
+  is just behind on the left (≈ +179.9°). (The authors' rounded step makes the 1800 beams
+  span 2π + 8.9e-7 rad, so the gap across the seam behind the robot is 8.9e-7 rad
+  narrower than the others; nothing else depends on it.)
+* **Range of a beam against one disc.** The points of beam u (unit vector) are t·u,
+  t ≥ 0. They meet the circle of centre c and radius r where
+  ``t² − 2bt + (d² − r²) = 0`` with ``b = c·u`` and ``d = |c|``, i.e. at
+  ``t = b ∓ √(b² − (d² − r²))``. The beam's range to the disc is the **smallest positive
+  root**; no positive root means the beam misses the disc. That gives:
 
-The cast only evaluates, per disc, the beams inside the disc's angular half-width
-``asin(r/d)`` (plus two beams of margin) and merges discs with ``np.minimum.at``, so it
-costs O(beams actually covered) instead of O(K · discs).
+  - origin outside the disc (d > r): the entry point ``b − √(…)``, when b > 0 and the
+    root is real; otherwise a miss;
+  - origin inside the disc (d < r): one root is negative and one positive, so *every*
+    beam hits the disc, at the point where it leaves it, ``b + √(…)``; pointing at the
+    centre gives d + r, pointing away r − d;
+  - origin exactly on the circle (d = r): the roots are 0 and 2b; 0 is not positive, so a
+    beam with b > 0 (pointing into the disc) hits it at 2b, where it leaves it again, and a
+    beam with b ≤ 0 misses. This is what the authors' cast does too: it keeps an
+    intersection only if it lies strictly ahead of the LiDAR.
+
+  Why the exit point: a discomfort disc (pedestrian radius + emotion distance) that
+  contains the robot then shows, on every beam, how far the robot has to go that way to
+  get out of the zone, instead of a full ring at ``min_range`` that says nothing about the
+  way out; this is the situation in which the policy needs the map the most.
+* **Several discs and clipping.** A beam's range is the minimum over all discs, then
+  clipped to ``[min_range, max_range]``: a nearer hit is raised to ``min_range`` (and is
+  still a hit); a beam with no hit, or whose hit is at or beyond ``max_range`` (also an
+  exit point beyond it), returns exactly ``max_range``, which the grid maps read as
+  "nothing here".
+
+The fast cast evaluates, for a disc not containing the origin, only the beams inside its
+angular half-width ``asin(r/d)`` around its bearing (plus two beams of margin on each
+side), and merges the discs with ``np.minimum.at``, so it costs O(beams actually covered)
+instead of O(K · discs). A disc containing the origin (or with the origin on its circle)
+covers every beam and is cast on all K of them.
 """
 
 from __future__ import annotations
@@ -29,8 +56,13 @@ DEFAULT_NUM_BEAMS = 1800
 DEFAULT_MAX_RANGE = 6.0  # L [m]
 DEFAULT_MIN_RANGE = 0.27  # [m]
 
+# The authors' beam angle step [rad] (their rounding of 2π/1800); used for K = 1800 only.
+AUTHORS_BEAM_STEP = 0.003490659
+AUTHORS_NUM_BEAMS = 1800
+
 # Beams added on each side of a disc's exact angular window. Any beam outside
-# the exact window misses the disc by a margin far larger than round-off, so the
+# the exact window misses the disc by a margin far larger than round-off (and than the
+# 2.6e-4-beam mismatch at the seam that the authors' rounded step causes), so the
 # windowed cast returns exactly what an every-beam-against-every-disc cast returns.
 _WINDOW_MARGIN = 2
 # A disc whose nearest surface point is farther than max_range + this cannot be
@@ -57,16 +89,28 @@ def check_ranges_limits(max_range: float, min_range: float) -> tuple[float, floa
     return max_range, min_range
 
 
+def beam_step(num_beams: int) -> float:
+    """Angle between neighbouring beams [rad]: ``AUTHORS_BEAM_STEP`` for K = 1800, else 2π/K.
+
+    0.003490659 is the constant of the authors' simulator, 2π/1800 rounded to 9 decimals;
+    it only has a meaning for their 1800 beams, so other beam counts keep 2π/K.
+    """
+    k = check_num_beams(num_beams)
+    return AUTHORS_BEAM_STEP if k == AUTHORS_NUM_BEAMS else 2.0 * math.pi / k
+
+
 @lru_cache(maxsize=16)
 def beam_table(num_beams: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Read-only ``(angles, cos, sin)`` of the beams, each (K,), angles in radians
     relative to the robot's heading (robot frame).
 
-    The cosines and sines come from ``math.cos``/``math.sin`` per beam (once, cached), so a
-    plain-Python implementation of the same formulas reproduces them bit for bit.
+    ``angles[i] = (i − (K−1)/2) · beam_step(K)`` in float64, i.e. exactly the product of
+    the two float64 numbers. The cosines and sines come from ``math.cos``/``math.sin`` per
+    beam (once, cached), so a plain-Python implementation of the same formulas reproduces
+    them bit for bit.
     """
     k = check_num_beams(num_beams)
-    angles = (np.arange(k, dtype=np.float64) - (k - 1) / 2) * (2.0 * math.pi / k)
+    angles = (np.arange(k, dtype=np.float64) - (k - 1) / 2) * beam_step(k)
     cos = np.array([math.cos(a) for a in angles.tolist()], dtype=np.float64)
     sin = np.array([math.sin(a) for a in angles.tolist()], dtype=np.float64)
     for a in (angles, cos, sin):
@@ -77,7 +121,8 @@ def beam_table(num_beams: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def beam_angles(num_beams: int = DEFAULT_NUM_BEAMS) -> np.ndarray:
     """Beam directions (K,) in radians relative to the robot's heading, CCW positive.
 
-    ``angle_i = (i − (K−1)/2)·2π/K``; e.g. K = 1800 gives −179.9°, −179.7°, …, +179.9°.
+    ``angle_i = (i − (K−1)/2)·beam_step(K)``; e.g. K = 1800 gives −899.5 · 0.003490659 rad
+    (≈ −179.9°), −898.5 · 0.003490659 rad (≈ −179.7°), …, +899.5 · 0.003490659 rad.
     """
     return beam_table(num_beams)[0].copy()
 
@@ -144,7 +189,9 @@ def cast_robot_frame(
         out: optional (C, K) float64 array to write into.
 
     Returns:
-        (C, K) float64 ranges [m], clipped to [min_range, max_range].
+        (C, K) float64 ranges [m], clipped to [min_range, max_range]: per beam, the
+        smallest positive root over the discs (module docstring), so a disc containing the
+        origin is hit by every beam where the beam leaves it.
     """
     k = num_beams
     n_scans = radii.shape[0]
@@ -155,21 +202,21 @@ def cast_robot_frame(
         np.minimum(out, max_range, out=out)
         return out
     _, cos, sin = beam_table(k)
+    beams_per_rad = 1.0 / beam_step(k)
     d2 = px * px + py * py  # (n,)
     r2 = radii * radii  # (C, n)
-    contains = d2 <= r2
-    if contains.any():
-        # The origin is inside (or on) a disc: every beam hits it at range 0.
-        out[contains.any(axis=1)] = 0.0
+    # The origin inside the disc or on its circle: the disc is cast on every beam below.
+    encloses = d2 <= r2
     dist = np.sqrt(d2)
-    active = ~contains & (dist - radii <= max_range + _FAR_SLACK)
+    # Origin outside: the entry point, on the beams of the disc's angular window only.
+    active = ~encloses & (dist - radii <= max_range + _FAR_SLACK)
     scan_idx, disc_idx = np.nonzero(active)
     if scan_idx.size:
         ra = radii[scan_idx, disc_idx]
         da = dist[disc_idx]
         # Half-width in beams; the clip guards round-off when d is within an ulp of r.
-        half = np.arcsin(np.minimum(ra / da, 1.0)) * (k / (2.0 * math.pi))
-        centre = np.arctan2(py[disc_idx], px[disc_idx]) * (k / (2.0 * math.pi)) + (k - 1) / 2
+        half = np.arcsin(np.minimum(ra / da, 1.0)) * beams_per_rad
+        centre = np.arctan2(py[disc_idx], px[disc_idx]) * beams_per_rad + (k - 1) / 2
         lo = np.floor(centre - half).astype(np.intp) - _WINDOW_MARGIN
         count = np.ceil(centre + half).astype(np.intp) + (_WINDOW_MARGIN + 1) - lo
         np.minimum(count, k, out=count)
@@ -190,6 +237,20 @@ def cast_robot_frame(
         hit[miss] = np.inf
         beam += scan_idx[rep] * k
         np.minimum.at(out.reshape(-1), beam, hit)
+    if encloses.any():
+        for s, j in zip(*np.nonzero(encloses), strict=True):
+            # Origin inside (d < r): the roots have opposite signs, every beam leaves the disc
+            # at the positive one, b + √(…). Origin on the circle (d = r): the roots are 0 and
+            # 2b; only beams with b > 0 have a positive root (2b = b + √(…)), the rest miss.
+            t = px[j] * cos + py[j] * sin  # b, the centre's projection on every beam (K,)
+            behind = t <= 0.0 if d2[j] == r2[s, j] else None
+            disc = r2[s, j] - (d2[j] - t * t)
+            np.maximum(disc, 0.0, out=disc)
+            np.sqrt(disc, out=disc)
+            hit = np.add(t, disc, out=t)
+            if behind is not None:
+                hit[behind] = np.inf
+            np.minimum(out[s], hit, out=out[s])
     np.minimum(out, max_range, out=out)
     np.maximum(out, min_range, out=out)
     return out
@@ -216,7 +277,8 @@ def scan_discs(
 
     Returns:
         (K,) float64 ranges [m] in ``[min_range, max_range]``; ``max_range`` means no hit.
-        A disc containing or touching the origin makes every beam return ``min_range``.
+        A disc containing the origin is hit by every beam where the beam leaves it (the
+        smallest positive root; module docstring, also for the origin on the circle).
     """
     k = check_num_beams(num_beams)
     max_range, min_range = check_ranges_limits(max_range, min_range)
