@@ -87,6 +87,11 @@ def cmd_sim(args: argparse.Namespace) -> int:
         meshcat = Meshcat()
         if args.meshcat:
             print(f"Meshcat: {meshcat.web_url()}")
+    rates = None
+    if args.rates:
+        from emonav_drake.evaluation.rates import RateMeasurement
+
+        rates = RateMeasurement()
     t0 = time.perf_counter()
     if args.plant == "digit":
         if args.emotion_estimate or args.rays:
@@ -104,6 +109,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
             goal_radius=cfg.episode.eval_goal_radius,
             realtime_rate=1.0 if args.meshcat else 0.0,
             record_html=args.record,
+            rates=rates,
         )
     else:
         record, _ = run_episode(
@@ -117,10 +123,14 @@ def cmd_sim(args: argparse.Namespace) -> int:
             realtime_rate=1.0 if args.meshcat else 0.0,
             grid_kind=grid_kind,
             emotion_estimate=_emotion_estimate(args),
+            rates=rates,
         )
     wall = time.perf_counter() - t0
     out = record.to_json()
     out["seed"] = scenario.seed
+    if rates is not None and rates.report is not None:
+        out.update(rates.report.to_json())
+        print(_format_rates(rates.report))
     print(
         f"seed {scenario.seed}: {record.outcome} after {record.steps} steps "
         f"({record.nav_time:.1f} s simulated, {wall:.2f} s wall), path "
@@ -133,6 +143,21 @@ def cmd_sim(args: argparse.Namespace) -> int:
     if args.json:
         _write_json(args.json, out)
     return 0
+
+
+def _format_rates(report) -> str:
+    """The measured rates and wall-time shares as a small table."""
+    shares = report.wall_time_share
+    rates = report.rates()
+    names = sorted(set(rates) | set(shares), key=lambda n: -shares.get(n, 0.0))
+    lines = [f"{'system':28s} {'rate [1/s sim]':>15s} {'wall share':>11s}"]
+    for n in names:
+        r = f"{rates[n]:.1f}" if n in rates else "-"
+        lines.append(f"{n:28s} {r:>15s} {100 * shares.get(n, 0.0):10.1f}%")
+    lines.append(
+        f"(profiled: {report.sim_seconds:.1f} s simulated in {report.wall_seconds:.1f} s wall)"
+    )
+    return "\n".join(lines)
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
@@ -239,6 +264,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--record", type=Path, help="write a self-contained HTML replay")
     s.add_argument("--rays", action="store_true", help="draw the LiDAR rays in Meshcat")
     s.add_argument("--json", type=Path, help="write the outcome as JSON")
+    s.add_argument(
+        "--rates",
+        action="store_true",
+        help="profile the run: events per simulated second and wall-time share of every "
+        "system (printed, and added to --json as 'rates' and 'wall_time_share')",
+    )
     _add_common(s)
     s.set_defaults(func=cmd_sim)
 

@@ -19,11 +19,13 @@ def _write_json(path: Path, data: dict) -> None:
 
 def cmd_walk(args: argparse.Namespace) -> int:
     """Run one walk and print / write its JSON summary."""
+    import math
+
     from emonav_drake.diagrams.walking import run_walk
     from emonav_drake.params import load_config
 
-    if args.seconds <= 0:
-        raise ValueError(f"--seconds must be positive, got {args.seconds}")
+    if not (math.isfinite(args.seconds) and args.seconds > 0):
+        raise ValueError(f"--seconds must be a positive finite number, got {args.seconds}")
     cfg = load_config(args.config) if args.config else load_config()
     meshcat = None
     if args.meshcat or args.record:
@@ -43,7 +45,7 @@ def cmd_walk(args: argparse.Namespace) -> int:
         speed=args.speed,
     )
     out = result.to_json()
-    status = f"FELL ({result.fall_reason})" if result.fell else "walked"
+    status = f"fall ({result.fall_reason})" if result.fell else "walked"
     print(
         f"seed {args.seed} [{args.command}]: {status} {result.sim_seconds:.2f} s simulated in "
         f"{result.wall_seconds:.2f} s ({result.real_time_factor:.2f}x real time), "

@@ -167,20 +167,31 @@ class MpcParams:
 class WalkingParams:
     """Full-order Digit walking: gait, ALIP planner, passivity controller, model options.
 
-    Gains of the passivity law τ = M̄ q̈_r + C̄ q̇_r + Ḡ − K_D s (DESIGN.md §3.4): the task
+    The step time T and gravity g are not here: they belong to `RobotParams`
+    (`robot.step_time`, `robot.gravity`), shared by the navigation model, the Digit plant,
+    the footstep planner and the controller. Fractions `*_fraction` are of T.
+
+    Gains of the passivity law τ = M̄ q̈_r + C̄ q̇_r + Ḡ − K_D s (docs/walking.md): the task
     error e decays through q̇_r = q̇_d − Λ e (rates `lambda_*` [1/s]) and s = q̇ − q̇_r is
     damped by the joint-space K_D (`kd_leg` [N·m·s/rad]).
     """
 
-    step_time: float = 0.4  # T [s]
     step_width: float = 0.22  # W, lateral distance between the feet [m]
     clearance: float = 0.08  # swing-foot apex above the ground [m]
     touchdown_speed: float = 0.2  # swing foot vertical speed at touchdown [m/s]
     early_touchdown: float = 0.9  # a touchdown is accepted after this fraction of T
+    touchdown_tolerance: float = 0.002  # swing sole this close to the ground = touchdown [m]
     torso_height: float = 1.0  # torso origin above the ground [m]
     torso_pitch: float = 0.0  # torso pitch target (+ leans forward) [rad]
     stand_time: float = 0.4  # double support before the first step [s]
+    stand_com_lead: float = 0.02  # standing CoM target ahead of the feet's midpoint [m]
     speed_integral_gain: float = 0.3  # per-step integrator on the speed error
+    speed_integral_limit: float = 0.15  # bound of that integrator [m/s]
+    heading_blend_fraction: float = 0.6  # torso heading reaches its target at this·T
+    swing_yaw_blend_fraction: float = 0.8  # swing foot yaw reaches its target at this·T
+    swing_finish_fraction: float = 0.85  # swing foot reaches its target (horizontally)
+    target_freeze_fraction: float = 0.8  # the swing target is frozen after this·T
+    prediction_fraction: float = 0.5  # the logged ALIP end-of-step prediction is made here
     lateral_step_min: float = 0.12  # lateral step clamp from the stance foot [m]
     lateral_step_max: float = 0.45
     max_step_length: float = 0.45  # sagittal step clamp from the stance foot [m]
@@ -193,11 +204,13 @@ class WalkingParams:
     kd_arm: float = 20.0  # arms held by PD when not welded [N·m·s/rad]
     kp_arm: float = 200.0  # [N·m/rad]
     ankle_torque_fraction: float = 0.8  # stance toe torque bound, fraction of its limit
-    planner_period: float = 0.005  # ALIP foot-placement update [s]
-    time_step: float = 0.001  # plant and controller period [s]
+    planner_period: float = 0.005  # ALIP footstep planner update [s] (200 Hz)
+    controller_period: float = 0.001  # passivity controller [s]; = time_step: every step
+    time_step: float = 0.001  # plant step [s]
     friction: float = 1.0  # ground friction coefficient
     arms: str = "welded"  # "welded" (fixed at the held pose) or "held" (PD-controlled)
-    fall_height: float = 0.6  # torso origin below this ends the run as a fall [m]
+    fall_height: float = 0.6  # torso origin below this is a fall [m]
+    fall_check_period: float = 0.005  # the fall monitor's period [s] (200 Hz)
 
 
 @dc.dataclass
@@ -275,7 +288,27 @@ class EmoNavConfig:
             c.dt,
             f"a divisor of robot.step_time ({self.robot.step_time})",
         )
+        self._validate_walking()
         return self
+
+    def _validate_walking(self) -> None:
+        """Cross-field rules of the Digit walking stack (its rates are multiples)."""
+        w = self.walking
+        _require(
+            w.lateral_step_min < w.lateral_step_max,
+            "walking.lateral_step_min",
+            w.lateral_step_min,
+            f"< walking.lateral_step_max ({w.lateral_step_max})",
+        )
+        for name in ("planner_period", "controller_period", "fall_check_period"):
+            period = getattr(w, name)
+            ratio = period / w.time_step
+            _require(
+                ratio >= 1.0 - 1e-9 and abs(ratio - round(ratio)) < 1e-9,
+                f"walking.{name}",
+                period,
+                f"a whole multiple of walking.time_step ({w.time_step})",
+            )
 
 
 # Allowed ranges: (low, high) inclusive; list fields: (length, low, high) for each element.
@@ -326,11 +359,18 @@ _RANGES: dict[str, Any] = {
     "dwa.heading_samples": (2, 101),
     "dwa.horizon_steps": (1, 50),
     "dwa.clearance_cap": (0.01, 10.0),
-    "walking.step_time": (0.2, 1.0),
     "walking.step_width": (0.1, 0.5),
     "walking.clearance": (0.01, 0.3),
     "walking.touchdown_speed": (0.0, 1.0),
     "walking.early_touchdown": (0.5, 1.0),
+    "walking.touchdown_tolerance": (0.0, 0.05),
+    "walking.stand_com_lead": (-0.1, 0.1),
+    "walking.speed_integral_limit": (0.0, 0.5),
+    "walking.heading_blend_fraction": (0.1, 1.0),
+    "walking.swing_yaw_blend_fraction": (0.1, 1.0),
+    "walking.swing_finish_fraction": (0.3, 1.0),
+    "walking.target_freeze_fraction": (0.1, 1.0),
+    "walking.prediction_fraction": (0.0, 1.0),
     "walking.torso_height": (0.7, 1.1),
     "walking.torso_pitch": (-0.5, 0.5),
     "walking.stand_time": (0.0, 1.0e6),
@@ -347,9 +387,11 @@ _RANGES: dict[str, Any] = {
     "walking.kp_arm": (0.0, 10000.0),
     "walking.ankle_torque_fraction": (0.0, 1.0),
     "walking.planner_period": (0.001, 0.1),
+    "walking.controller_period": (0.0002, 0.02),
     "walking.time_step": (0.0002, 0.005),
     "walking.friction": (0.1, 2.0),
     "walking.fall_height": (0.2, 1.0),
+    "walking.fall_check_period": (0.0002, 0.01),
     "mpc.horizon_steps": (2, 40),
     "mpc.scp_iterations": (1, 20),
     "mpc.goal_weight": (0.0, 1e4),

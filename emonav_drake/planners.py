@@ -1,7 +1,9 @@
-"""Planner registry: one name → one planner object with `reset()` and `plan(PlannerInput)`.
+"""Planner registry: one name → one planner object (`systems.navigation_planner.Planner`).
 
-The same objects drive the Drake diagram (`systems.NavigationPlanner`) and act as
-policies on the Gymnasium environment (`planner.plan(env.unwrapped.planner_input())`).
+The same objects drive the Drake diagram (`systems.NavigationPlanner`, through the pure
+`plan_with_memory(obs, memory)`, the memory living in the Context) and act as policies on
+the Gymnasium environment (`planner.plan(env.unwrapped.planner_input())`, the memory kept
+on the object, `reset()` between episodes).
 """
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
 """The MPC baseline (`core/mpc.py`): model, behaviour, bounds, fallback, determinism."""
 
+import copy
 import math
 
 import numpy as np
@@ -225,13 +226,20 @@ def test_deterministic_and_replanning_the_same_step_gives_the_same_command():
     # a reused planner (after reset) gives the same episode again
     c = _episode(sc, cfg, planner)
     assert np.array_equal(a[1], c[1])
-    # planning a step twice (a Drake output port may be evaluated twice) changes nothing
+    # planning a step twice with the same memory changes nothing, and the memory given
+    # is not modified (the diagram keeps it in the Context)
     world = NavigationWorld(sc, cfg, grid_kind=None)
     p = MpcPlanner(cfg)
-    for _ in range(15):
+    memory = p.initial_memory()
+    for k in range(15):
         obs = world.planner_input()
-        u1, u2 = p.plan(obs), p.plan(obs)
-        assert np.array_equal(u1, u2)
+        before = copy.deepcopy(memory)
+        u1, m1 = p.plan_with_memory(obs, memory)
+        u2, m2 = p.plan_with_memory(obs, memory)
+        assert np.array_equal(u1, u2) and np.array_equal(u1, a[1][k])
+        assert np.array_equal(m1.plan.u, m2.plan.u) and np.array_equal(m1.plan.y, m2.plan.y)
+        assert np.array_equal(memory.plan.u, before.plan.u) if k else memory.plan is None
+        memory = m1
         world.step(u1)
 
 

@@ -1,15 +1,29 @@
+"""Navigation with the full-order Digit: the station under the navigation stack."""
+
 import json
+import math
 
 import numpy as np
+from pydrake.systems.analysis import Simulator
 
 from emonav_drake.cli import main
 from emonav_drake.core.dwa import DwaPlanner
-from emonav_drake.core.scenario import Scenario, StaticDiscSpec
-from emonav_drake.diagrams.navigation_digit import build_digit_navigation_diagram
+from emonav_drake.core.scenario import Scenario, StaticDiscSpec, sample_scenario
+from emonav_drake.diagrams.navigation_digit import (
+    build_digit_navigation_diagram,
+    simulate_digit_episode,
+)
 from emonav_drake.params import EmoNavConfig
+from tests.test_digit_station import kneeling_positions
 
 
-def test_digit_com_state_at_the_start():
+def _short_config(steps: int) -> EmoNavConfig:
+    cfg = EmoNavConfig()
+    cfg.episode.max_steps = steps
+    return cfg
+
+
+def test_digit_stands_at_the_scenario_start_in_a_default_context():
     cfg = EmoNavConfig()
     sc = Scenario(
         robot_start=[-4.0, 0.5],
@@ -18,11 +32,53 @@ def test_digit_com_state_at_the_start():
     )
     nd = build_digit_navigation_diagram(sc, cfg, DwaPlanner(cfg))
     ctx = nd.diagram.CreateDefaultContext()
-    nd.model.plant.SetPositionsAndVelocities(
-        nd.model.plant.GetMyMutableContextFromRoot(ctx), nd.initial_state
-    )
-    x, y, th, v = nd.com.GetOutputPort("robot_state").Eval(nd.com.GetMyContextFromRoot(ctx))
+    x, y, th, v = nd.station.GetOutputPort("robot_state").Eval(nd.station.GetMyContextFromRoot(ctx))
     assert np.hypot(x + 4.0, y - 0.5) < 0.05 and abs(th - 0.3) < 1e-9 and v == 0.0
+
+
+def test_two_runs_from_fresh_default_contexts_give_identical_records():
+    cfg = _short_config(5)
+    nd = build_digit_navigation_diagram(sample_scenario(3, cfg), cfg, DwaPlanner(cfg))
+    records = []
+    for _ in range(2):
+        sim = Simulator(nd.diagram)  # a fresh default context; no reset() anywhere
+        records.append(simulate_digit_episode(sim, nd, cfg).to_json())
+    assert records[0] == records[1]
+    assert records[0]["steps"] == 5 and records[0]["path_length"] > 0.3
+
+
+def _fall_episode(setup) -> tuple[str, str, float]:
+    cfg = _short_config(10)
+    nd = build_digit_navigation_diagram(sample_scenario(0, cfg), cfg, DwaPlanner(cfg))
+    sim = Simulator(nd.diagram)
+    plant = nd.station.plant
+    setup(nd, plant, plant.GetMyMutableContextFromRoot(sim.get_mutable_context()))
+    record = simulate_digit_episode(sim, nd, cfg)
+    ctx = sim.get_context()
+    fall = nd.station.GetOutputPort("fall").Eval(nd.station.GetMyContextFromRoot(ctx))
+    return record.outcome, fall.reason, ctx.get_time()
+
+
+def test_a_shove_ends_the_navigation_episode_as_a_fall():
+    def shove(nd, plant, plant_ctx):
+        v = np.zeros(plant.num_velocities())
+        v[nd.model.base_v[3:]] = [0.0, 2.5, 0.0]  # sideways, 2.5 m/s
+        plant.SetVelocities(plant_ctx, v)
+
+    outcome, reason, t = _fall_episode(shove)
+    assert outcome == "fall" and reason and t < 4.0
+
+
+def test_a_knee_on_the_ground_ends_the_navigation_episode_as_a_fall():
+    def kneel(nd, plant, plant_ctx):
+        q = kneeling_positions(nd.station)
+        q[nd.model.base_q[4:6]] = [-4.0, 0.0]  # at the scenario's start
+        plant.SetPositions(plant_ctx, q)
+
+    outcome, reason, t = _fall_episode(kneel)
+    # the torso is above the fall height: only the contact check can see this fall
+    assert outcome == "fall" and "shin touched the ground" in reason
+    assert math.isclose(t, 0.0, abs_tol=0.0051)
 
 
 def test_sim_with_the_full_order_digit(tmp_path):

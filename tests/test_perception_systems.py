@@ -306,7 +306,6 @@ def test_noisy_emotions_in_the_closed_navigation_loop():
     )
     b.Connect(crowd.GetOutputPort("crowd"), monitor.GetInputPort("crowd"))  # ground truth
     b.Connect(maps.GetOutputPort("lgm_stack"), plan.GetInputPort("lgm_stack"))
-    b.Connect(robot.GetOutputPort("last_command"), plan.GetInputPort("last_command"))
     b.Connect(plan.GetOutputPort("command"), robot.GetInputPort("command"))
     diagram = b.Build()
     sim = Simulator(diagram)

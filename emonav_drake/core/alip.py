@@ -8,7 +8,7 @@ left), the angular-momentum LIP about the stance contact reads
 with x_c the CoM relative to the contact [m] and ℒ a "momentum velocity" [kg·m²/s]:
 sagittally ℒ = L_y of the heading frame (= m H v_s for a CoM at height H), laterally
 ℒ = −L_x (= m H v_l). Writing both axes the same way lets one formula serve both
-(DESIGN.md §3.4). L about the contact is continuous through an impact, so the state just
+(docs/walking.md). L about the contact is continuous through an impact, so the state just
 before touchdown predicts the next step's start.
 
 Foot placement: at the end of the current step (state x̂_c, ℒ̂), place the new contact so
@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 
-def alip_frequency(height: float, gravity: float = 9.81) -> float:
+def alip_frequency(height: float, gravity: float) -> float:
     """ℓ = √(g/H) [1/s]."""
     return math.sqrt(gravity / height)
 
@@ -39,7 +39,7 @@ def alip_predict(
     elapsed: float,
     mass: float,
     height: float,
-    gravity: float = 9.81,
+    gravity: float,
 ) -> tuple[float | np.ndarray, float | np.ndarray]:
     """ALIP state `elapsed` seconds later: (x_c [m], ℒ [kg·m²/s]), per axis."""
     ell = math.sqrt(gravity / height)
@@ -48,7 +48,7 @@ def alip_predict(
     return c * xc + s * momentum / mhl, mhl * s * xc + c * momentum
 
 
-def alip_acceleration(xc: float | np.ndarray, height: float, gravity: float = 9.81):
+def alip_acceleration(xc: float | np.ndarray, height: float, gravity: float):
     """CoM acceleration of the pendulum, ẍ_c = (g/H) x_c [m/s²]."""
     return gravity / height * xc
 
@@ -59,7 +59,7 @@ def lateral_momentum_target(
     mass: float,
     height: float,
     step_time: float,
-    gravity: float = 9.81,
+    gravity: float,
 ) -> float:
     """ℒ_l at the end of the next step for a periodic gait of step width W [kg·m²/s]."""
     ell = math.sqrt(gravity / height)
@@ -75,7 +75,7 @@ def foot_placement(
     mass: float,
     height: float,
     step_time: float,
-    gravity: float = 9.81,
+    gravity: float,
 ) -> float | np.ndarray:
     """Next contact relative to the current one [m], per axis (see the module docstring).
 

@@ -53,8 +53,16 @@ class DwaPlanner:
         wh = r.omega * r.step_time / 2
         self._ch_mid, self._sh_mid = math.cosh(wh), math.sinh(wh)
 
+    def initial_memory(self) -> None:
+        """DWA keeps no memory between steps."""
+        return None
+
     def reset(self) -> None:
-        """DWA keeps no state between steps."""
+        """DWA keeps no memory between steps."""
+
+    def plan_with_memory(self, obs: PlannerInput, memory: None) -> tuple[np.ndarray, None]:
+        """`plan(obs)` and the (empty) memory: the planner interface of the diagram."""
+        return self.plan(obs), None
 
     def _rollout(self, x0: float, y0: float, th0: float, v0: float) -> np.ndarray:
         """CoM positions (C, 2·H, 2) at the middle and end of each of H steps."""

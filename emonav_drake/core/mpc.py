@@ -64,15 +64,29 @@ pattern: every QP only rewrites the values of P and A, q, l and u (`update`), so
 re-factorises numerically without a new symbolic analysis. Every solve is explicitly
 warm-started: the first of a planning step with the previous plan's primal and dual
 solution shifted by one step, the next ones with the previous iterate. Solutions are
-polished (active-set refinement), so commands on a bound are exactly on it. rho is reset
-to its initial value at each planning step, the matrices are updated before the vectors
-(OSQP re-scales all data on a matrix update) and the number of SCP iterations is fixed,
-so a plan is a deterministic function of (planner input, previous step's plan) bit for
-bit: the same episode gives the same commands, and calling `plan` twice for the same
-step (as a Drake output port may) gives the same answer. OSQP's `time_limit` is a
-wall-clock guard (0.1 s per QP, 3 QPs fit in a 0.4 s step); it is never reached on an
-idle machine (a QP takes ~0.2 ms), but on a starved one a solve that hits it makes the
-result timing-dependent — `max_iter` is the deterministic bound on the work.
+polished (active-set refinement), so commands on a bound are exactly on it.
+
+Memory and determinism. What a planning step takes from the previous ones is its memory,
+an immutable `MpcMemory`: the previous step's plan and duals (the warm start) and the
+guide path with the goal and discs it was built for. `plan_with_memory(obs, memory)`
+returns the command and the next memory without touching its argument, so in the Drake
+diagram the memory lives in the Context (`systems.NavigationPlanner`); `plan(obs)` /
+`reset()` keep one on the object for the Gymnasium env and scripts. The OSQP workspaces
+and the counters are a cache and diagnostics, not memory: a command (and the next memory)
+is a deterministic function of (planner input, memory), bit for bit, whatever the OSQP
+objects solved before. For that, rho is reset to its initial value at each planning step,
+the number of SCP iterations is fixed, and every QP goes through the same sequence of
+updates — q zeroed, then the matrices, then the vectors. OSQP re-scales the data on a
+matrix update, and its cost scaling reads the q left in the workspace: the previous QP's
+q, unscaled with the previous scaling, leaked into the new scaling in the last bits (one
+random problem in ten gave a command differing in the last bit depending on what the
+workspace had solved before). Zero survives any scaling exactly; the price is a cost
+scaling that ignores q (about 50 % more ADMM iterations, ~0.3 ms a planning step; a new
+workspace per planning step would keep the q-aware scaling but a setup costs ~1.3 ms).
+`tests/test_navigation_planner_rate.py` checks it bit for bit. OSQP's `time_limit` is a
+wall-clock guard (0.1 s per QP, 3 QPs fit in a 0.4 s step); it is never reached on an idle
+machine (a QP takes ~0.2 ms), but on a starved one a solve that hits it makes the result
+timing-dependent — `max_iter` is the deterministic bound on the work.
 
 scipy (a dependency of osqp) provides the sparse matrices OSQP takes and the Dijkstra of
 the guide path; the module needs nothing else beyond numpy.
@@ -80,8 +94,9 @@ the guide path; the module needs nothing else beyond numpy.
 Fallback. If the first QP of a planning step is infeasible (e.g. the hard contact
 constraints cannot be met) or fails, the command is the safe one — slow down to
 `fallback_speed_scale` × the current speed and keep the heading — and `fallbacks` is
-incremented; a later SCP iteration that fails keeps the previous iterate. `plan` never
-raises for a solver problem and the command is always clipped to the bounds of Eq. 2.
+incremented (the next step then starts cold); a later SCP iteration that fails keeps the
+previous iterate. Planning never raises for a solver problem and the command is always
+clipped to the bounds of Eq. 2.
 """
 
 from __future__ import annotations
@@ -127,16 +142,36 @@ class _Layout:
     soft_rows: np.ndarray  # obstacle rows (k·O + o) that carry a late-contact slack σ
     a_mat: sp.csc_matrix  # the pattern of A (values written at the first solve)
     p_mat: sp.csc_matrix  # the pattern of P (upper triangle)
+    zero_q: np.ndarray  # (n,) zeros: q before a matrix update (see `_solve`)
     solver: osqp.OSQP | None = None
 
 
-@dc.dataclass
+@dc.dataclass(frozen=True)
 class _Plan:
-    """A plan kept for warm-starting the next planning step."""
+    """A plan kept for warm-starting the next planning step (never modified)."""
 
     u: np.ndarray  # (N, 2): (u_v, u_Δθ) per step
     y: np.ndarray  # (m,) OSQP dual solution
     key: tuple[int, int]  # layout (P, S)
+    step: int  # the walking step it was planned at
+
+    def __post_init__(self) -> None:
+        self.u.flags.writeable = False
+        self.y.flags.writeable = False
+
+
+@dc.dataclass(frozen=True)
+class MpcMemory:
+    """What the MPC carries from one walking step to the next: its memory.
+
+    `plan_with_memory` never modifies a memory, it returns a new one (which may share the
+    guide path, itself never modified after construction). In the Drake diagram the
+    memory is an abstract state of `NavigationPlanner` (deep-copied in and out).
+    """
+
+    plan: _Plan | None = None  # the previous step's plan and duals (the warm start)
+    guide: GuidePath | None = None  # the guide path of the episode's static discs …
+    guide_key: tuple | None = None  # … and what it was built for (goal, discs)
 
 
 class GuidePath:
@@ -203,13 +238,15 @@ class GuidePath:
             (np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))),
             shape=(nx * ny, nx * ny),
         )
-        self.goal = np.asarray(goal, dtype=float)
+        self.goal = np.array(goal, dtype=float)
         self.goal_cell = self._cell(self.goal)
         dist, pred = csgraph.dijkstra(
             graph, directed=False, indices=int(self.goal_cell), return_predecessors=True
         )
         self.dist, self.pred = dist, pred
         self.blocked = blocked
+        for a in (self.origin, self.goal, self.dist, self.pred, self.blocked):
+            a.flags.writeable = False  # part of the planner's memory: never modified
 
     def covers(self, p: np.ndarray) -> bool:
         """Whether p lies on the grid."""
@@ -256,7 +293,8 @@ class GuidePath:
 class MpcPlanner:
     """MPC over LIP walking steps with linearised, emotion-aware collision constraints.
 
-    Implements the planner interface (`name`, `reset()`, `plan(PlannerInput)`), so it runs
+    Implements the planner interface (`name`, `initial_memory()`, `plan_with_memory`,
+    `reset()`, `plan(PlannerInput)`; see `systems.navigation_planner.Planner`), so it runs
     in the navigation diagram (`emonav sim --planner mpc`) and as a policy on the
     Gymnasium environment. The formulation is in the module docstring.
 
@@ -266,7 +304,7 @@ class MpcPlanner:
     Attributes:
         fallbacks: planning steps that fell back to the safe command (never reset).
         plans, qp_solves, qp_failures: counters since construction.
-        last_info: diagnostics of the last `plan` call (solves, iterations, statuses,
+        last_info: diagnostics of the last planning step (solves, iterations, statuses,
             OSQP run time [s], whether it fell back).
     """
 
@@ -302,10 +340,10 @@ class MpcPlanner:
         self._mask0 = (mm <= kk).astype(float)
         self._mask1 = (mm <= kk - 1).astype(float)
         self._tri = mm <= kk  # u_Δθ,i affects p_{k+1} for i ≤ k
+        # OSQP workspaces: a cache (see the module docstring: a plan does not depend on
+        # what they solved before); the planner's memory is `MpcMemory`.
         self._layouts: dict[tuple[int, int], _Layout] = {}
-        self._guide: GuidePath | None = None
-        self._guide_key: tuple | None = None
-        self._memory: dict[int, _Plan] = {}
+        self._memory = self.initial_memory()
         self.fallbacks = 0
         self.plans = 0
         self.qp_solves = 0
@@ -313,13 +351,30 @@ class MpcPlanner:
         self.last_info: dict = {}
 
     # ------------------------------------------------------------------ interface
+    def initial_memory(self) -> MpcMemory:
+        """The memory at the start of an episode: no previous plan, no guide path."""
+        return MpcMemory()
+
     def reset(self) -> None:
         """Forget the previous plan and the guide path (a new episode); counters are kept."""
-        self._memory.clear()
-        self._guide, self._guide_key = None, None
+        self._memory = self.initial_memory()
 
     def plan(self, obs: PlannerInput) -> np.ndarray:
-        """The command (u_v [m/s], u_Δθ [rad]) for this walking step."""
+        """The command (u_v [m/s], u_Δθ [rad]) for this walking step, with the planner's
+        own memory (for the Gymnasium env and scripts; call `reset` between episodes)."""
+        command, self._memory = self.plan_with_memory(obs, self._memory)
+        return command
+
+    def plan_with_memory(
+        self, obs: PlannerInput, memory: MpcMemory | None
+    ) -> tuple[np.ndarray, MpcMemory]:
+        """The command for this walking step and the memory for the next one.
+
+        A deterministic function of (obs, memory), bit for bit, whatever the planner
+        object solved before; `memory` is not modified. The previous plan warm-starts
+        this step only if it was planned at step `obs.step − 1`.
+        """
+        memory = self.initial_memory() if memory is None else memory
         self.plans += 1
         p = self.params
         n = self.horizon
@@ -329,7 +384,9 @@ class MpcPlanner:
         last = np.asarray(obs.last_command, dtype=float)
         goal = np.asarray(obs.goal_xy, dtype=float)
         obst = self._obstacles(obs)
-        target = self.references(p0, goal, obs)
+        guide, guide_key = self._guide_for(p0, goal, obs, memory)
+        has_discs = len(np.asarray(obs.crowd.static_radii).reshape(-1)) > 0
+        target = self.references(p0, goal, guide if has_discs else None)
         key = (obst["num_ped"], obst["num_static"])
         layout = self._layout(key)
         info = {
@@ -343,10 +400,10 @@ class MpcPlanner:
         }
         self.last_info = info
 
-        prev = self._memory.get(obs.step - 1)
+        prev = memory.plan
         prev_u = None
         y0 = np.zeros(layout.m)
-        if prev is not None and prev.key == key:
+        if prev is not None and prev.step == obs.step - 1 and prev.key == key:
             prev_u = np.vstack([prev.u[1:], prev.u[-1:]])
             y0 = self._shift_duals(prev.y, layout)
         u_bar = self._choose_seed(p0, th0, v0, last, target, obst, prev_u)
@@ -371,46 +428,51 @@ class MpcPlanner:
         if solved is None:
             self.fallbacks += 1
             info["fallback"] = True
-            # No plan for this step, so the next one starts cold; the previous step's plan
-            # is kept, so that planning this step again gives the same answer.
-            self._memory = {k: v for k, v in self._memory.items() if k == obs.step - 1}
+            # No plan for this step: the next one starts cold.
             command = np.array([p.fallback_speed_scale * v0, 0.0])
-            return np.clip(command, self._lo, self._hi)
-        self._memory = {k: v for k, v in self._memory.items() if k == obs.step - 1}
-        self._memory[obs.step] = _Plan(solved.copy(), y_sol.copy(), key)
-        return np.clip(solved[0].copy(), self._lo, self._hi)
+            return np.clip(command, self._lo, self._hi), MpcMemory(None, guide, guide_key)
+        new_plan = _Plan(solved.copy(), y_sol.copy(), key, int(obs.step))
+        command = np.clip(solved[0].copy(), self._lo, self._hi)
+        return command, MpcMemory(new_plan, guide, guide_key)
 
     # ------------------------------------------------------------------ reference
-    def references(self, p0: np.ndarray, goal: np.ndarray, obs: PlannerInput) -> np.ndarray:
-        """Reference positions p_k^ref (N, 2) for the step ends: along the guide path, at
-        full-speed progress plus `reference_lead` from the robot, clamped at the goal."""
+    def _guide_for(
+        self, p0: np.ndarray, goal: np.ndarray, obs: PlannerInput, memory: MpcMemory
+    ) -> tuple[GuidePath | None, tuple | None]:
+        """The guide path to keep: the memory's if it was built for the same goal and
+        discs and covers the robot, else a new one; without static discs the memory's,
+        unused (the straight line to the goal is the guide then)."""
         p, r = self.params, self.config.robot
         crowd = obs.crowd
         centers = np.asarray(crowd.static_centers, dtype=float).reshape(-1, 2)
         radii = np.asarray(crowd.static_radii, dtype=float).reshape(-1)
-        path = None
-        if len(radii):
-            key = (
-                goal.tobytes(),
-                centers.tobytes(),
-                radii.tobytes(),
-                float(crowd.static_discomfort),
-            )
-            if self._guide_key != key or not self._guide.covers(p0):
-                r_col = radii + r.radius + p.collision_margin
-                r_zone = radii + r.radius + crowd.static_discomfort + p.discomfort_margin
-                self._guide = GuidePath(
-                    goal,
-                    centers,
-                    r_col,
-                    r_zone,
-                    p0,
-                    p.guide_resolution,
-                    p.guide_padding,
-                    p.guide_zone_cost,
-                )
-                self._guide_key = key
-            path = self._guide.path(p0)
+        if not len(radii):
+            return memory.guide, memory.guide_key
+        key = (goal.tobytes(), centers.tobytes(), radii.tobytes(), float(crowd.static_discomfort))
+        if memory.guide is not None and memory.guide_key == key and memory.guide.covers(p0):
+            return memory.guide, memory.guide_key
+        r_col = radii + r.radius + p.collision_margin
+        r_zone = radii + r.radius + crowd.static_discomfort + p.discomfort_margin
+        guide = GuidePath(
+            goal,
+            centers,
+            r_col,
+            r_zone,
+            p0,
+            p.guide_resolution,
+            p.guide_padding,
+            p.guide_zone_cost,
+        )
+        return guide, key
+
+    def references(
+        self, p0: np.ndarray, goal: np.ndarray, guide: GuidePath | None = None
+    ) -> np.ndarray:
+        """Reference positions p_k^ref (N, 2) for the step ends: along the guide path (or
+        the straight line without one), at full-speed progress plus `reference_lead` from
+        the robot, clamped at the goal."""
+        p, r = self.params, self.config.robot
+        path = None if guide is None else guide.path(p0)
         if path is None:
             path = np.stack([p0, goal])
         arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
@@ -640,7 +702,20 @@ class MpcPlanner:
         buf_a[one] = 1.0
         buf_p = np.zeros(nu * nu + 1)
         buf_p[-1] = 2.0 * self.params.slack_quadratic_weight
-        layout = _Layout(n_ped, n_st, nvar, m, src_a, src_p, buf_a, buf_p, soft_rows, a_mat, p_mat)
+        layout = _Layout(
+            n_ped,
+            n_st,
+            nvar,
+            m,
+            src_a,
+            src_p,
+            buf_a,
+            buf_p,
+            soft_rows,
+            a_mat,
+            p_mat,
+            np.zeros(nvar),
+        )
         self._layouts[key] = layout
         return layout
 
@@ -765,10 +840,14 @@ class MpcPlanner:
             )
             layout.solver = solver
         # Always the same sequence of operations, also right after the setup, so that a
-        # plan does not depend on what the solver did before, bit for bit: the matrices
-        # first (OSQP re-scales the problem data), then the vectors with the new scaling.
+        # plan does not depend on what the solver did before, bit for bit. A matrix update
+        # makes OSQP re-scale the problem, and its cost scaling reads the q in the
+        # workspace — the previous QP's, unscaled with the previous scaling (rounding): so
+        # q is zeroed first (zero survives any scaling exactly), then the matrices, then
+        # the vectors with the new scaling.
         if first:
             layout.solver.update_settings(rho=_RHO0)
+        layout.solver.update(q=layout.zero_q)
         layout.solver.update(Px=lin["Px"], Ax=lin["Ax"])
         layout.solver.update(q=lin["q"], l=lin["l"], u=lin["u"])
         layout.solver.warm_start(x=x0, y=y0)

@@ -23,10 +23,19 @@ class ReplayPlanner:
     def __init__(self, commands: np.ndarray) -> None:
         self.commands = np.asarray(commands, dtype=float).reshape(-1, 2)
 
+    def initial_memory(self) -> None:
+        """No memory: the step index comes with the planner input."""
+        return None
+
     def reset(self) -> None:
-        """No state: the step index comes with the planner input."""
+        """No memory: the step index comes with the planner input."""
+
+    def plan_with_memory(self, obs: PlannerInput, memory: None) -> tuple[np.ndarray, None]:
+        """`plan(obs)` and the (empty) memory: the planner interface of the diagram."""
+        return self.plan(obs), None
 
     def plan(self, obs: PlannerInput) -> np.ndarray:
+        """Command `obs.step` of the sequence (u_v [m/s], u_Δθ [rad]), (0, 0) after it."""
         if obs.step < len(self.commands):
             return self.commands[obs.step].copy()
         return np.zeros(2)

@@ -1,14 +1,27 @@
 """The navigation diagram: crowd + LiDAR/LGM + planner + LIP robot (+ Meshcat).
 
-    ┌──────────────┐ robot_state ┌──────────────┐ crowd ┌──────────────────────┐
-    │ LipRobotPlant├────────────►│ CrowdSystem  ├──────►│ LidarGridMapBuilder  │
-    │   (T = 0.4 s)│◄─┐          │ (dt = 0.1 s) │       │ (stack per step)     │
-    └──────┬───────┘  │ command  └──────────────┘       └─────────┬────────────┘
-           │          │          ┌──────────────────┐ lgm_stack   │
-           │          └──────────┤ NavigationPlanner│◄────────────┘
-           └────────────────────►│ (DWA / MPC / SAC)│ (+ robot_state, crowd, last_command)
-                                 └──────────────────┘
+    ┌───────────────┐ robot_state ┌──────────────┐ crowd ┌─────────────────────┐
+    │ LipRobotPlant ├────────────►│ CrowdSystem  ├──────►│ LidarGridMapBuilder │
+    │ (T = 0.4 s)   │             │ (dt = 0.1 s) │       │ (stack per step)    │
+    └──▲─────┬──────┘             └──────┬───────┘       └─────────┬───────────┘
+       │     │ robot_state               │ crowd                   │ lgm_stack
+       │     │                    ┌──────▼───────────┐             │
+       │     └───────────────────►│ NavigationPlanner│◄────────────┘
+       │          command (held)  │ (DWA / MPC / SAC,│
+       └──────────────────────────┤  T = 0.4 s)      │
+                                  └──────────────────┘
     EpisodeMonitor (rewards, outcome, metrics) and the Meshcat visualiser listen.
+
+Timing. Every navigation update is a periodic unrestricted event at offset 0 (the
+planner, the plant and the grid maps every T, the crowd every dt, the monitor every T),
+so at an instant t_k = kT every one reads the same pre-update state. At t_k the planner
+reads the robot at its foot switch, the crowd and the grid-map stack at t_k, and its own
+previous command u_{k−1} (from its state: there is no `last_command` port); it stores u_k,
+which the robot executes during step k (t_k → t_{k+1}). The planner's `command` output is
+its state (no direct feedthrough); the plant's `robot_state` is computed from the step's
+start state, that command and the elapsed time (direct feedthrough from `command`). The
+planner's memory (e.g. the MPC's warm start) lives in the Context: two simulations from
+fresh default contexts, or a cloned context, need no `planner.reset()`.
 
 `build_navigation_diagram` wires it; `run_episode` simulates one episode walking step
 by walking step and returns its `EpisodeRecord` and a per-step trajectory log.
@@ -19,6 +32,7 @@ from __future__ import annotations
 import dataclasses as dc
 import logging
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from pydrake.geometry import Meshcat
@@ -36,6 +50,9 @@ from emonav_drake.systems.lidar_grid_map_builder import LidarGridMapBuilder
 from emonav_drake.systems.lip_robot_plant import LipRobotPlant
 from emonav_drake.systems.navigation_meshcat import NavigationMeshcatVisualizer
 from emonav_drake.systems.navigation_planner import NavigationPlanner, Planner
+
+if TYPE_CHECKING:
+    from emonav_drake.evaluation.rates import RateMeasurement
 
 log = logging.getLogger(__name__)
 
@@ -69,7 +86,6 @@ def AddNavigationStack(
     config: EmoNavConfig,
     planner: Planner,
     robot_state: OutputPort,
-    last_command: OutputPort,
     grid_kind: str = "lgm",
     goal_radius: float | None = None,
     emotion_estimate: EmotionEstimateParams | None = None,
@@ -78,10 +94,11 @@ def AddNavigationStack(
 
     Args:
         builder: the diagram builder.
-        robot_state: the robot's (x, y, θ, v) output (LIP plant or Digit's CoM state).
-        last_command: the command in force (the previous step's at a foot switch).
+        robot_state: the robot's (x [m], y [m], θ [rad], v [m/s]) output, world frame (LIP
+            plant or Digit's CoM state); at t_k it must show the robot at its foot switch.
         Others: as `build_navigation_diagram`.
-    The caller connects the planner's `command` output to its robot.
+    The caller connects the planner's `command` output to its robot: (u_v [m/s], u_Δθ
+    [rad]), held for the whole walking step (u_k during step k, planned at t_k).
     """
     b = builder
     crowd = b.AddNamedSystem("crowd", CrowdSystem(scenario, config))
@@ -100,7 +117,6 @@ def AddNavigationStack(
             b.Connect(crowd.GetOutputPort("crowd"), port)
     b.Connect(crowd.GetOutputPort("crowd"), monitor.GetInputPort("crowd"))
     b.Connect(maps.GetOutputPort("lgm_stack"), plan.GetInputPort("lgm_stack"))
-    b.Connect(last_command, plan.GetInputPort("last_command"))
     return NavigationStack(crowd, maps, plan, monitor)
 
 
@@ -119,7 +135,8 @@ def build_navigation_diagram(
     Args:
         scenario: the episode to play.
         config: the project configuration.
-        planner: DWA, MPC or a learned policy (anything with `plan` and `reset`).
+        planner: DWA, MPC or a learned policy (a `Planner`); its memory lives in the
+            diagram's Context, so one planner object may serve several contexts.
         meshcat: draw into this Meshcat when given.
         show_rays: draw LiDAR rays in Meshcat.
         grid_kind: "lgm" or "ogm" grid maps for the planner's `lgm_stack` input.
@@ -140,7 +157,6 @@ def build_navigation_diagram(
         config,
         planner,
         state,
-        robot.GetOutputPort("last_command"),
         grid_kind,
         goal_radius,
         emotion_estimate,
@@ -167,7 +183,7 @@ class StepLog:
 
     robot: list[np.ndarray] = dc.field(default_factory=list)  # (x, y, θ, v)
     pedestrians: list[np.ndarray] = dc.field(default_factory=list)  # (P, 2)
-    commands: list[np.ndarray] = dc.field(default_factory=list)  # command issued at t_k
+    commands: list[np.ndarray] = dc.field(default_factory=list)  # u_k, k = 0 … steps − 1
     rewards: list[float] = dc.field(default_factory=list)  # reward of the step ending at t_k
 
 
@@ -182,16 +198,19 @@ def run_episode(
     goal_radius: float | None = None,
     realtime_rate: float = 0.0,
     emotion_estimate: EmotionEstimateParams | None = None,
+    rates: RateMeasurement | None = None,
 ) -> tuple[EpisodeRecord, StepLog]:
     """Simulate one episode of the navigation diagram.
 
     Returns the episode's record (outcome, metrics) and the per-step log. With
     `record_html` the run is recorded in Meshcat and written as a self-contained HTML
-    replay (a Meshcat is created if none is given).
+    replay (a Meshcat is created if none is given). With `rates`, the simulation runs
+    under the profiler of `evaluation.rates` and the per-system rates and wall-time shares
+    are left in `rates.report`. The planner's memory starts from
+    `planner.initial_memory()` in the new diagram's Context (no `reset()` needed).
     """
     if record_html is not None and meshcat is None:
         meshcat = Meshcat()
-    planner.reset()
     nav = build_navigation_diagram(
         scenario, config, planner, meshcat, show_rays, grid_kind, goal_radius, emotion_estimate
     )
@@ -210,24 +229,32 @@ def run_episode(
     status_port = nav.monitor.GetOutputPort("status")
 
     def snapshot(k: int) -> bool:
+        """Log the world at t_k, before the updates at t_k (the planner still holds
+        u_{k−1}: the command of the step that just ended)."""
         rc = nav.robot.GetMyContextFromRoot(ctx)
         log_.robot.append(robot_port.Eval(rc).copy())
         log_.pedestrians.append(
             crowd_port.Eval(nav.crowd.GetMyContextFromRoot(ctx)).positions.copy()
         )
         status = status_port.Eval(nav.monitor.GetMyContextFromRoot(ctx))
-        if k > 0 and status.last_step is not None:
-            log_.rewards.append(status.last_step.reward)
-        if not status.done:
+        if k > 0:
             log_.commands.append(cmd_port.Eval(nav.planner.GetMyContextFromRoot(ctx)).copy())
+            if status.last_step is not None:
+                log_.rewards.append(status.last_step.reward)
         return status.done
 
-    done = snapshot(0)
-    k = 0
-    while not done:
-        k += 1
-        sim.AdvanceTo(k * T)
-        done = snapshot(k)
+    def walk() -> None:
+        done = snapshot(0)
+        k = 0
+        while not done:
+            k += 1
+            sim.AdvanceTo(k * T)
+            done = snapshot(k)
+
+    if rates is not None:
+        rates.run(sim, nav.diagram, walk)
+    else:
+        walk()
     record = status_port.Eval(nav.monitor.GetMyContextFromRoot(ctx)).record
     if record_html is not None:
         meshcat.StopRecording()

@@ -1,58 +1,67 @@
 """Navigation with the full-order Digit: the paper's deployment setting (LIP/Digit, Digit/Digit).
 
 The navigation stack of `diagrams/navigation.py` — crowd, LiDAR grid maps, planner (DWA,
-MPC or a learned policy) and episode monitor — around the walking stack of
-`diagrams/walking.py` instead of the LIP robot:
+MPC or a learned policy) and episode monitor — around the Digit station
+(`diagrams/digit_station.py`) instead of the LIP robot:
 
-    planner ─command─► CommandHold (2.5 Hz) ─► AlipFootstepPlanner ─► PassivityController
-       ▲                                           ▲                        │ torques
-       │ robot_state, crowd, lgm_stack             │ state                  ▼
-    DigitComState ◄──────────── state ──────── Digit MultibodyPlant (SAP, 1 ms)
+    NavigationPlanner (2.5 Hz, holds u_k) ─command─► DigitStation ──► robot_state, fall
+       ▲  robot_state, crowd, lgm_stack               (ALIP 200 Hz, controller 1 kHz,
+       └──────────────────────────────────────────────  plant 1 ms, fall check 200 Hz)
 
 The robot state the navigation stack sees is Digit's CoM, torso yaw and sagittal CoM
-speed (`DigitComState`), so the LIP model's tracking errors reach the crowd, the LGM and
-the rewards — the discrepancy the paper studies. A fall (torso below
-`walking.fall_height`, or a non-foot body on the ground) ends the episode with outcome
-"fall": an outcome, never an exception.
+speed, so the walking stack's tracking errors reach the crowd, the LGM and the rewards —
+the discrepancy the paper studies.
+
+Timing. At t_k = kT the planner computes u_k from the robot, the crowd and the grid maps
+at t_k and holds it. Digit's footstep planner reads the held command at each foot switch
+for the step that starts there. The first step starts at `walking.stand_time` and later
+switches come at most T apart (earlier on an early touchdown), so Digit's steps are not
+locked to the planner's clock: a switch reads the command of the latest planner instant
+strictly before it (a switch at the same instant t_k, as at the first step, still reads
+u_{k−1}: every update of one instant reads the pre-update state). The ALIP then places
+the swing foot so that the speed reaches u_v at the end of the *next* step. Together this
+is the response delay of the full-order robot that the LIP model (which reaches u_v at
+t_{k+1}) does not have.
+
+A fall (the station's `FallMonitor`) ends the episode with the outcome "fall": an
+outcome, never an exception.
 """
 
 from __future__ import annotations
 
 import dataclasses as dc
-import math
 from pathlib import Path
 
-import numpy as np
 from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams, Role
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Diagram, DiagramBuilder
 
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
+from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
 from emonav_drake.diagrams.navigation import AddNavigationStack
-from emonav_drake.diagrams.walking import standing_com_height
+from emonav_drake.evaluation.rates import RateMeasurement
 from emonav_drake.params import EmoNavConfig
-from emonav_drake.systems.alip_footstep_planner import AlipFootstepPlanner
 from emonav_drake.systems.crowd_system import CrowdSystem
-from emonav_drake.systems.digit_navigation_bridge import CommandHold, DigitComState
-from emonav_drake.systems.digit_plant import AddDigitPlant, DigitModel, standing_state
 from emonav_drake.systems.episode_monitor import EpisodeMonitor
+from emonav_drake.systems.fall_monitor import FALL, fall_monitor_callback
 from emonav_drake.systems.navigation_meshcat import NavigationMeshcatVisualizer
 from emonav_drake.systems.navigation_planner import NavigationPlanner, Planner
-from emonav_drake.systems.passivity_controller import PassivityController
-
-FALL = "fall"
 
 
 @dc.dataclass
 class DigitNavigationDiagram:
+    """The built diagram and handles to its systems."""
+
     diagram: Diagram
-    model: DigitModel
-    com: DigitComState
+    station: DigitStation
     crowd: CrowdSystem
     planner: NavigationPlanner
     monitor: EpisodeMonitor
-    initial_state: np.ndarray
+
+    @property
+    def model(self):
+        return self.station.model
 
 
 def build_digit_navigation_diagram(
@@ -63,51 +72,37 @@ def build_digit_navigation_diagram(
     grid_kind: str = "lgm",
     goal_radius: float | None = None,
 ) -> DigitNavigationDiagram:
-    """Wire the navigation stack around the full-order Digit for one scenario."""
+    """Wire the navigation stack around the Digit station for one scenario.
+
+    Digit stands at the scenario's start, facing its heading, in a default context.
+    """
     config.validate()
     scenario.validate()
-    wp = config.walking
     b = DiagramBuilder()
-    model = AddDigitPlant(b, wp)
-    height = standing_com_height(model)
-    alip = b.AddNamedSystem("alip", AlipFootstepPlanner(model, wp, config.robot, height))
-    controller = b.AddNamedSystem("controller", PassivityController(model, wp))
-    com = b.AddNamedSystem("com", DigitComState(model))
-    hold = b.AddNamedSystem("command_hold", CommandHold(config.robot.step_time))
-    plant = model.plant
-    for sys in (alip, controller, com):
-        b.Connect(plant.get_state_output_port(), sys.GetInputPort("state"))
-    b.Connect(alip.GetOutputPort("targets"), controller.GetInputPort("targets"))
-    b.Connect(controller.GetOutputPort("actuation"), plant.get_actuation_input_port())
+    pose = (*(float(v) for v in scenario.robot_start), float(scenario.robot_heading))
+    station = AddDigitStation(b, config, pose=pose)
+    robot_state = station.GetOutputPort("robot_state")
     stack = AddNavigationStack(
-        b,
-        scenario,
-        config,
-        planner,
-        com.GetOutputPort("robot_state"),
-        hold.GetOutputPort("command"),
-        grid_kind,
-        goal_radius,
+        b, scenario, config, planner, robot_state, grid_kind=grid_kind, goal_radius=goal_radius
     )
     crowd, nav, monitor = stack.crowd, stack.planner, stack.monitor
-    b.Connect(nav.GetOutputPort("command"), hold.GetInputPort("command"))
-    b.Connect(hold.GetOutputPort("command"), alip.GetInputPort("command"))
+    b.Connect(nav.GetOutputPort("command"), station.GetInputPort("command"))
     if meshcat is not None:
         MeshcatVisualizer.AddToBuilder(
-            b, model.scene_graph, meshcat, MeshcatVisualizerParams(role=Role.kIllustration)
+            b,
+            station.GetOutputPort("query_object"),
+            meshcat,
+            MeshcatVisualizerParams(role=Role.kIllustration),
         )
         vis = b.AddNamedSystem(
             "navigation_visualizer",
             NavigationMeshcatVisualizer(meshcat, scenario, config, draw_robot=False),
         )
-        b.Connect(com.GetOutputPort("robot_state"), vis.GetInputPort("robot_state"))
+        b.Connect(robot_state, vis.GetInputPort("robot_state"))
         b.Connect(crowd.GetOutputPort("crowd"), vis.GetInputPort("crowd"))
     diagram = b.Build()
-    x0 = standing_state(model)
-    heading = float(scenario.robot_heading)
-    x0[model.base_q[:4]] = [math.cos(heading / 2), 0.0, 0.0, math.sin(heading / 2)]
-    x0[model.base_q[4:6]] = scenario.robot_start
-    return DigitNavigationDiagram(diagram, model, com, crowd, nav, monitor, x0)
+    diagram.set_name("emonav_navigation_digit")
+    return DigitNavigationDiagram(diagram, station, crowd, nav, monitor)
 
 
 def run_digit_episode(
@@ -119,23 +114,24 @@ def run_digit_episode(
     goal_radius: float | None = None,
     realtime_rate: float = 0.0,
     record_html: str | Path | None = None,
+    rates: RateMeasurement | None = None,
 ) -> EpisodeRecord:
     """Simulate one navigation episode with the full-order Digit; returns its record
-    (outcome success | collision | timeout | fall)."""
+    (outcome success | collision | timeout | fall).
+
+    With `rates`, the simulation runs under the profiler of `evaluation.rates` and the
+    per-system rates and wall-time shares are left in `rates.report`."""
     if record_html is not None and meshcat is None:
         meshcat = Meshcat()
-    planner.reset()
     nd = build_digit_navigation_diagram(scenario, config, planner, meshcat, grid_kind, goal_radius)
     sim = Simulator(nd.diagram)
     sim.set_target_realtime_rate(realtime_rate)
-    ctx = sim.get_mutable_context()
-    plant = nd.model.plant
-    plant_ctx = plant.GetMyMutableContextFromRoot(ctx)
-    plant.SetPositionsAndVelocities(plant_ctx, nd.initial_state)
     if record_html is not None:
         meshcat.StartRecording(set_visualizations_while_recording=False)
-    sim.Initialize()
-    record = _simulate_until_done(sim, nd, config)
+    if rates is not None:
+        record = rates.run(sim, nd.diagram, lambda: simulate_digit_episode(sim, nd, config))
+    else:
+        record = simulate_digit_episode(sim, nd, config)
     if record_html is not None:
         meshcat.StopRecording()
         meshcat.PublishRecording()
@@ -143,26 +139,31 @@ def run_digit_episode(
     return record
 
 
-def _simulate_until_done(
+def simulate_digit_episode(
     sim: Simulator, nd: DigitNavigationDiagram, config: EmoNavConfig
 ) -> EpisodeRecord:
-    """Advance walking step by walking step until the monitor or a fall ends the episode."""
+    """Run `sim` (built on `nd`, its context at the episode's start) walking step by
+    walking step until the episode monitor ends the episode or the robot falls."""
+    sim.set_monitor(fall_monitor_callback(nd.diagram, nd.station.fall_monitor))
     ctx = sim.get_mutable_context()
-    plant = nd.model.plant
-    plant_ctx = plant.GetMyMutableContextFromRoot(ctx)
     status_port = nd.monitor.GetOutputPort("status")
-    monitor_ctx = nd.monitor.GetMyContextFromRoot(ctx)
-    torso_z = nd.model.base_q[6]
+    fall_port = nd.station.GetOutputPort("fall")
     T = config.robot.step_time
-    k = 0
+    sim.Initialize()
+    k = round(ctx.get_time() / T)
     while True:
-        status = status_port.Eval(monitor_ctx)
-        if status.done:
-            return status.record
-        q = plant.GetPositions(plant_ctx)
-        if not np.all(np.isfinite(q)) or q[torso_z] < config.walking.fall_height:
+        status = status_port.Eval(nd.monitor.GetMyContextFromRoot(ctx))
+        fall = fall_port.Eval(nd.station.GetMyContextFromRoot(ctx))
+        if fall.fallen:
             record = status.record
             record.outcome = FALL
             return record
+        if status.done:
+            return status.record
         k += 1
-        sim.AdvanceTo(k * T)
+        try:
+            sim.AdvanceTo(k * T)
+        except RuntimeError:  # the contact solver gives up only on a robot in a heap
+            record = status_port.Eval(nd.monitor.GetMyContextFromRoot(ctx)).record
+            record.outcome = FALL
+            return record

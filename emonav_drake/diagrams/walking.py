@@ -1,17 +1,16 @@
-"""The walking diagram: full-order Digit + ALIP footstep planner + passivity controller.
+"""The walking diagram: the Digit station driven by a per-step command source.
 
-    ┌──────────────────────┐ command ┌──────────────────────┐ targets ┌─────────────────┐
-    │ WalkingCommandSource ├────────►│ AlipFootstepPlanner  ├────────►│ Passivity-      │
-    │ (per step)           │◄────────┤ (phase, ALIP, 200 Hz)│         │ Controller 1 kHz│
-    └──────────────────────┘next_step└──────────▲───────────┘         └───────┬─────────┘
-                                                │ state                       │ actuation
-                                     ┌──────────┴───────────┐◄────────────────┘
-                                     │ Digit MultibodyPlant │ (SAP, 1 ms) ──► Meshcat
-                                     └──────────────────────┘
+    ┌──────────────────────┐ command  ┌──────────────────────────────────────────┐
+    │ WalkingCommandSource ├─────────►│ DigitStation: ALIP footstep planner,     │
+    │ (per step)           │◄─────────┤ passivity controller, Digit plant, CoM   │──► Meshcat
+    └──────────────────────┘ next_step│ state, fall monitor                      │
+                                      └──────────────────────────────────────────┘
 
 `build_walking_diagram` wires it; `run_walk` simulates it and returns the issue's JSON
-fields. A fall — the torso origin below `fall_height` or any body but a foot touching the
-ground — ends the run with `fell = True`; it is an outcome, never an exception.
+fields. A fall — detected by the station's `FallMonitor` (non-finite state, torso below
+`walking.fall_height`, or any body but a foot touching the ground, checked every
+`walking.fall_check_period`) — ends the run with the outcome "fall"; it is an outcome,
+never an exception.
 """
 
 from __future__ import annotations
@@ -26,12 +25,23 @@ import numpy as np
 from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams, Role
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 
 from emonav_drake.core.lip import LipState, lip_step, wrap_angle
+from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
 from emonav_drake.params import EmoNavConfig, load_config
-from emonav_drake.systems.alip_footstep_planner import T_SWYAW0, T_SWYAW1, AlipFootstepPlanner
-from emonav_drake.systems.digit_plant import AddDigitPlant, DigitModel, standing_state
-from emonav_drake.systems.passivity_controller import PassivityController
+from emonav_drake.systems.alip_footstep_planner import (
+    LOG_COM,
+    LOG_COMMAND,
+    LOG_HEADING_TARGET,
+    LOG_MEASURED,
+    LOG_PREDICTED,
+    LOG_SPEED,
+    LOG_SWING_YAW,
+    LOG_TIME,
+    LOG_YAW,
+)
+from emonav_drake.systems.fall_monitor import FALL, fall_monitor_callback
 from emonav_drake.systems.walking_command_source import WalkingCommandSource, command_sequence
 
 log = logging.getLogger(__name__)
@@ -42,19 +52,14 @@ class WalkingDiagram:
     """The built diagram and handles to its systems."""
 
     diagram: Diagram
-    model: DigitModel
-    planner: AlipFootstepPlanner
-    controller: PassivityController
+    station: DigitStation
     commands: WalkingCommandSource
-    com_height: float
-    initial_state: np.ndarray
+    step_logger: VectorLogSink
+    count_logger: VectorLogSink
 
-
-def standing_com_height(model: DigitModel) -> float:
-    """CoM height of the standing pose [m] — the ALIP's H for this model."""
-    ctx = model.plant.CreateDefaultContext()
-    model.plant.SetPositionsAndVelocities(ctx, standing_state(model))
-    return float(model.plant.CalcCenterOfMassPositionInWorld(ctx)[2])
+    @property
+    def com_height(self) -> float:
+        return self.station.com_height
 
 
 def build_walking_diagram(
@@ -63,7 +68,7 @@ def build_walking_diagram(
     meshcat: Meshcat | None = None,
     record_timing: bool = False,
 ) -> WalkingDiagram:
-    """Wire plant, planner, controller and command source (+ Meshcat).
+    """Wire the Digit station, the command source, step loggers (+ Meshcat).
 
     Args:
         config: the project configuration (`config.walking`, `config.robot`).
@@ -71,29 +76,26 @@ def build_walking_diagram(
         meshcat: draw the robot into this Meshcat when given.
         record_timing: keep the controller's per-tick durations.
     """
-    config.validate()
-    wp = config.walking
     b = DiagramBuilder()
-    model = AddDigitPlant(b, wp)
-    H = standing_com_height(model)
-    planner = b.AddNamedSystem("planner", AlipFootstepPlanner(model, wp, config.robot, H))
-    controller = b.AddNamedSystem(
-        "controller", PassivityController(model, wp, record_timing=record_timing)
-    )
+    station = AddDigitStation(b, config, record_timing=record_timing)
     source = b.AddNamedSystem("commands", WalkingCommandSource(commands))
-    plant = model.plant
-    b.Connect(plant.get_state_output_port(), planner.GetInputPort("state"))
-    b.Connect(plant.get_state_output_port(), controller.GetInputPort("state"))
-    b.Connect(planner.GetOutputPort("targets"), controller.GetInputPort("targets"))
-    b.Connect(planner.GetOutputPort("next_step"), source.GetInputPort("next_step"))
-    b.Connect(source.GetOutputPort("command"), planner.GetInputPort("command"))
-    b.Connect(controller.GetOutputPort("actuation"), plant.get_actuation_input_port())
+    b.Connect(station.GetOutputPort("next_step"), source.GetInputPort("next_step"))
+    b.Connect(source.GetOutputPort("command"), station.GetInputPort("command"))
+    # A switch happens at a footstep-planner update and lasts at least half a step, so
+    # logging at the planner's rate sees every one.
+    period = config.walking.planner_period
+    steps = LogVectorOutput(station.GetOutputPort("step_log"), b, period)
+    counts = LogVectorOutput(station.GetOutputPort("next_step"), b, period)
     if meshcat is not None:
         MeshcatVisualizer.AddToBuilder(
-            b, model.scene_graph, meshcat, MeshcatVisualizerParams(role=Role.kIllustration)
+            b,
+            station.GetOutputPort("query_object"),
+            meshcat,
+            MeshcatVisualizerParams(role=Role.kIllustration),
         )
     diagram = b.Build()
-    return WalkingDiagram(diagram, model, planner, controller, source, H, standing_state(model))
+    diagram.set_name("emonav_walking")
+    return WalkingDiagram(diagram, station, source, steps, counts)
 
 
 @dc.dataclass
@@ -136,8 +138,14 @@ class WalkResult:
     def real_time_factor(self) -> float:
         return self.sim_seconds / self.wall_seconds if self.wall_seconds > 0 else float("inf")
 
+    @property
+    def outcome(self) -> str:
+        """ "fall" or "walked"."""
+        return FALL if self.fell else "walked"
+
     def to_json(self) -> dict:
         return {
+            "outcome": self.outcome,
             "fell": self.fell,
             "fall_reason": self.fall_reason,
             "sim_seconds": round(self.sim_seconds, 4),
@@ -216,11 +224,12 @@ def run_walk(
         speed, heading_change, script: see `command_sequence`.
         push: an initial torso velocity v_WT [m/s] (world), e.g. to provoke a fall.
     """
+    if not (math.isfinite(seconds) and seconds > 0):
+        raise ValueError(f"seconds must be a positive finite number, got {seconds}")
     cfg = config if config is not None else load_config()
     if command == "stand":
         cfg = dc.replace(cfg, walking=dc.replace(cfg.walking, stand_time=seconds + 1.0))
-    wp = cfg.walking
-    n_steps = int(seconds / wp.step_time) + 10
+    n_steps = int(seconds / cfg.robot.step_time) + 10
     seq = command_sequence(
         command,
         n_steps,
@@ -233,94 +242,83 @@ def run_walk(
     if record_html is not None and meshcat is None:
         meshcat = Meshcat()
     wd = build_walking_diagram(cfg, seq, meshcat=meshcat, record_timing=record_timing)
-    plant = wd.model.plant
-    sim = Simulator(wd.diagram)
+    station = wd.station
+    plant = station.plant
+    sim = Simulator(wd.diagram)  # the default context stands still
     ctx = sim.get_mutable_context()
-    plant_ctx = plant.GetMyMutableContextFromRoot(ctx)
-    x0 = wd.initial_state.copy()
     if push is not None:
-        x0[plant.num_positions() + wd.model.base_v[3:]] = push
-    plant.SetPositionsAndVelocities(plant_ctx, x0)
-    planner_ctx = wd.planner.GetMyContextFromRoot(ctx)
-    log_port = wd.planner.GetOutputPort("step_log")
-    torso_q = wd.model.base_q[6]
-    non_foot = wd.model.non_foot_bodies
-    fall = {"reason": ""}
-    steps: list[StepRecord] = []
-    last = {"count": 0.0}
-    count_port = wd.planner.GetOutputPort("next_step")
-    targets_port = wd.planner.GetOutputPort("targets")
-
-    def check() -> str:
-        """Fall reason ('' if none); also records a new step from the planner's log."""
-        q = plant.GetPositions(plant_ctx)
-        if not np.all(np.isfinite(q)):
-            return "non-finite state"
-        if q[torso_q] < wp.fall_height:
-            return f"torso at {q[torso_q]:.3f} m"
-        contacts = plant.get_contact_results_output_port().Eval(plant_ctx)
-        for i in range(contacts.num_point_pair_contacts()):
-            info = contacts.point_pair_contact_info(i)
-            for bi in (info.bodyA_index(), info.bodyB_index()):
-                if int(bi) in non_foot:
-                    return f"{plant.get_body(bi).name()} touched the ground"
-        c = count_port.Eval(planner_ctx)[0]
-        if c != last["count"]:
-            last["count"] = c
-            r = log_port.Eval(planner_ctx)
-            tg = targets_port.Eval(planner_ctx)
-            steps.append(
-                StepRecord(
-                    *[float(v) for v in r[:8]],
-                    [float(v) for v in r[8:12]],
-                    [float(v) for v in r[12:16]],
-                    (float(tg[T_SWYAW0]), float(tg[T_SWYAW1])),
-                )
-            )
-        return ""
-
+        plant_ctx = plant.GetMyMutableContextFromRoot(ctx)
+        v = plant.GetVelocities(plant_ctx).copy()
+        v[station.model.base_v[3:]] = push
+        plant.SetVelocities(plant_ctx, v)
+    sim.set_monitor(fall_monitor_callback(wd.diagram, station.fall_monitor))
     sim.set_target_realtime_rate(realtime_rate)
     if meshcat is not None and record_html is not None:
         meshcat.StartRecording(set_visualizations_while_recording=False)
-    sim.Initialize()
-    # Advance in chunks of the planner period (5 ms) and check for a fall in between:
-    # cheaper than a per-tick monitor, and a fall is caught within one chunk.
-    chunk = wp.planner_period
-    n_chunks = int(math.ceil(seconds / chunk - 1e-9))
+    reason = ""
     t0 = time.perf_counter()
-    for k in range(1, n_chunks + 1):
-        try:
-            sim.AdvanceTo(min(k * chunk, seconds))
-        except RuntimeError as e:  # a solver failure after a fall is still a fall
-            fall["reason"] = f"simulation stopped: {e}"
-            break
-        fall["reason"] = check()
-        if fall["reason"]:
-            break
+    try:
+        sim.Initialize()
+        sim.AdvanceTo(seconds)
+    except RuntimeError as e:  # a solver failure after a fall is still a fall
+        reason = f"simulation stopped: {e}"
     wall = time.perf_counter() - t0
     t_end = ctx.get_time()
+    fall = station.GetOutputPort("fall").Eval(station.GetMyContextFromRoot(ctx))
+    reason = fall.reason if fall.fallen else reason
     if meshcat is not None and record_html is not None:
         meshcat.StopRecording()
         meshcat.PublishRecording()
         Path(record_html).write_text(meshcat.StaticHtml())
-    omega = math.sqrt(cfg.robot.gravity / wd.com_height)
-    table = tracking_table(steps, omega, wp.step_time)
+    steps = step_records(wd, ctx)
+    omega = math.sqrt(cfg.robot.gravity / station.com_height)
+    table = tracking_table(steps, omega, cfg.robot.step_time)
+    planner_ctx = station.planner.GetMyContextFromRoot(ctx)
     return WalkResult(
-        fell=bool(fall["reason"]),
-        fall_reason=fall["reason"],
+        fell=bool(reason),
+        fall_reason=reason,
         sim_seconds=t_end,
         wall_seconds=wall,
-        total_mass=wd.model.total_mass,
+        total_mass=station.model.total_mass,
         num_positions=plant.num_positions(),
         num_actuators=plant.num_actuators(),
         mean_forward_speed=mean_forward_speed(steps),
         tracking_rms=tracking_rms(table),
         seed=seed,
         steps=steps,
-        com_height=wd.com_height,
-        clipped_commands=wd.planner.clipped_commands(planner_ctx),
-        tick_seconds=list(wd.controller.tick_seconds),
+        com_height=station.com_height,
+        clipped_commands=station.planner.clipped_commands(planner_ctx),
+        tick_seconds=list(station.controller.tick_seconds),
     )
+
+
+def step_records(wd: WalkingDiagram, root_context) -> list[StepRecord]:
+    """Every foot switch of a simulated walk, from the step loggers in `root_context`."""
+    logs = wd.step_logger.FindLog(root_context).data()
+    counts = wd.count_logger.FindLog(root_context).data()[0]
+    steps: list[StepRecord] = []
+    last = 0.0
+    for k in range(logs.shape[1]):
+        if counts[k] == last:
+            continue
+        last = counts[k]
+        r = logs[:, k].tolist()
+        steps.append(
+            StepRecord(
+                time=r[LOG_TIME],
+                x=r[LOG_COM][0],
+                y=r[LOG_COM][1],
+                heading=r[LOG_YAW],
+                speed=r[LOG_SPEED],
+                u_speed=r[LOG_COMMAND][0],
+                u_heading=r[LOG_COMMAND][1],
+                heading_target=r[LOG_HEADING_TARGET],
+                predicted=r[LOG_PREDICTED],
+                measured=r[LOG_MEASURED],
+                swing_yaw=tuple(r[LOG_SWING_YAW]),
+            )
+        )
+    return steps
 
 
 def mean_forward_speed(steps: list[StepRecord]) -> float:

@@ -9,7 +9,8 @@ A policy checkpoint is one `torch.save` file:
      "observation": {"grid_kind": "lgm"|"ogm"|"scan", "num_frames": N, "grid_size": M},
      "bounds": [ū_v, ū_Δθ], "state_dict": {...}, "provenance": {...}}
 
-`PolicyPlanner` implements the planner interface (`reset`, `plan(PlannerInput)`), so a
+`PolicyPlanner` implements the planner interface (`systems.navigation_planner.Planner`:
+`plan(PlannerInput)`, `reset`, and the memoryless `initial_memory`/`plan_with_memory`), so a
 policy drives the Drake diagram (`emonav sim --planner sac`) or the Gymnasium env
 exactly like DWA or MPC. It uses only the grid-map stack, the goal state and the last
 command — never the privileged crowd state.
@@ -141,8 +142,18 @@ class PolicyPlanner:
         if self.meta["kind"] == "categorical":
             self.commands = np.asarray(self.meta["commands"], dtype=float)
 
+    def initial_memory(self) -> None:
+        """The policy is memoryless: the frame stack and the last command (the planner
+        input's `last_command`; in the diagram the planner system's stored command) carry
+        the history."""
+        return None
+
     def reset(self) -> None:
-        """The policy is memoryless: the frame stack carries the history."""
+        """The policy is memoryless (see `initial_memory`)."""
+
+    def plan_with_memory(self, obs: PlannerInput, memory: None) -> tuple[np.ndarray, None]:
+        """`plan(obs)` and the (empty) memory: the planner interface of the diagram."""
+        return self.plan(obs), None
 
     def check_observation(self, lgm_stack: np.ndarray | None) -> np.ndarray:
         if lgm_stack is None or not isinstance(lgm_stack, np.ndarray):
@@ -169,6 +180,7 @@ class PolicyPlanner:
         return np.array([(a[0] + 1) / 2 * self.bounds[0], a[1] * self.bounds[1]])
 
     def plan(self, obs: PlannerInput) -> np.ndarray:
+        """The command (u_v [m/s], u_Δθ [rad]) for this walking step."""
         return self.act(obs.lgm_stack, obs.goal_state(), obs.last_command)
 
 

@@ -99,7 +99,7 @@ class DigitModel:
 
 
 def _weld_arms(plant: MultibodyPlant, instance: ModelInstanceIndex) -> None:
-    """Replace each arm joint by a weld at the held pose (DESIGN.md §3.4b)."""
+    """Replace each arm joint by a weld at the held pose (`ARM_POSE`)."""
     for side, sign in zip(SIDES, (1.0, -1.0), strict=True):
         for name, angle in zip(ARM_JOINTS, ARM_POSE, strict=True):
             joint = plant.GetJointByName(f"{side}_{name}", instance)
@@ -117,12 +117,22 @@ def _axis_rotation(axis: np.ndarray, angle: float) -> RotationMatrix:
     return RotationMatrix(AngleAxis(angle, np.asarray(axis, dtype=float)))
 
 
-def AddDigitPlant(builder: DiagramBuilder, params: WalkingParams) -> DigitModel:
+def AddDigitPlant(
+    builder: DiagramBuilder,
+    params: WalkingParams,
+    gravity: float = 9.81,
+    pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
+) -> DigitModel:
     """Add the Digit plant, its scene graph and the ground to `builder`.
+
+    The plant's default state is standing still (`standing_state`) with the torso at
+    `pose`, so a default context starts standing.
 
     Args:
         builder: the diagram builder.
         params: time step, friction and arm option (`WalkingParams`).
+        gravity: g [m/s²] (`RobotParams.gravity`), along −z of the world.
+        pose: (x [m], y [m], yaw [rad]) of the torso in the world at the start.
     """
     config = MultibodyPlantConfig(
         time_step=params.time_step,
@@ -142,8 +152,12 @@ def AddDigitPlant(builder: DiagramBuilder, params: WalkingParams) -> DigitModel:
     plant.RegisterVisualGeometry(
         plant.world_body(), X_WG, HalfSpace(), "ground_visual", np.array([0.8, 0.8, 0.78, 1.0])
     )
+    plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, -gravity])
     plant.Finalize()
-    return describe_digit(plant, scene_graph, instance, params)
+    model = describe_digit(plant, scene_graph, instance, params)
+    x0 = standing_state(model, pose=pose)
+    plant.SetDefaultPositions(x0[: plant.num_positions()])
+    return model
 
 
 def describe_digit(
@@ -216,13 +230,19 @@ def standing_leg_angles(torso_height: float) -> np.ndarray:
     return np.array([0.0, 0.0, -0.5 * knee, knee, -0.5 * knee, 0.0])
 
 
-def standing_state(model: DigitModel, torso_height: float | None = None) -> np.ndarray:
-    """(q, v) standing still: feet flat under the hips, torso upright at x = y = 0."""
+def standing_state(
+    model: DigitModel,
+    torso_height: float | None = None,
+    pose: tuple[float, float, float] = (0.0, 0.0, 0.0),
+) -> np.ndarray:
+    """(q, v) standing still: feet flat under the hips, torso upright at `pose`
+    (x [m], y [m], yaw [rad]) and `torso_height` [m] (default `params.torso_height`)."""
     h = model.params.torso_height if torso_height is None else torso_height
     plant = model.plant
+    x, y, yaw = (float(v) for v in pose)
     q = np.zeros(plant.num_positions())
-    q[model.base_q[:4]] = [1.0, 0.0, 0.0, 0.0]
-    q[model.base_q[4:]] = [0.0, 0.0, h]
+    q[model.base_q[:4]] = [math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)]
+    q[model.base_q[4:]] = [x, y, h]
     legs = standing_leg_angles(h)
     for i in range(2):
         q[model.leg_q[i]] = legs

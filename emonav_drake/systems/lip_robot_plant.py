@@ -1,18 +1,28 @@
 """`LipRobotPlant`: the reduced-order (LIP) robot as a Drake system, one step per T.
 
 Input port:
-    command (2): (u_v [m/s], u_Δθ [rad]) for the walking step that starts now. Read at
-        each foot switch t_k = kT. Out-of-range commands are clipped to the paper's
-        bounds with a warning; a NaN command raises `CommandError`.
-Output ports:
-    robot_state (4): (x [m], y [m], θ [rad], v [m/s]) of the CoM in the world frame at
-        the current time: at a foot switch the state reached by the step just ended,
-        within a step the LIP CoM trajectory of Eq. 1 (`core.lip.lip_in_step`).
-    last_command (2): the command of the step in progress (at t_k, before the update:
-        the previous step's command u_{k−1}).
-Discrete state (11), set by a periodic unrestricted update every T from t = 0:
-    [x_s, y_s, θ_s, v_s, u_v, u_Δθ, x_e, y_e, θ_e, v_e, t_s] — the step's start state, its
-    command, its end state and its start time.
+    command (2): (u_v [m/s], u_Δθ [rad]), the command of the walking step in progress — in
+        the navigation diagram the `NavigationPlanner`'s held command, u_k during step k
+        (t_k ≤ t < t_{k+1}; before the updates at t_k still u_{k−1}). It must be held for
+        the whole step. Out-of-range commands are clipped to the paper's bounds (Eq. 2),
+        with a warning once per step; a NaN command raises `CommandError`.
+Output port:
+    robot_state (4): (x [m], y [m], θ [rad], v [m/s]) of the CoM in the world frame at the
+        current time, from the step's start state, the command and the time elapsed since
+        the step started: at the crowd's sample times the state the Gymnasium env's crowd
+        sees (`core.navigation.robot_at_substep`: the start itself at the foot switch, the
+        next foot switch `lip_step` at the step's end), in between the LIP CoM trajectory
+        of Eq. 1 (`core.lip.lip_in_step`). Direct feedthrough from `command` (the planner's
+        command output is a state output, so there is no algebraic loop).
+Discrete state (5): [x_s, y_s, θ_s, v_s, t_s] — the start state of the step in progress
+    (at its foot switch) and its start time [s]; initially the scenario's start at rest
+    with t_s = 0.
+
+Timing. A periodic unrestricted update every T from t = 0 (like every navigation update,
+so at t_k all of them read the same pre-update state). At t_k, before the update, the
+output shows the end of step k − 1, `lip_step(start, u_{k−1})`; the update stores that
+state as the start of step k with t_s = t_k (at t = 0 nothing has been walked: the start
+stays). During step k the output follows the command then in force, u_k.
 """
 
 from __future__ import annotations
@@ -22,7 +32,7 @@ import logging
 import numpy as np
 from pydrake.systems.framework import BasicVector, Context, LeafSystem, State
 
-from emonav_drake.core.lip import LipState, lip_in_step, lip_step
+from emonav_drake.core.lip import LipState, lip_in_step
 from emonav_drake.core.navigation import check_command, robot_at_substep
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.params import EmoNavConfig
@@ -45,62 +55,60 @@ class LipRobotPlant(LeafSystem):
         self._substeps = round(config.robot.step_time / self._dt)
         x0, y0 = (float(v) for v in scenario.robot_start)
         th0 = float(scenario.robot_heading)
-        T = config.robot.step_time
-        init = [x0, y0, th0, 0.0, 0.0, 0.0, x0, y0, th0, 0.0, -T]
-        self._state = self.DeclareDiscreteState(np.array(init))
-        self.DeclareVectorInputPort("command", 2)
+        self._state = self.DeclareDiscreteState(np.array([x0, y0, th0, 0.0, 0.0]))
+        self._command = self.DeclareVectorInputPort("command", 2)
         self.DeclareVectorOutputPort(
-            "robot_state", 4, self._calc_robot_state, {self.time_ticket(), self.xd_ticket()}
+            "robot_state",
+            4,
+            self._calc_robot_state,
+            {
+                self.time_ticket(),
+                self.xd_ticket(),
+                self.input_port_ticket(self._command.get_index()),
+            },
         )
-        self.DeclareVectorOutputPort("last_command", 2, self._calc_last_command, {self.xd_ticket()})
-        # Unrestricted like every other update of the navigation diagram: Drake applies all
-        # unrestricted updates of one instant together (each reads the pre-update state),
-        # before any discrete update, so mixing the two kinds would skew the timing.
-        self.DeclarePeriodicUnrestrictedUpdateEvent(T, 0.0, self._step)
+        self.DeclarePeriodicUnrestrictedUpdateEvent(config.robot.step_time, 0.0, self._step)
 
-    def _step(self, context: Context, state: State) -> None:
+    def _robot(self, context: Context) -> LipState:
+        """The CoM state now (see `robot_state`)."""
         s = context.get_discrete_state(self._state).get_value()
-        command = self.get_input_port(0).Eval(context)
-        u, clipped = check_command(command, self._config.robot, clip=True)
-        if clipped:
-            log.warning(
-                "LipRobotPlant: command %s out of bounds at t = %.2f s, clipped to %s",
-                np.asarray(command).tolist(),
-                context.get_time(),
-                u.tolist(),
-            )
-        start = LipState(*s[6:10])
-        r = self._config.robot
-        end = lip_step(start, float(u[0]), float(u[1]), r.omega, r.step_time)
-        state.get_mutable_discrete_state(self._state).set_value(
-            np.array([*start, u[0], u[1], *end, context.get_time()])
-        )
-
-    def _calc_robot_state(self, context: Context, output: BasicVector) -> None:
-        s = context.get_discrete_state(self._state).get_value()
-        elapsed = context.get_time() - s[10]
-        start, u = LipState(*s[0:4]), s[4:6]
+        u, _ = check_command(self._command.Eval(context), self._config.robot, clip=True)
+        start = LipState(*s[0:4])
+        elapsed = context.get_time() - s[4]
         j = round(elapsed / self._dt)
         if abs(elapsed - j * self._dt) < 1e-9 and 0 <= j <= self._substeps:
             # On the crowd's clock: exactly the state the fast world uses.
-            if j == self._substeps:
-                state = LipState(*s[6:10])
-            else:
-                state = robot_at_substep(start, u, j, self._config)
-        else:
-            r = self._config.robot
-            state = lip_in_step(
-                start,
-                float(u[0]),
-                float(u[1]),
-                r.omega,
-                r.step_time,
-                min(max(elapsed, 0.0), r.step_time),
-            )
-        output.SetFromVector(np.array(state))
+            return robot_at_substep(start, u, j, self._config)
+        r = self._config.robot
+        return lip_in_step(
+            start,
+            float(u[0]),
+            float(u[1]),
+            r.omega,
+            r.step_time,
+            min(max(elapsed, 0.0), r.step_time),
+        )
 
-    def _calc_last_command(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(context.get_discrete_state(self._state).get_value()[4:6])
+    def _step(self, context: Context, state: State) -> None:
+        s = context.get_discrete_state(self._state).get_value()
+        t = context.get_time()
+        command = self._command.Eval(context)
+        u, clipped = check_command(command, self._config.robot, clip=True)
+        if clipped and t > s[4]:
+            log.warning(
+                "LipRobotPlant %s: command %s of the step from t = %.2f s to %.2f s out of "
+                "bounds, clipped to %s",
+                self.GetSystemPathname(),
+                np.asarray(command).tolist(),
+                s[4],
+                t,
+                u.tolist(),
+            )
+        end = self._robot(context)
+        state.get_mutable_discrete_state(self._state).set_value(np.array([*end, t]))
+
+    def _calc_robot_state(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(np.array(self._robot(context)))
 
 
 def lip_state_from_vector(v: np.ndarray) -> LipState:

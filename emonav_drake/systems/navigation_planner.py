@@ -1,77 +1,154 @@
-"""`NavigationPlanner`: any planner (DWA, MPC, learned policy) as one Drake system.
+"""`NavigationPlanner`: any planner (DWA, MPC, learned policy) as one Drake system that
+owns its rate — one plan per walking step, the command held in between.
 
 Input ports:
-    robot_state (4): (x, y, θ, v) of the robot CoM, world frame [m, rad, m/s].
-    crowd (abstract `CrowdSnapshot`): privileged crowd state (used by DWA / MPC).
-    lgm_stack (abstract uint8 (N, M, M)): the grid-map stack (used by learned policies).
-    last_command (2): the previous step's command (u_v [m/s], u_Δθ [rad]).
+    robot_state (4): (x [m], y [m], θ [rad], v [m/s]) of the robot CoM, world frame.
+    crowd (abstract `CrowdSnapshot`): privileged crowd state (used by DWA / MPC): world
+        frame positions [m] and velocities [m/s], emotions and discomfort distances.
+    lgm_stack (abstract uint8 (N, M, M)): the grid-map stack, robot frame, oldest first
+        (used by learned policies). May be left unconnected for planners that ignore it.
 Output port:
-    command (2): (u_v, u_Δθ) for the walking step starting now. Computed directly from
-        the inputs (no delay): the robot plant reads it at each foot switch t_k = kT,
-        i.e. the planner runs at 1/T = 2.5 Hz.
+    command (2): (u_v [m/s], u_Δθ [rad]), the command of the walking step in progress: u_k
+        during step k (t_k ≤ t < t_{k+1}); before the update at t_k it is still u_{k−1}.
+        A state output: no direct feedthrough from any input.
+State (the Context holds everything the planner remembers):
+    command (discrete, 2): the stored command; (0, 0) initially, like the Gymnasium env
+        after `reset` (the "previous command" of step 0).
+    plan_log (discrete, 3): [time of the last plan t [s] (NaN before the first one),
+        number of plans, number of clipped commands].
+    memory (abstract): the planner's memory (`Planner.initial_memory()` initially; e.g.
+        the MPC's previous plan, duals and guide path; None for memoryless planners).
 
-The wrapped planner is any object with ``plan(PlannerInput) -> (2,) array`` and
-``reset()``; swapping DWA for MPC or a policy changes nothing else in the diagram.
+Timing. A periodic unrestricted update every T = `robot.step_time` from t = 0, like every
+navigation update (the LIP plant, the crowd, the grid maps and the episode monitor are
+all periodic unrestricted events at offset 0, so at t_k = kT each reads the same
+pre-update state). At t_k the planner reads the robot at its foot switch, the crowd and
+the grid-map stack at t_k, and its own previous command u_{k−1}; it stores u_k, which the
+robot executes during step k (t_k → t_{k+1}). The command is checked with
+`core.navigation.check_command`: NaN raises `CommandError`; out of range is clipped to the
+bounds of Eq. 2, counted in `plan_log` and logged as a warning naming the system, the time
+and the command.
 """
 
 from __future__ import annotations
 
-from typing import Protocol
+import copy
+import logging
+from typing import Any, Protocol
 
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import BasicVector, Context, LeafSystem
+from pydrake.systems.framework import Context, LeafSystem, State
 
-from emonav_drake.core.navigation import PlannerInput
+from emonav_drake.core.navigation import PlannerInput, check_command
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
+log = logging.getLogger(__name__)
+
 
 class Planner(Protocol):
-    """What the navigation diagram needs of a planner."""
+    """What the navigation diagram and the Gymnasium env need of a planner.
+
+    The diagram uses the pure pair `initial_memory()` / `plan_with_memory(obs, memory)`:
+    a planning step is a function of (planner input, memory) that returns the command and
+    the next memory without modifying its argument. The env, DAgger and scripts use the
+    stateful pair `plan(obs)` / `reset()`, which keeps one memory on the object
+    (`command, self._memory = self.plan_with_memory(obs, self._memory)`). A pure function
+    rather than `get_memory()` / `set_memory()` on the object: the Drake event then never
+    depends on what the object last planned (a cloned Context, two simulations sharing the
+    planner, or an exception between a restore and a save cannot leak memory from one
+    context into another), the object's own memory is only the convenience of `plan`, and
+    `plan(obs)` keeps working unchanged. Memoryless planners (DWA, replay, policies)
+    return None as their memory.
+    """
 
     name: str
 
-    def reset(self) -> None: ...
+    def initial_memory(self) -> Any:
+        """The memory at the start of an episode (copyable with `copy.deepcopy`)."""
+        ...
 
-    def plan(self, obs: PlannerInput) -> np.ndarray: ...
+    def plan_with_memory(self, obs: PlannerInput, memory: Any) -> tuple[np.ndarray, Any]:
+        """(u_v [m/s], u_Δθ [rad]) for this walking step and the memory for the next one;
+        `memory` is not modified."""
+        ...
+
+    def reset(self) -> None:
+        """Back to `initial_memory()` for `plan` (a new episode)."""
+        ...
+
+    def plan(self, obs: PlannerInput) -> np.ndarray:
+        """`plan_with_memory` with the memory kept on the object."""
+        ...
 
 
 class NavigationPlanner(LeafSystem):
-    """A planner wrapped as a system.
+    """A planner wrapped as a system that plans once per walking step (see the module).
 
     Args:
-        planner: the planner (see `Planner`).
+        planner: the planner (see `Planner`). The system keeps no planner memory outside
+            its Context, so one planner object may serve several contexts.
         goal_xy: the robot's goal in the world frame [m].
-        config: for the step time T.
+        config: the step time T and the command bounds.
     """
 
     def __init__(self, planner: Planner, goal_xy: np.ndarray, config: EmoNavConfig) -> None:
         super().__init__()
         self.planner = planner
         self._goal = np.asarray(goal_xy, dtype=float)
-        self._step_time = config.robot.step_time
+        self._robot_params = config.robot
+        self.step_time = config.robot.step_time  # T [s]: the planning period
         self._robot = self.DeclareVectorInputPort("robot_state", 4)
         self._crowd = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
         self._lgm = self.DeclareAbstractInputPort("lgm_stack", AbstractValue.Make(object()))
-        self._last = self.DeclareVectorInputPort("last_command", 2)
-        self.DeclareVectorOutputPort(
-            "command", 2, self._calc_command, {self.all_input_ports_ticket(), self.time_ticket()}
+        self._command = self.DeclareDiscreteState(np.zeros(2))
+        self._plan_log = self.DeclareDiscreteState(np.array([np.nan, 0.0, 0.0]))
+        self._memory = self.DeclareAbstractState(
+            AbstractValue.Make(copy.deepcopy(planner.initial_memory()))
         )
+        self.DeclareStateOutputPort("command", self._command)
+        self.DeclarePeriodicUnrestrictedUpdateEvent(self.step_time, 0.0, self._plan)
 
     def planner_input(self, context: Context) -> PlannerInput:
-        """The `PlannerInput` the planner sees in `context`."""
+        """The `PlannerInput` the planner sees in `context` (its `last_command` is the
+        stored command, i.e. the previous step's at a foot switch before the update)."""
         lgm = self._lgm.Eval(context) if self._lgm.HasValue(context) else None
         return PlannerInput(
             robot=lip_state_from_vector(self._robot.Eval(context)),
             goal_xy=self._goal,
-            last_command=self._last.Eval(context).copy(),
+            last_command=context.get_discrete_state(self._command).get_value().copy(),
             crowd=self._crowd.Eval(context),
             lgm_stack=lgm,
-            step=round(context.get_time() / self._step_time),
+            step=round(context.get_time() / self.step_time),
         )
 
-    def _calc_command(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(
-            np.asarray(self.planner.plan(self.planner_input(context)), dtype=float)
+    def memory(self, context: Context) -> Any:
+        """The planner memory stored in `context` (a deep copy)."""
+        return copy.deepcopy(context.get_abstract_state(self._memory).get_value())
+
+    def plan_log(self, context: Context) -> tuple[float, int, int]:
+        """(time of the last plan [s] or NaN, number of plans, number of clipped commands)."""
+        t, plans, clipped = context.get_discrete_state(self._plan_log).get_value()
+        return float(t), int(plans), int(clipped)
+
+    def _plan(self, context: Context, state: State) -> None:
+        t = context.get_time()
+        obs = self.planner_input(context)
+        raw, memory = self.planner.plan_with_memory(obs, self.memory(context))
+        command, clipped = check_command(raw, self._robot_params, clip=True)
+        _, plans, clips = self.plan_log(context)
+        if clipped:
+            clips += 1
+            log.warning(
+                "NavigationPlanner %s: command %s out of bounds at t = %.2f s, clipped to %s",
+                self.GetSystemPathname(),
+                np.asarray(raw).tolist(),
+                t,
+                command.tolist(),
+            )
+        state.get_mutable_discrete_state(self._command).set_value(command)
+        state.get_mutable_discrete_state(self._plan_log).set_value(
+            np.array([t, plans + 1.0, float(clips)])
         )
+        state.get_mutable_abstract_state(self._memory).set_value(copy.deepcopy(memory))

@@ -1,13 +1,17 @@
-"""`PassivityController`: the 1 kHz passivity-based whole-body controller (DESIGN.md §3.4).
+"""`PassivityController`: the 1 kHz passivity-based whole-body controller.
 
 Input ports:
     state (nq + nv): the Digit plant state (q, v).
-    targets (N_TARGETS): the footstep planner's targets (`alip_footstep_planner.T_*`).
+    targets (abstract `core.walking_targets.WalkingTargets`): the footstep planner's
+        targets; the controller evaluates their reference motion at its own time.
 Output port:
     actuation (nu): joint torques [N·m] in the plant's actuator order, within the
         joint-side effort limits; the stance toe (ankle) torques within
-        `ankle_torque_fraction` of theirs. Computed in the output port (no one-step
-        delay); the discrete plant pulls it every 1 ms step.
+        `ankle_torque_fraction` of theirs. Computed in the output port from the current
+        state (no one-step delay): the discrete plant pulls it at every step. With a
+        `controller_period` longer than the plant's `time_step` (e.g. 2 ms, 4 ms) it is
+        computed only at the controller's instants and held in between (a zero-order
+        hold, kept in a discrete state by a periodic update).
 
 Law (Slotine–Li / Sadeghian form on the stance-constrained dynamics). The stance foot is
 a holonomic constraint J_st v = 0; with it the robot's 12 leg joints are fully actuated
@@ -41,27 +45,13 @@ import math
 import time
 
 import numpy as np
+from pydrake.common.value import AbstractValue
 from pydrake.multibody.tree import JacobianWrtVariable, MultibodyForces
-from pydrake.systems.framework import BasicVector, Context, LeafSystem
+from pydrake.systems.framework import BasicVector, Context, LeafSystem, State
 from scipy.linalg.lapack import dgesv
 
-from emonav_drake.core.alip import alip_predict, quintic_blend, smooth_angle, swing_height
+from emonav_drake.core.walking_targets import WalkingTargets
 from emonav_drake.params import WalkingParams
-from emonav_drake.systems.alip_footstep_planner import (
-    N_TARGETS,
-    T_HEAD0,
-    T_HEAD1,
-    T_HEIGHT,
-    T_LV0,
-    T_PHASE,
-    T_STANCE,
-    T_START,
-    T_SW0,
-    T_SW1,
-    T_SWYAW0,
-    T_SWYAW1,
-    T_XC0,
-)
 from emonav_drake.systems.digit_plant import DigitModel
 
 _ZERO3 = np.zeros(3)
@@ -162,8 +152,15 @@ class PassivityController(LeafSystem):
         self.tick_seconds: list[float] = []
         nx = plant.num_positions() + plant.num_velocities()
         self._state_in = self.DeclareVectorInputPort("state", nx)
-        self._targets_in = self.DeclareVectorInputPort("targets", N_TARGETS)
-        self.DeclareVectorOutputPort("actuation", self._nu, self._calc_actuation)
+        self._targets_in = self.DeclareAbstractInputPort("targets", AbstractValue.Make(object()))
+        self._period = params.controller_period
+        if abs(self._period / params.time_step - 1.0) < 1e-9:
+            self._held = None
+            self._out = self.DeclareVectorOutputPort("actuation", self._nu, self._calc_actuation)
+        else:
+            self._held = self.DeclareDiscreteState(self._nu)
+            self._out = self.DeclareVectorOutputPort("actuation", self._nu, self._calc_held)
+            self.DeclarePeriodicUnrestrictedUpdateEvent(self._period, 0.0, self._hold)
         # preallocated work arrays (no re-allocation of the big ones per tick)
         self._vr = np.zeros(self._nv)
         self._ar = np.zeros(self._nv)
@@ -178,47 +175,46 @@ class PassivityController(LeafSystem):
         if self._record:
             self.tick_seconds.append(time.perf_counter() - t0)
 
-    def compute(self, x: np.ndarray, tg: np.ndarray, t: float) -> np.ndarray:
+    def _on_tick(self, t: float) -> bool:
+        return abs(t - round(t / self._period) * self._period) < 1e-9
+
+    def _calc_held(self, context: Context, output: BasicVector) -> None:
+        # A zero-order hold without delay: at a controller instant the torque is computed
+        # from the current state (the plant's step at that instant pulls it); in between,
+        # the value the update stored at that instant.
+        if self._on_tick(context.get_time()):
+            self._calc_actuation(context, output)
+        else:
+            output.SetFrom(context.get_discrete_state(self._held))
+
+    def _hold(self, context: Context, state: State) -> None:
+        # Every update of an instant reads the same context, so this is the value the
+        # plant's step just pulled (cached), not a second computation.
+        state.get_mutable_discrete_state(self._held).set_value(self._out.Eval(context))
+
+    def compute(self, x: np.ndarray, tg: WalkingTargets, t: float) -> np.ndarray:
         """Joint torques for plant state `x`, planner targets `tg` at time `t` [s]."""
         p = self._p
         plant, ctx = self._plant, self._ctx
         plant.SetPositionsAndVelocities(ctx, x)
         xs = x.tolist()  # scalar work in Python floats, matrix work in numpy
-        g = tg.tolist()
         b0, v0 = self._bq0, self._nq + self._bv0
         qw, qx, qy, qz, z = xs[b0], xs[b0 + 1], xs[b0 + 2], xs[b0 + 3], xs[b0 + 6]
         wx, wy, wz, vbx, vby, vbz = xs[v0 : v0 + 6]
-        phase = int(g[T_PHASE])
-        T = p.step_time
-        tp = t - g[T_START]
+        phase = tg.phase
 
         # ---- torso orientation: heading from the planner, upright, pitch target
-        if phase < 0:
-            yaw_d, dyaw_d, ddyaw_d = g[T_HEAD1], 0.0, 0.0
-        else:
-            yaw_d, dyaw_d, ddyaw_d = smooth_angle(tp, 0.6 * T, g[T_HEAD0], g[T_HEAD1])
+        yaw_d, dyaw_d, ddyaw_d = tg.torso_yaw(t)
         ex, ey, ez = _orientation_error(qw, qx, qy, qz, yaw_d, p.torso_pitch)
         lo = p.lambda_orientation
 
-        # ---- CoM horizontal vs the LIP of this step (through the stance ankle)
+        # ---- CoM horizontal vs the ALIP of this step (through the stance ankle)
         cx, cy, _ = plant.CalcCenterOfMassPositionInWorld(ctx).tolist()
         vcx, vcy, _ = plant.CalcCenterOfMassTranslationalVelocityInWorld(ctx).tolist()
-        H = g[T_HEIGHT]
-        w2 = 9.81 / H
-        st = g[T_STANCE.start : T_STANCE.start + 2]
-        if phase < 0:
-            sw = g[T_SW0.start : T_SW0.start + 2]
-            cdx = 0.5 * (st[0] + sw[0]) + 0.02 * math.cos(yaw_d)
-            cdy = 0.5 * (st[1] + sw[1]) + 0.02 * math.sin(yaw_d)
-            dcdx = dcdy = ax0 = ay0 = 0.0
-        else:
-            (xcx, xcy), (lx, ly) = _lip_xy(g, tp, self._mass, H)
-            cdx, cdy = st[0] + xcx, st[1] + xcy
-            mH = self._mass * H
-            dcdx, dcdy = lx / mH, ly / mH
-            # the pendulum's own acceleration at the measured CoM: zero ankle torque in
-            # the ALIP sense; the ankle only corrects the error below
-            ax0, ay0 = w2 * (cx - st[0]), w2 * (cy - st[1])
+        (cdx, cdy), (dcdx, dcdy) = tg.com(t, yaw_d)
+        # the pendulum's own acceleration at the measured CoM: zero ankle torque in the
+        # ALIP sense; the ankle only corrects the error below
+        ax0, ay0 = tg.pendulum_acceleration(cx, cy)
         lh, lz = p.lambda_horizontal, p.lambda_height
         # base reference [ω; v] and [α; a] (world); horizontal CoM mapped onto the base
         VA = np.array(
@@ -266,13 +262,11 @@ class PassivityController(LeafSystem):
                 ctx, self._wrt, frame, _ZERO3, self._world, self._world
             ).get_coeffs()
             Vx = (J @ x[self._nq :]).tolist()
-            p0 = g[T_SW0.start : T_SW0.stop]
-            p1 = g[T_SW1.start : T_SW1.stop]
-            (phx, phy), (dphx, dphy), (ddphx, ddphy) = swing_horizontal_xy(
-                tp, T, p0[0], p0[1], p1[0], p1[1]
-            )
-            zz, dz, ddz = swing_height(tp, T, p0[2] - p1[2], p.clearance, p.touchdown_speed)
-            yw, dyw, ddyw = smooth_angle(tp, 0.8 * T, g[T_SWYAW0], g[T_SWYAW1])
+            ref = tg.swing(t)
+            phx, phy, phz = ref.position
+            dphx, dphy, dz = ref.velocity
+            ddphx, ddphy, ddz = ref.acceleration
+            yw, dyw, ddyw = ref.yaw
             Rm = X.rotation().matrix().ravel().tolist()
             erx, ery, erz = _vee_error(*Rm, yw, 0.0)
             px, py, pz = X.translation().tolist()
@@ -284,7 +278,7 @@ class PassivityController(LeafSystem):
                     [dyw - ls * erz, ddyw - ls * (Vx[2] - dyw)],
                     [dphx - ls * (px - phx), ddphx - ls * (Vx[3] - dphx)],
                     [dphy - ls * (py - phy), ddphy - ls * (Vx[4] - dphy)],
-                    [dz - ls * (pz - p1[2] - zz), ddz - ls * (Vx[5] - dz)],
+                    [dz - ls * (pz - phz), ddz - ls * (Vx[5] - dz)],
                 ]
             )
             Jb, Jl = J[:, bv], J[:, self._lv[j]]
@@ -323,28 +317,3 @@ class PassivityController(LeafSystem):
             )
         np.minimum(np.maximum(u, -self._u_max, out=u), self._u_max, out=u)
         return u.copy()
-
-
-def _lip_xy(g: list[float], tp: float, mass: float, H: float) -> tuple[tuple, tuple]:
-    """The LIP state of this step at phase time tp, world x/y: ((x_c, y_c), (ℒ_x, ℒ_y))."""
-    x0, l0 = g[T_XC0.start : T_XC0.stop], g[T_LV0.start : T_LV0.stop]
-    ax, lx = alip_predict(x0[0], l0[0], max(tp, 0.0), mass, H)
-    ay, ly = alip_predict(x0[1], l0[1], max(tp, 0.0), mass, H)
-    return (ax, ay), (lx, ly)
-
-
-def swing_horizontal_xy(
-    t: float,
-    step_time: float,
-    x0: float,
-    y0: float,
-    x1: float,
-    y1: float,
-    finish: float = 0.85,
-) -> tuple[tuple, tuple, tuple]:
-    """Scalar version of `core.alip.swing_horizontal` (x and y separately)."""
-    duration = finish * step_time
-    b, db, ddb = quintic_blend(t / duration)
-    dx, dy = x1 - x0, y1 - y0
-    k1, k2 = db / duration, ddb / duration**2
-    return (x0 + dx * b, y0 + dy * b), (dx * k1, dy * k1), (dx * k2, dy * k2)
