@@ -100,3 +100,22 @@ def test_digit_episode_records_a_meshcat_replay(tmp_path):
     assert main(args) == 0
     text = html.read_text()
     assert len(text) > 50_000 and "<html" in text.lower()
+
+
+def test_sim_rates_reports_every_systems_rate_and_wall_time_share(tmp_path, capsys):
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("episode: {max_steps: 3}\n")
+    out = tmp_path / "r.json"
+    args = ["sim", "--plant", "digit", "--seed", "2", "--config", str(cfg), "--rates"]
+    assert main([*args, "--json", str(out)]) == 0
+    r = json.loads(out.read_text())
+    rates, shares = r["rates"], r["wall_time_share"]
+    # 1.2 s simulated: the counts include the instants at both ends, the footstep
+    # planner's initialization and the simulator's extra step at each of the three
+    # AdvanceTo boundaries (the plant's count), so allow four events over the run
+    expected = {"planner": 2.5, "crowd": 10.0, "digit/alip": 200.0, "digit/fall_monitor": 200.0}
+    expected |= {"digit/controller": 1000.0, "digit/plant": 1000.0}
+    for name, hz in expected.items():
+        assert abs(rates[name] - hz) <= 4 / 1.2, (name, rates[name])
+    assert abs(sum(shares.values()) - 1.0) < 1e-3 and shares["digit/controller"] > 0.05
+    assert "wall share" in capsys.readouterr().out
