@@ -2,7 +2,7 @@
 
 Each figure is a median over repeated runs, printed beside a straightforward reference
 implementation (per-beam Python LGM loop; per-agent ORCA loop) as a ratio, and against
-the budgets of DESIGN.md §4:
+the budgets of docs/facts.md ("Performance budgets"):
 
     LGM build (K 1800, M 100, 4 pedestrians + 3 discs)  ≥ 2 000 maps/s
     ORCA step, 20 agents                                 ≤ 1 ms

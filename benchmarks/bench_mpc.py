@@ -13,7 +13,7 @@ each `plan` call is timed. Printed, as median and 95th percentile:
     OSQP per step   OSQP's own run time summed over the step's QPs
     OSQP per QP     one QP (update + solve as OSQP reports it)
 
-against the budget of DESIGN.md §4: MPC solve (OSQP, warm) median ≤ 5 ms — checked on
+against the budget of docs/facts.md: MPC solve (OSQP, warm) median ≤ 5 ms — checked on
 the whole planning step, which is stricter.
 
 Run:  .venv/bin/python benchmarks/bench_mpc.py [--episodes 20] [--quick] [--json out.json]

@@ -1,7 +1,7 @@
 """Perception benchmark: face detection + emotion classification on 640 × 480 frames, one core.
 
     full pipeline (gray, Haar detection, crops, mini-XCEPTION, 3-way label) per frame:
-        budget ≥ 20 Hz (DESIGN.md §4); the paper runs detection at 10 Hz, emotion at 0.5 Hz
+        budget ≥ 20 Hz (docs/facts.md); the paper runs detection at 10 Hz, emotion at 0.5 Hz
     Haar detection alone, at fer's full resolution and at detection_scale 0.5
     CNN latency alone: one 64 × 64 face, and a batch of 4
 

@@ -6,7 +6,7 @@ Runs the full walking diagram (Digit plant at 1 ms with SAP + ALIP planner at 20
 passivity controller at 1 kHz + per-step random commands, no Meshcat) `--repeats` times
 pinned to one CPU core, and prints per run and as medians: the real-time factor
 (simulated / wall seconds) and the controller's median tick (one `actuation` output
-evaluation, i.e. all plant queries + the law). Budgets (DESIGN.md §4): real-time factor
+evaluation, i.e. all plant queries + the law). Budgets (docs/facts.md): real-time factor
 ≥ 1 (aim ≥ 3), median tick ≤ 0.3 ms. The machine is shared: read the medians.
 """
 

@@ -1,6 +1,6 @@
 """One typed configuration for the whole project.
 
-Every number of the paper's Table I and of the environment (DESIGN.md §3.1–3.2) lives
+Every number of the paper's Table I and of the environment (docs/facts.md) lives
 here, in plain dataclasses. Configurations load from YAML with Drake's typed loader
 (`pydrake.common.yaml.yaml_load_typed`, which already rejects unknown fields) and are
 then validated: a value outside its allowed range raises `ConfigError` naming the
@@ -45,7 +45,7 @@ class RobotParams:
 
 @dc.dataclass
 class LidarParams:
-    """The 2-D LiDAR and the grid maps built from it (DESIGN.md §3.2)."""
+    """The 2-D LiDAR and the grid maps built from it (docs/lidar_grid_maps.md)."""
 
     num_beams: int = 1800  # K, over 360°
     max_range: float = 6.0  # L [m]

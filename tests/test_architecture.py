@@ -1,4 +1,4 @@
-"""The architecture rule of DESIGN.md §2: the math in core/ is numpy only."""
+"""The architecture rule (docs/architecture.md): the math in core/ is numpy only."""
 
 import ast
 from pathlib import Path

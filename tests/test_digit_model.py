@@ -14,7 +14,7 @@ from emonav_drake.systems.digit_plant import (
     standing_state,
 )
 
-# joint-side effort limit [N·m] and gear ratio, DESIGN.md §3.3
+# joint-side effort limit [N·m] and gear ratio (docs/facts.md, "Digit, and the model …")
 EXPECTED = {
     "hip_roll": (126.7, 80),
     "hip_yaw": (79.2, 50),
@@ -79,7 +79,7 @@ def test_four_sole_spheres_per_foot_and_standing_pose():
     ctx = plant.CreateDefaultContext()
     plant.SetPositionsAndVelocities(ctx, standing_state(m))
     com = plant.CalcCenterOfMassPositionInWorld(ctx)
-    assert 0.85 <= com[2] <= 1.0  # DESIGN.md §3.3: standing CoM 0.9–1.0 m
+    assert 0.85 <= com[2] <= 1.0  # published for Digit 0.9–1.0 m; this model 0.891 m
     for foot in m.foot_bodies:  # flat feet, soles on the ground (ankle 5 cm above)
         X = plant.EvalBodyPoseInWorld(ctx, foot)
         assert X.translation()[2] == pytest.approx(0.05)

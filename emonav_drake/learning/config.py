@@ -37,7 +37,7 @@ class DaggerConfig:
 
 @dc.dataclass
 class SacConfig:
-    """SAC with the shared LGM encoder; defaults are the paper's / authors' (DESIGN §3.2)."""
+    """SAC with the shared LGM encoder; defaults are the paper's / authors' (docs/learning.md)."""
 
     seed: int = 0
     device: str = "cpu"

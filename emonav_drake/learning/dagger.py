@@ -1,6 +1,6 @@
 """The CPU training route: DAgger distillation of a privileged expert into an LGM student.
 
-Paper-scale SAC costs seconds per update on a CPU (DESIGN.md §3.6), a GPU job. This
+Paper-scale SAC costs seconds per update on a CPU (docs/learning.md), a GPU job. This
 route trains a deployable policy that sees only what the paper's policy sees — the
 9-frame LiDAR grid-map stack, the goal state and the last command — in well under two
 hours on two cores:

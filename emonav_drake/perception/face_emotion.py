@@ -1,6 +1,6 @@
 """Face detection + facial-emotion classification, as the paper's robot does (§III-B, §IV-G).
 
-Pipeline (the semantics of `fer.FER.detect_emotions`, DESIGN.md §3.5):
+Pipeline (the semantics of `fer.FER.detect_emotions`, docs/facts.md):
 
 1. gray = BGR → gray (OpenCV weights);
 2. faces = Haar cascade `detectMultiScale(scaleFactor 1.1, minNeighbors 5, minSize 50 × 50)`
@@ -64,7 +64,7 @@ class DetectorParams:
         detection_scale: the Haar cascade runs on the image resized by this factor
             (≤ 1; `min_face_size` scales with it) and boxes are scaled back; crops are
             always taken at full resolution. 1.0 is `fer`'s behaviour; 0.5 detects
-            about 3–4× faster (DESIGN.md §4 budget) with boxes within a few pixels.
+            about 3–4× faster (the 20 Hz budget, docs/facts.md) with boxes within a few pixels.
     """
 
     scale_factor: float = 1.1

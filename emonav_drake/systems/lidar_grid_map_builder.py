@@ -2,7 +2,7 @@
 
 Input ports:
     robot_state (4): (x, y, θ, v) of the robot CoM, world frame; the LiDAR sits at the
-        CoM and beam angles are measured from θ (DESIGN.md §3.2 conventions).
+        CoM and beam angles are measured from θ (docs/lidar_grid_maps.md).
     crowd (abstract `CrowdSnapshot`): discs to scan (pedestrians and static obstacles)
         with their discomfort margins.
 Output ports:
