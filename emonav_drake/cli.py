@@ -139,7 +139,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
         f"IDT {record.idt}"
     )
     if args.record:
-        print(f"replay written to {args.record}")
+        print(f"replay written to {Path(args.record).resolve()} (open it in a browser)")
     if args.json:
         _write_json(args.json, out)
     return 0
