@@ -84,7 +84,10 @@ def cmd_sim(args: argparse.Namespace) -> int:
     if args.meshcat or args.record:
         from pydrake.geometry import Meshcat
 
+        from emonav_drake.systems.navigation_meshcat import set_overview_camera
+
         meshcat = Meshcat()
+        set_overview_camera(meshcat, cfg)
         if args.meshcat:
             print(f"Meshcat: {meshcat.web_url()}")
     rates = None

@@ -141,3 +141,17 @@ class NavigationMeshcatVisualizer(LeafSystem):
             )
             m.SetLineSegments(f"{_PREFIX}/rays", start, end, 1.0, Rgba(0.9, 0.2, 0.2, 0.5))
         return EventStatus.Succeeded()
+
+
+def set_overview_camera(meshcat: Meshcat, config: EmoNavConfig) -> None:
+    """Frame the whole arena from above at an angle (start, goal and the crowd's circle),
+    instead of Meshcat's default camera that sits inside the arena. Set before a
+    recording, a replay's HTML opens with this view."""
+    start = np.asarray(config.robot.start, dtype=float)
+    goal = np.asarray(config.robot.goal, dtype=float)
+    centre = 0.5 * (start + goal)
+    span = max(float(np.linalg.norm(goal - start)), 2.0 * config.crowd.circle_radius_max)
+    meshcat.SetCameraPose(
+        [centre[0] - 0.05 * span, centre[1] - 0.85 * span, 0.6 * span],
+        [centre[0], centre[1], 0.0],
+    )
