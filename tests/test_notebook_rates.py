@@ -19,5 +19,5 @@ def test_rates_notebook_runs_in_short_mode(monkeypatch):
         o.get("text", "") for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
     )
     assert "measured rates match the configuration" in outputs
-    assert "digit/controller" in outputs and "plant + framework" in outputs
+    assert "digit/controller" in outputs and "digit/plant + framework" in outputs
     assert "| 1000 Hz | 200 Hz |" in outputs  # the sweep table

@@ -13,8 +13,9 @@ any change to the systems:
   wall time, including the Drake queries it makes (e.g. the controller's mass matrix).
   C++ systems (the `MultibodyPlant`'s discrete step with its contact solver, the scene
   graph, the simulator's own event dispatch) are what remains of the wall time: reported
-  as "plant + framework"; the plant's rate is the simulator's count of steps (the plant
-  has the shortest period; every other one is a multiple of it).
+  under the plant's name as "<plant> + framework" (or "framework" in a diagram without a
+  MultibodyPlant); the plant's rate is the simulator's count of steps (the plant has the
+  shortest period; every other one is a multiple of it).
   cProfile adds a fixed cost to every Python call, so the Python systems' shares are
   somewhat inflated (by ~10–20 % on the Digit controller); read them as a ranking.
 * `record_event_times` records the simulated time of every event handler call over a
@@ -38,7 +39,7 @@ from collections.abc import Callable
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Diagram, LeafSystem, System
 
-PLANT_AND_FRAMEWORK = "plant + framework"
+FRAMEWORK = "framework"
 
 _Key = tuple[str, int, str]  # cProfile's (file, first line, function name)
 
@@ -104,7 +105,8 @@ class RateReport:
         sim_seconds, wall_seconds: simulated and wall time of the run [s].
         events_per_second: per system, event handler calls per simulated second.
         outputs_per_second: per system, output calculations per simulated second.
-        wall_seconds_by_system: per system (and "plant + framework") [s].
+        wall_seconds_by_system: per system [s]; the C++ remainder under
+            "<plant> + framework" (or "framework").
     """
 
     sim_seconds: float
@@ -178,11 +180,12 @@ def profile_run(simulator: Simulator, diagram: Diagram, run: Callable[[], None])
         elif cb.kind == "output":
             outputs[cb.system] = outputs.get(cb.system, 0.0) + nc
     total_profiled = sum(tt for (_, _, tt, _, _) in stats.values())
-    seconds[PLANT_AND_FRAMEWORK] = max(total_profiled - sum(seconds.values()), 0.0)
     per = 1.0 / sim_s if sim_s > 0 else 0.0
     plant_name = next(
         (n for n, s in systems if type(s).__name__.startswith("MultibodyPlant")), None
     )
+    rest = FRAMEWORK if plant_name is None else f"{plant_name} + {FRAMEWORK}"
+    seconds[rest] = max(total_profiled - sum(seconds.values()), 0.0)
     if plant_name is not None:
         # The plant has the shortest period (every other rate is a multiple of its time
         # step), so the simulator takes one step per plant update.
