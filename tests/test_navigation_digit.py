@@ -48,6 +48,8 @@ def test_two_runs_from_fresh_default_contexts_give_identical_records():
 
 
 def _fall_episode(setup) -> tuple[str, str, float]:
+    """Outcome, fall reason (from the station's fall port; the record must agree) and
+    the time the simulation stopped."""
     cfg = _short_config(10)
     nd = build_digit_navigation_diagram(sample_scenario(0, cfg), cfg, DwaPlanner(cfg))
     sim = Simulator(nd.diagram)
@@ -56,6 +58,7 @@ def _fall_episode(setup) -> tuple[str, str, float]:
     record = simulate_digit_episode(sim, nd, cfg)
     ctx = sim.get_context()
     fall = nd.station.GetOutputPort("fall").Eval(nd.station.GetMyContextFromRoot(ctx))
+    assert record.to_json()["fall_reason"] == fall.reason
     return record.outcome, fall.reason, ctx.get_time()
 
 

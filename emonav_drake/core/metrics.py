@@ -34,10 +34,13 @@ class EpisodeRecord:
     idt: list[int] = dc.field(default_factory=lambda: [0, 0, 0, 0])
     total_reward: float = 0.0
     seed: int = -1
+    fall_reason: str = ""  # why the full-order robot fell (outcome "fall" only)
 
     def to_json(self) -> dict:
         d = dc.asdict(self)
         d["min_ped_distance"] = None if math.isinf(self.min_ped_distance) else self.min_ped_distance
+        if not self.fall_reason:
+            del d["fall_reason"]
         return d
 
 

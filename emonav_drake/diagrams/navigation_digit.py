@@ -156,14 +156,14 @@ def simulate_digit_episode(
         fall = fall_port.Eval(nd.station.GetMyContextFromRoot(ctx))
         if fall.fallen:
             record = status.record
-            record.outcome = FALL
+            record.outcome, record.fall_reason = FALL, fall.reason
             return record
         if status.done:
             return status.record
         k += 1
         try:
             sim.AdvanceTo(k * T)
-        except RuntimeError:  # the contact solver gives up only on a robot in a heap
+        except RuntimeError as e:  # the contact solver gives up only on a robot in a heap
             record = status_port.Eval(nd.monitor.GetMyContextFromRoot(ctx)).record
-            record.outcome = FALL
+            record.outcome, record.fall_reason = FALL, f"simulation stopped: {e}"
             return record
