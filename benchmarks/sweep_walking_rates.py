@@ -26,6 +26,7 @@ def plot(table: list[dict], path: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
 
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
     planners = sorted({r["planner_hz"] for r in table}, reverse=True)
@@ -40,17 +41,24 @@ def plot(table: list[dict], path: Path) -> None:
         for r in rows:
             if r["falls"]:
                 axes[0].annotate(f"{r['falls']} falls", (r["controller_hz"], 100 * r["rms_x"]))
+    ticks = sorted({r["controller_hz"] for r in table})
     for ax, title in zip(
         axes,
-        ["tracking RMS x [cm]", "tracking RMS y [cm]", "real-time factor (one core)"],
+        [
+            "tracking RMS x [cm]",
+            "tracking RMS y [cm]",
+            "real-time factor (while the sweep ran)",
+        ],
         strict=True,
     ):
         ax.set_xscale("log")
-        ax.set_xticks([250, 500, 1000], ["250", "500", "1000"])
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.set_xticks(ticks, [str(t) for t in ticks])
         ax.set_xlabel("controller rate [Hz]")
         ax.set_title(title)
+        ax.set_ylim(0.0, 1.3 * ax.get_ylim()[1])
         ax.grid(alpha=0.3)
-    axes[0].legend()
+    axes[0].legend(loc="lower right", fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
 
