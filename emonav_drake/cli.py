@@ -4,18 +4,43 @@ emonav sim  --planner dwa --plant lip --seed S [--scenario F.yaml] [--config F.y
             [--meshcat] [--record out.html] [--json out.json] [--rays]
 emonav eval --planner dwa --plant lip --episodes 100 --first-seed 0 [--json out.json]
 emonav lgm  --seed S --png out.png [--steps K]
+
+Errors: a bad flag, file or field is one line `emonav: error: ...` naming it, exit code 2
+(`--debug` shows the traceback instead). Ctrl-C: one line, exit code 130; `eval` keeps
+the finished episodes, `train` saves a checkpoint. Output files are checked before any
+work and written atomically (never half-written). See docs/reliability.md.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
+import contextlib
 import logging
+import signal
 import sys
+import threading
 import time
+import traceback
+from collections.abc import Iterator
 from pathlib import Path
 
+from emonav_drake.atomic_io import (
+    atomic_output,
+    check_distinct,
+    check_output_file,
+    write_json,
+)
+from emonav_drake.errors import RunInterrupted
 from emonav_drake.params import ConfigError, EmoNavConfig, load_config
+
+# Exit codes.
+EXIT_USAGE = 2  # a user error: bad flag, file, field or output path
+EXIT_INTERRUPTED = 130  # Ctrl-C (128 + SIGINT)
+EXIT_INTERNAL = 1  # an unexpected exception: a bug
+
+# Exceptions that are the user's to fix: the ValueError family (ConfigError, PolicyError,
+# CommandError, ImageReadError, OutputPathError, DeviceError, …) and the file system's.
+USER_ERRORS = (ValueError, OSError, NotImplementedError)
 
 
 def _add_common(p: argparse.ArgumentParser) -> None:
@@ -25,7 +50,9 @@ def _add_common(p: argparse.ArgumentParser) -> None:
         type=Path,
         help="policy checkpoint for --planner sac (default: the shipped policy)",
     )
-    p.add_argument("--device", default="cpu", help="torch device for --planner sac")
+    p.add_argument(
+        "--device", default="cpu", help="torch device for --planner sac (cpu, cuda, cuda:N)"
+    )
     p.add_argument(
         "--emotion-estimate",
         type=Path,
@@ -35,7 +62,8 @@ def _add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--time-varying",
         action="store_true",
-        help="one pedestrian's emotion changes every 2 s (paper §IV-F)",
+        help="one pedestrian's emotion changes every 2 s (paper §IV-F); with --scenario, "
+        "a pedestrian of the file chosen by --seed",
     )
 
 
@@ -47,13 +75,26 @@ def _config(args: argparse.Namespace) -> EmoNavConfig:
 
 
 def _scenario(args: argparse.Namespace, cfg: EmoNavConfig):
-    from emonav_drake.core.scenario import load_scenario, sample_scenario
+    from emonav_drake.core.scenario import add_time_varying_emotion, load_scenario
 
     if getattr(args, "scenario", None):
-        sc = load_scenario(args.scenario)
+        sc = load_scenario(args.scenario, cfg)
         sc.seed = args.seed if sc.seed < 0 else sc.seed
+        if getattr(args, "time_varying", False):
+            add_time_varying_emotion(sc, sc.seed, cfg)
         return sc
-    return sample_scenario(args.seed, cfg)
+    return _sample(args, args.seed, cfg)
+
+
+def _sample(args: argparse.Namespace, seed: int, cfg: EmoNavConfig):
+    """`sample_scenario`, its error naming the configuration file the crowd came from."""
+    from emonav_drake.core.scenario import ScenarioSamplingError, sample_scenario
+
+    try:
+        return sample_scenario(seed, cfg)
+    except ScenarioSamplingError as e:
+        where = f"--config {args.config}" if args.config else "the default configuration"
+        raise ScenarioSamplingError(f"{where}: {e}") from None
 
 
 def _emotion_estimate(args: argparse.Namespace):
@@ -65,19 +106,50 @@ def _emotion_estimate(args: argparse.Namespace):
     return load_typed_yaml(EmotionEstimateParams, path=args.emotion_estimate).validate()
 
 
-def _write_json(path: Path, data: dict) -> None:
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(data, indent=2) + "\n")
-    tmp.replace(path)  # atomic: never a half-written result
+def _check_planner_flags(args: argparse.Namespace) -> None:
+    """--checkpoint / --device only mean something with --planner sac; check them early."""
+    if args.planner != "sac":
+        if args.checkpoint is not None:
+            raise ConfigError(f"--checkpoint applies to --planner sac only, not {args.planner}")
+        if args.device != "cpu":
+            raise ConfigError(f"--device applies to --planner sac only, not {args.planner}")
+        return
+    from emonav_drake.learning.policy import resolve_device
+
+    resolve_device(args.device)
+
+
+def _check_seed(value: int, flag: str) -> None:
+    if value < 0:
+        raise ConfigError(f"{flag} {value}: must be >= 0")
+
+
+def _check_outputs(args: argparse.Namespace, *flags: str) -> None:
+    """Every output flag given: a writable file path (checked before any work), all distinct."""
+    outputs = {}
+    for flag in flags:
+        path = getattr(args, flag.removeprefix("--").replace("-", "_"), None)
+        if path is not None:
+            outputs[flag] = check_output_file(path, flag)
+    check_distinct(outputs)
 
 
 def cmd_sim(args: argparse.Namespace) -> int:
+    _check_seed(args.seed, "--seed")
+    _check_outputs(args, "--json", "--record")
+    if args.plant == "digit" and (args.emotion_estimate or args.rays):
+        raise ConfigError(
+            "--plant digit: --rays and --emotion-estimate are available "
+            "with --plant lip only in this version"
+        )
+    _check_planner_flags(args)
+    cfg = _config(args)
+    scenario = _scenario(args, cfg)
+    estimate = _emotion_estimate(args)
     from emonav_drake.diagrams.navigation import run_episode
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
     from emonav_drake.planners import configure_for, make_planner
 
-    cfg = _config(args)
-    scenario = _scenario(args, cfg)
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
     grid_kind = configure_for(planner, cfg)
     meshcat = None
@@ -96,38 +168,35 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
         rates = RateMeasurement()
     t0 = time.perf_counter()
-    if args.plant == "digit":
-        if args.emotion_estimate or args.rays:
-            raise ConfigError(
-                "--plant digit: --rays and --emotion-estimate are available "
-                "with --plant lip only in this version"
+    with contextlib.ExitStack() as stack:
+        # the replay goes to a temporary sibling, renamed when complete
+        record_html = stack.enter_context(atomic_output(args.record)) if args.record else None
+        if args.plant == "digit":
+            record = run_digit_episode(
+                scenario,
+                cfg,
+                planner,
+                meshcat=meshcat,
+                grid_kind=grid_kind,
+                goal_radius=cfg.episode.eval_goal_radius,
+                realtime_rate=1.0 if args.meshcat else 0.0,
+                record_html=record_html,
+                rates=rates,
             )
-
-        record = run_digit_episode(
-            scenario,
-            cfg,
-            planner,
-            meshcat=meshcat,
-            grid_kind=grid_kind,
-            goal_radius=cfg.episode.eval_goal_radius,
-            realtime_rate=1.0 if args.meshcat else 0.0,
-            record_html=args.record,
-            rates=rates,
-        )
-    else:
-        record, _ = run_episode(
-            scenario,
-            cfg,
-            planner,
-            meshcat=meshcat,
-            record_html=args.record,
-            show_rays=args.rays,
-            goal_radius=cfg.episode.eval_goal_radius,
-            realtime_rate=1.0 if args.meshcat else 0.0,
-            grid_kind=grid_kind,
-            emotion_estimate=_emotion_estimate(args),
-            rates=rates,
-        )
+        else:
+            record, _ = run_episode(
+                scenario,
+                cfg,
+                planner,
+                meshcat=meshcat,
+                record_html=record_html,
+                show_rays=args.rays,
+                goal_radius=cfg.episode.eval_goal_radius,
+                realtime_rate=1.0 if args.meshcat else 0.0,
+                grid_kind=grid_kind,
+                emotion_estimate=estimate,
+                rates=rates,
+            )
     wall = time.perf_counter() - t0
     out = record.to_json()
     out["seed"] = scenario.seed
@@ -144,7 +213,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     if args.record:
         print(f"replay written to {Path(args.record).resolve()} (open it in a browser)")
     if args.json:
-        _write_json(args.json, out)
+        write_json(args.json, out)
     return 0
 
 
@@ -167,59 +236,89 @@ def _format_rates(report) -> str:
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
+    """Evaluate over seeds; on Ctrl-C keep the finished episodes (summary, --json, exit 130)."""
+    _check_seed(args.first_seed, "--first-seed")
+    if args.episodes < 1:
+        raise ConfigError(f"--episodes {args.episodes}: must be >= 1")
+    _check_outputs(args, "--json")
+    _check_planner_flags(args)
+    cfg = _config(args)
+    estimate = _emotion_estimate(args)
+    if args.plant == "digit" and estimate is not None:
+        raise ConfigError("--emotion-estimate is available with --plant lip only")
     from tqdm import tqdm
 
     from emonav_drake.core.metrics import format_summary, summarize
-    from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation import run_episode
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
     from emonav_drake.planners import configure_for, make_planner
 
-    cfg = _config(args)
+    seeds = range(args.first_seed, args.first_seed + args.episodes)
+    # Every scenario first (cheap): a crowd that does not fit fails now, not at episode k.
+    scenarios = [_sample(args, seed, cfg) for seed in seeds]
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
     grid_kind = configure_for(planner, cfg)
-    estimate = _emotion_estimate(args)
-    if args.plant == "digit" and estimate is not None:
-        raise ConfigError("--emotion-estimate is available with --plant lip only")
     records = []
-    seeds = range(args.first_seed, args.first_seed + args.episodes)
-    for seed in tqdm(seeds, desc=f"{args.planner}/{args.plant}", unit="ep"):
-        scenario = sample_scenario(seed, cfg)
-        if args.plant == "digit":
-            rec = run_digit_episode(
-                scenario,
-                cfg,
-                planner,
-                grid_kind=grid_kind,
-                goal_radius=cfg.episode.eval_goal_radius,
-            )
-        else:
-            rec, _ = run_episode(
-                scenario,
-                cfg,
-                planner,
-                goal_radius=cfg.episode.eval_goal_radius,
-                grid_kind=grid_kind,
-                emotion_estimate=estimate,
-            )
-        records.append(rec)
+    interrupted = False
+    with tqdm(total=len(seeds), desc=f"{args.planner}/{args.plant}", unit="ep") as bar:
+        try:
+            for scenario in scenarios:
+                if args.plant == "digit":
+                    rec = run_digit_episode(
+                        scenario,
+                        cfg,
+                        planner,
+                        grid_kind=grid_kind,
+                        goal_radius=cfg.episode.eval_goal_radius,
+                    )
+                else:
+                    rec, _ = run_episode(
+                        scenario,
+                        cfg,
+                        planner,
+                        goal_radius=cfg.episode.eval_goal_radius,
+                        grid_kind=grid_kind,
+                        emotion_estimate=estimate,
+                    )
+                records.append(rec)
+                bar.update(1)
+        except KeyboardInterrupt:
+            interrupted = True
+    if not records:
+        raise RunInterrupted("interrupted before the first episode finished; nothing written")
     summary = summarize(records)
+    done = [s.seed for s in scenarios[: len(records)]]
     print(format_summary(summary))
     if args.json:
-        _write_json(
-            args.json,
-            {
-                "planner": args.planner,
-                "plant": args.plant,
-                "seeds": [seeds.start, seeds.stop],
-                "summary": summary,
-                "episodes": [r.to_json() for r in records],
-            },
+        out = {
+            "planner": args.planner,
+            "plant": args.plant,
+            "seeds": [seeds.start, seeds.stop],
+            "interrupted": interrupted,
+            "seeds_done": done,
+            "summary": summary,
+            "episodes": [r.to_json() for r in records],
+        }
+        write_json(args.json, out)
+    if interrupted:
+        where = f"; written to {args.json} (interrupted: true)" if args.json else ""
+        raise RunInterrupted(
+            f"interrupted after {len(records)} of {len(seeds)} episodes (seeds "
+            f"{done[0]}-{done[-1]}); the summary above covers them{where}"
         )
     return 0
 
 
 def cmd_lgm(args: argparse.Namespace) -> int:
+    _check_seed(args.seed, "--seed")
+    if args.steps < 0:
+        raise ConfigError(f"--steps {args.steps}: must be >= 0")
+    _check_outputs(args, "--png")
+    for flag in ("checkpoint", "emotion_estimate"):
+        if getattr(args, flag) is not None:
+            raise ConfigError(f"--{flag.replace('_', '-')} is not used by lgm")
+    if args.device != "cpu":
+        raise ConfigError("--device is not used by lgm")
     import numpy as np
 
     from emonav_drake.core.crowd import obstacle_discs
@@ -239,17 +338,18 @@ def cmd_lgm(args: argparse.Namespace) -> int:
     kinds = np.concatenate(
         [np.ones(len(obs.crowd.positions), int), np.zeros(len(obs.crowd.static_radii), int)]
     )
-    render_grid_map_figure(
-        args.png,
-        np.array([obs.robot.x, obs.robot.y]),
-        obs.robot.heading,
-        centers,
-        radii,
-        margins,
-        kinds,
-        goal_xy=obs.goal_xy,
-        grid_size=cfg.lidar.grid_size,
-    )
+    with atomic_output(args.png) as tmp:
+        render_grid_map_figure(
+            tmp,
+            np.array([obs.robot.x, obs.robot.y]),
+            obs.robot.heading,
+            centers,
+            radii,
+            margins,
+            kinds,
+            goal_xy=obs.goal_xy,
+            grid_size=cfg.lidar.grid_size,
+        )
     print(f"wrote {args.png} (seed {args.seed}, after {world.step_count} steps)")
     return 0
 
@@ -259,12 +359,25 @@ def build_parser() -> argparse.ArgumentParser:
         prog="emonav", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     p.add_argument("-v", "--verbose", action="store_true")
+    p.add_argument(
+        "--debug",
+        action="store_true",
+        help="on an error, show the Python traceback instead of the one-line message",
+    )
+    # accepted after the sub-command too (`emonav sim --debug`); SUPPRESS keeps the
+    # sub-parser from overwriting a --debug given before the sub-command
+    debug = argparse.ArgumentParser(add_help=False)
+    debug.add_argument(
+        "--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS
+    )
     sub = p.add_subparsers(dest="command", required=True)
 
-    s = sub.add_parser("sim", help="run one navigation episode in the Drake diagram")
+    s = sub.add_parser(
+        "sim", parents=[debug], help="run one navigation episode in the Drake diagram"
+    )
     s.add_argument("--planner", default="dwa", choices=["dwa", "mpc", "sac"])
     s.add_argument("--plant", default="lip", choices=["lip", "digit"])
-    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("--seed", type=int, default=0, help="scenario seed (>= 0)")
     s.add_argument("--scenario", type=Path, help="YAML scenario instead of a sampled one")
     s.add_argument("--meshcat", action="store_true", help="draw live in Meshcat (real time)")
     s.add_argument("--record", type=Path, help="write a self-contained HTML replay")
@@ -279,16 +392,25 @@ def build_parser() -> argparse.ArgumentParser:
     _add_common(s)
     s.set_defaults(func=cmd_sim)
 
-    e = sub.add_parser("eval", help="evaluate a planner over many seeds (SR, NT, DT, IDT)")
+    e = sub.add_parser(
+        "eval", parents=[debug], help="evaluate a planner over many seeds (SR, NT, DT, IDT)"
+    )
     e.add_argument("--planner", default="dwa", choices=["dwa", "mpc", "sac"])
     e.add_argument("--plant", default="lip", choices=["lip", "digit"])
-    e.add_argument("--episodes", type=int, default=100)
-    e.add_argument("--first-seed", type=int, default=0)
-    e.add_argument("--json", type=Path)
+    e.add_argument("--episodes", type=int, default=100, help=">= 1")
+    e.add_argument("--first-seed", type=int, default=0, help=">= 0")
+    e.add_argument(
+        "--json",
+        type=Path,
+        help="write summary and episodes as JSON (after Ctrl-C: the finished ones, "
+        "with interrupted: true and seeds_done)",
+    )
     _add_common(e)
     e.set_defaults(func=cmd_eval)
 
-    g = sub.add_parser("lgm", help="render a scenario's LiDAR grid map and OGM as a PNG")
+    g = sub.add_parser(
+        "lgm", parents=[debug], help="render a scenario's LiDAR grid map and OGM as a PNG"
+    )
     g.add_argument("--seed", type=int, default=0)
     g.add_argument("--scenario", type=Path)
     g.add_argument("--steps", type=int, default=8, help="DWA steps to walk before the snapshot")
@@ -306,20 +428,89 @@ def build_parser() -> argparse.ArgumentParser:
     from emonav_drake.cli_walk import add_walk_parser
 
     add_walk_parser(sub)
+    for name, parser in sub.choices.items():
+        if name not in ("sim", "eval", "lgm"):
+            parser.add_argument(
+                "--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS
+            )
     return p
 
 
+def _one_line(e: BaseException) -> str:
+    """The exception's message on one line (YAML and torch messages can span several)."""
+    lines = [line.strip() for line in str(e).splitlines() if line.strip()]
+    return "; ".join(lines) or type(e).__name__
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM handled like Ctrl-C while a command runs (temporary files removed, runs saved).
+
+    The signal is passed to whatever SIGINT handler is installed at that moment — the
+    trainers' graceful stop-request guard during training, else Python's default, which
+    raises `KeyboardInterrupt` (also when SIGINT is ignored, as in a background job:
+    `kill` must still stop the run).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def as_sigint(signum: int, frame: object) -> None:
+        handler = signal.getsignal(signal.SIGINT)
+        if callable(handler):
+            handler(signal.SIGINT, frame)
+        else:
+            raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, as_sigint)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run a sub-command; the one place where exceptions become messages and exit codes.
+
+    0: done. 2: a user error (bad flag, file, field or output path), one line
+    `emonav: error: ...`. 130: interrupted (Ctrl-C or SIGTERM), one line. 1: an
+    unexpected exception (a bug), one line. `--debug` re-raises instead, with the
+    traceback. Argument-syntax errors are argparse's (usage and exit code 2).
+    """
     args = build_parser().parse_args(argv)
+    debug = getattr(args, "debug", False)
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,
         format="%(levelname)s %(name)s: %(message)s",
     )
     try:
-        return args.func(args)
-    except (ConfigError, ValueError, NotImplementedError, FileNotFoundError) as e:
-        print(f"emonav: error: {e}", file=sys.stderr)
-        return 2
+        with _sigterm_as_interrupt():
+            return args.func(args)
+    except RunInterrupted as e:
+        if debug:
+            traceback.print_exc()
+        print(f"emonav: {_one_line(e)}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except KeyboardInterrupt:
+        if debug:
+            traceback.print_exc()
+        saved = "" if args.command == "train" else "; no output file was written"
+        print(f"emonav: interrupted{saved}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except USER_ERRORS as e:
+        if debug:
+            raise
+        print(f"emonav: error: {_one_line(e)}", file=sys.stderr)
+        return EXIT_USAGE
+    except Exception as e:
+        if debug:
+            raise
+        print(
+            f"emonav: internal error: {type(e).__name__}: {_one_line(e)} "
+            "(a bug: rerun with --debug for the traceback and report it)",
+            file=sys.stderr,
+        )
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":

@@ -7,12 +7,18 @@ and the paper's 3-way label; a frame without a face is neutral (paper §IV-G).
 --annotate writes the image with boxes and labels drawn. For a video, an image suffix
 (.png, .jpg) writes the frame with the most faces (the first such frame), a video
 suffix (.mp4, .avi) the whole annotated video.
+
+Large inputs: an image (or video frame) above --max-pixels (default 4096 x 2048) is
+classified on a downscaled copy, with a note on stderr; boxes in the printout and the
+JSON stay in the original's pixels ("scale" < 1 in the JSON), the annotation is drawn on
+the downscaled copy. Images above 268 megapixels are refused from their header.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
+import contextlib
+import sys
 import time
 from collections import Counter
 from pathlib import Path
@@ -20,6 +26,13 @@ from typing import Any
 
 import numpy as np
 
+from emonav_drake.atomic_io import (
+    atomic_output,
+    check_distinct,
+    check_output_file,
+    write_bytes_atomic,
+    write_json,
+)
 from emonav_drake.params import EMOTION_NAMES
 
 IMAGE_WRITE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp")
@@ -53,14 +66,15 @@ def add_emotion_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="run the Haar detector on the image scaled by this factor (1 = fer's; "
         "0.5 is ~3x faster)",
     )
+    p.add_argument(
+        "--max-pixels",
+        type=int,
+        default=None,
+        help="classify larger images / frames on a copy downscaled to this many pixels "
+        "(default 4096 x 2048 = 8388608; 0 = never downscale)",
+    )
     p.set_defaults(func=cmd_emotion)
     return p
-
-
-def _write_json(path: Path, data: dict) -> None:
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(data, indent=2) + "\n")
-    tmp.replace(path)  # never a half-written result
 
 
 def _write_image(path: Path, image: np.ndarray) -> None:
@@ -72,7 +86,61 @@ def _write_image(path: Path, image: np.ndarray) -> None:
     ok, data = cv2.imencode(suffix, image)
     if not ok:
         raise ValueError(f"--annotate {path}: could not encode the image")
-    path.write_bytes(data.tobytes())
+    write_bytes_atomic(path, data.tobytes())
+
+
+def _original_coordinates(faces: list, scale: float) -> list:
+    """Faces found on a copy downscaled by `scale`, with boxes in the original's pixels."""
+    from emonav_drake.perception.face_emotion import FaceEmotion, scale_box
+
+    if scale == 1.0:
+        return faces
+    return [FaceEmotion(scale_box(f.box, scale), f.probabilities) for f in faces]
+
+
+def _note_downscaled(path: Path, size: tuple[int, int], shape: tuple, max_pixels: int) -> None:
+    w, h = size
+    print(
+        f"note: {path} is {w}x{h} ({w * h / 1e6:.1f} megapixels): classified on a copy "
+        f"downscaled to {shape[1]}x{shape[0]} (--max-pixels {max_pixels}); boxes are given "
+        "in the original's pixels, the annotation is drawn on the copy",
+        file=sys.stderr,
+    )
+
+
+def _validate_emotion_args(args: argparse.Namespace, video: bool) -> None:
+    """Every flag checked before the classifier loads or a frame is read."""
+    from emonav_drake.perception.face_emotion import MAX_IMAGE_PIXELS
+
+    if args.path.is_dir():
+        raise ValueError(f"{args.path}: is a directory, expected an image or video file")
+    if not args.path.is_file():
+        raise FileNotFoundError(f"{args.path}: no such file")
+    if args.every < 1:
+        raise ValueError(f"--every {args.every}: must be >= 1")
+    if args.max_frames is not None and args.max_frames < 1:
+        raise ValueError(f"--max-frames {args.max_frames}: must be >= 1")
+    if not 0.0 < args.smooth <= 1.0:
+        raise ValueError(f"--smooth {args.smooth}: must be in (0, 1]")
+    if not 0.05 <= args.detection_scale <= 1.0:
+        raise ValueError(f"--detection-scale {args.detection_scale}: must be in [0.05, 1]")
+    if args.max_pixels is None:
+        args.max_pixels = MAX_IMAGE_PIXELS
+    if args.max_pixels < 0:
+        raise ValueError(f"--max-pixels {args.max_pixels}: must be >= 0 (0 = never downscale)")
+    if args.annotate is not None:
+        check_output_file(args.annotate, "--annotate")
+        suffix = args.annotate.suffix.lower()
+        if suffix not in (*IMAGE_WRITE_SUFFIXES, *VIDEO_WRITERS):
+            raise ValueError(
+                f"--annotate {args.annotate}: use an image suffix {IMAGE_WRITE_SUFFIXES} "
+                f"or, for a video, {tuple(VIDEO_WRITERS)}"
+            )
+        if suffix in VIDEO_WRITERS and not video:
+            raise ValueError(f"--annotate {args.annotate}: an image input needs an image suffix")
+    if args.json is not None:
+        check_output_file(args.json, "--json")
+    check_distinct({"--json": args.json, "--annotate": args.annotate, "PATH": args.path})
 
 
 def _face_lines(faces: list) -> list[str]:
@@ -94,51 +162,44 @@ def cmd_emotion(args: argparse.Namespace) -> int:
         is_video_path,
     )
 
-    if not args.path.is_file():
-        raise FileNotFoundError(f"{args.path}: no such file")
-    if args.annotate is not None and args.annotate.suffix.lower() not in (
-        *IMAGE_WRITE_SUFFIXES,
-        *VIDEO_WRITERS,
-    ):
-        raise ValueError(
-            f"--annotate {args.annotate}: use an image suffix {IMAGE_WRITE_SUFFIXES} "
-            f"or, for a video, {tuple(VIDEO_WRITERS)}"
-        )
+    video = is_video_path(args.path)
+    _validate_emotion_args(args, video)
     classifier = FaceEmotionClassifier(DetectorParams(detection_scale=args.detection_scale))
-    if is_video_path(args.path):
+    if video:
         return _run_video(args, classifier)
     return _run_image(args, classifier)
 
 
 def _run_image(args: argparse.Namespace, classifier: Any) -> int:
-    from emonav_drake.perception.face_emotion import annotate, frame_label, load_image
+    from emonav_drake.perception.face_emotion import annotate, frame_label, load_image_limited
 
-    image = load_image(args.path)
+    image, scale, (w, h) = load_image_limited(args.path, args.max_pixels)
+    if scale != 1.0:
+        _note_downscaled(args.path, (w, h), image.shape, args.max_pixels)
     t0 = time.perf_counter()
     faces = classifier.classify(image)
     ms = (time.perf_counter() - t0) * 1e3
     label = EMOTION_NAMES[frame_label(faces)]
-    h, w = image.shape[:2]
+    reported = _original_coordinates(faces, scale)
     print(f"{args.path} ({w}x{h}): {len(faces)} face(s) in {ms:.0f} ms, emotion {label}")
     if faces:
-        print("\n".join(_face_lines(faces)))
+        print("\n".join(_face_lines(reported)))
     else:
         print("  no face found: neutral (paper §IV-G)")
     if args.json:
-        _write_json(
+        write_json(
             args.json,
             {
                 "path": str(args.path),
                 "kind": "image",
                 "width": w,
                 "height": h,
-                "faces": [f.to_json() for f in faces],
+                "scale": round(scale, 6),
+                "faces": [f.to_json() for f in reported],
                 "label": label,
             },
         )
     if args.annotate:
-        if args.annotate.suffix.lower() in VIDEO_WRITERS:
-            raise ValueError(f"--annotate {args.annotate}: an image input needs an image suffix")
         _write_image(args.annotate, annotate(image, faces))
         print(f"annotated image written to {args.annotate}")
     return 0
@@ -150,51 +211,64 @@ def _run_video(args: argparse.Namespace, classifier: Any) -> int:
         FaceEmotion,
         FaceTracker,
         annotate,
+        fit_pixels,
         frame_label,
         video_frames,
     )
 
-    if args.every < 1:
-        raise ValueError(f"--every {args.every}: must be >= 1")
-    if not 0.0 < args.smooth <= 1.0:
-        raise ValueError(f"--smooth {args.smooth}: must be in (0, 1]")
     tracker, smoother = FaceTracker(), EmotionSmoother(args.smooth)
     frames_out: list[dict] = []
     best: tuple[int, np.ndarray | None] = (-1, None)
-    writer = None
     suffix = args.annotate.suffix.lower() if args.annotate else ""
-    t0 = time.perf_counter()
-    try:
-        for index, t, frame in video_frames(args.path, every=args.every):
-            if args.max_frames is not None and len(frames_out) >= args.max_frames:
-                break
-            raw = classifier.classify(frame)
-            ids = tracker.update([f.box for f in raw])
-            faces = [
-                FaceEmotion(f.box, smoother.update(k, f.probabilities))
-                for f, k in zip(raw, ids, strict=True)
-            ]
-            smoother.forget(ids)
-            label = EMOTION_NAMES[frame_label(faces)]
-            frames_out.append(
-                {
-                    "index": index,
-                    "time": None if np.isnan(t) else round(t, 4),
-                    "faces": [{**f.to_json(), "track": k} for f, k in zip(faces, ids, strict=True)],
-                    "label": label,
-                }
-            )
-            if suffix in VIDEO_WRITERS:
-                drawn = annotate(frame, faces)
-                if writer is None:
-                    writer = _open_writer(args.annotate, args.path, drawn.shape, args.every)
-                writer.write(drawn)
-            elif args.annotate and len(faces) > best[0]:
-                best = (len(faces), annotate(frame, faces))
-    finally:
-        if writer is not None:
-            writer.release()
-    wall = time.perf_counter() - t0
+    scale, size = 1.0, None
+    with contextlib.ExitStack() as stack:
+        # an annotated video goes to a temporary sibling, renamed only when complete
+        video_out = (
+            stack.enter_context(atomic_output(args.annotate)) if suffix in VIDEO_WRITERS else None
+        )
+        writer = None
+        t0 = time.perf_counter()
+        try:
+            for index, t, frame in video_frames(args.path, every=args.every):
+                if args.max_frames is not None and len(frames_out) >= args.max_frames:
+                    break
+                if size is None:
+                    size = (frame.shape[1], frame.shape[0])
+                frame, scale = fit_pixels(frame, args.max_pixels)
+                if scale != 1.0 and not frames_out:
+                    _note_downscaled(args.path, size, frame.shape, args.max_pixels)
+                raw = classifier.classify(frame)
+                ids = tracker.update([f.box for f in raw])
+                faces = [
+                    FaceEmotion(f.box, smoother.update(k, f.probabilities))
+                    for f, k in zip(raw, ids, strict=True)
+                ]
+                smoother.forget(ids)
+                label = EMOTION_NAMES[frame_label(faces)]
+                reported = _original_coordinates(faces, scale)
+                frames_out.append(
+                    {
+                        "index": index,
+                        "time": None if np.isnan(t) else round(t, 4),
+                        "faces": [
+                            {**f.to_json(), "track": k} for f, k in zip(reported, ids, strict=True)
+                        ],
+                        "label": label,
+                    }
+                )
+                if video_out is not None:
+                    drawn = annotate(frame, faces)
+                    if writer is None:
+                        writer = _open_writer(video_out, args.path, drawn.shape, args.every)
+                    writer.write(drawn)
+                elif args.annotate and len(faces) > best[0]:
+                    best = (len(faces), annotate(frame, faces))
+        finally:
+            if writer is not None:
+                writer.release()
+        wall = time.perf_counter() - t0
+        if video_out is not None and writer is None:
+            raise ValueError(f"{args.path}: no frame to annotate")
     counts = Counter(f["label"] for f in frames_out)
     with_faces = sum(1 for f in frames_out if f["faces"])
     n = len(frames_out)
@@ -204,13 +278,14 @@ def _run_video(args: argparse.Namespace, classifier: Any) -> int:
         + ", ".join(f"{k} {counts.get(k, 0)}" for k in EMOTION_NAMES)
     )
     if args.json:
-        _write_json(
+        write_json(
             args.json,
             {
                 "path": str(args.path),
                 "kind": "video",
                 "every": args.every,
                 "smooth": args.smooth,
+                "scale": round(scale, 6),
                 "frames": frames_out,
                 "summary": {
                     "frames": n,
@@ -237,5 +312,5 @@ def _open_writer(path: Path, source: Path, shape: tuple, every: int) -> Any:
     fourcc = cv2.VideoWriter_fourcc(*VIDEO_WRITERS[path.suffix.lower()])
     writer = cv2.VideoWriter(str(path), fourcc, max(fps / every, 1.0), (shape[1], shape[0]))
     if not writer.isOpened():
-        raise ValueError(f"--annotate {path}: cannot open a video writer for this format")
+        raise ValueError(f"--annotate {path.suffix}: cannot open a video writer for this format")
     return writer

@@ -4,7 +4,9 @@ A `Scenario` fixes everything random about one episode: pedestrians (start, goal
 emotion and, in the time-varying mode, an emotion schedule), static discs and the
 robot's start and goal. `sample_scenario(seed, config)` draws one as the paper does
 (§IV-B); the same seed gives the same scenario. Scenarios also load from YAML
-(`load_scenario`), with every field validated.
+(`load_scenario`), with every field validated: a pedestrian needs `start`, `goal` and
+`emotion`, an obstacle `center` and `radius` (no silent defaults); the robot's start
+and goal must be clear of every obstacle, and its start clear of every pedestrian's.
 
 World frame: x towards the robot's goal, y left, metres.
 """
@@ -21,8 +23,14 @@ from emonav_drake.params import (
     ConfigError,
     EmoNavConfig,
     dump_typed_yaml,
-    load_typed_yaml,
+    load_typed_yaml_raw,
 )
+
+PLACEMENT_TRIES = 1000  # rejection-sampling draws per object
+
+
+class ScenarioSamplingError(ConfigError):
+    """The configured crowd does not fit: an object found no free spot (the message says which)."""
 
 
 @dc.dataclass
@@ -36,6 +44,8 @@ class PedestrianSpec:
     # Empty: the emotion is constant.
     emotion_schedule: list[str] = dc.field(default_factory=list)
 
+    _REQUIRED = ("start", "goal", "emotion")  # in YAML (no annotation: not a field)
+
 
 @dc.dataclass
 class StaticDiscSpec:
@@ -43,6 +53,8 @@ class StaticDiscSpec:
 
     center: list[float] = dc.field(default_factory=lambda: [0.0, 0.0])  # [m]
     radius: float = 0.3  # [m]
+
+    _REQUIRED = ("center", "radius")  # in YAML (no annotation: not a field)
 
 
 @dc.dataclass
@@ -57,8 +69,14 @@ class Scenario:
     emotion_change_period: float = 2.0  # [s], used when a schedule is present
     seed: int = -1  # the seed it was sampled with, −1 when written by hand
 
-    def validate(self) -> "Scenario":
-        """Raise `ConfigError` naming the field if any value is invalid."""
+    def validate(self, robot_radius: float = 0.3, pedestrian_radius: float = 0.3) -> "Scenario":
+        """Raise `ConfigError` naming the field if any value is invalid.
+
+        Besides ranges: the robot's start and goal must be clear of every obstacle (the
+        robot's disc of `robot_radius` must not overlap it: a start inside one is an
+        instant collision, a goal inside one a certain timeout), and the robot must not
+        start overlapping a pedestrian's start (disc of `pedestrian_radius`).
+        """
         for name in ("robot_start", "robot_goal"):
             _check_point(getattr(self, name), name)
         if not math.isfinite(self.robot_heading):
@@ -81,6 +99,23 @@ class Scenario:
                 raise ConfigError(
                     f"obstacles[{i}].radius = {o.radius!r} is out of range: allowed [0.01, 5.0]"
                 )
+        for name in ("robot_start", "robot_goal"):
+            point = getattr(self, name)
+            for i, o in enumerate(self.obstacles):
+                gap = math.dist(point, o.center) - o.radius - robot_radius
+                if gap < 0:
+                    raise ConfigError(
+                        f"{name} = {point!r} is inside obstacles[{i}] (center {o.center!r}, "
+                        f"radius {o.radius}): the robot (radius {robot_radius} m) must stand "
+                        f"clear of it ({-gap:.2f} m overlap)"
+                    )
+        for i, p in enumerate(self.pedestrians):
+            gap = math.dist(self.robot_start, p.start) - pedestrian_radius - robot_radius
+            if gap < 0:
+                raise ConfigError(
+                    f"robot_start = {self.robot_start!r} overlaps pedestrians[{i}].start "
+                    f"= {p.start!r}: the episode would begin in collision"
+                )
         return self
 
 
@@ -89,9 +124,61 @@ def _check_point(p: list[float], name: str) -> None:
         raise ConfigError(f"{name} = {p!r} is invalid: must be 2 finite numbers in [-100, 100]")
 
 
-def load_scenario(path: str | Path) -> Scenario:
-    """A scenario from a YAML file (fields as in `Scenario`), validated."""
-    return load_typed_yaml(Scenario, path=path).validate()
+def load_scenario(path: str | Path, config: EmoNavConfig | None = None) -> Scenario:
+    """A scenario from a YAML file (fields as in `Scenario`), validated.
+
+    Absent top-level fields take the documented defaults (no obstacles, no pedestrians,
+    the paper's start (−4, 0) and goal (4, 0)); `robot_heading`, if absent, faces the
+    goal. Inside `pedestrians` and `obstacles` every field but `emotion_schedule` is
+    required. `config` gives the robot's and pedestrians' radii for the overlap checks.
+    """
+    cfg = config or EmoNavConfig()
+    scenario, raw = load_typed_yaml_raw(Scenario, path=path)
+    if "robot_heading" not in raw:
+        (sx, sy), (gx, gy) = scenario.robot_start, scenario.robot_goal
+        scenario.robot_heading = math.atan2(gy - sy, gx - sx) if (sx, sy) != (gx, gy) else 0.0
+    try:
+        return scenario.validate(cfg.robot.radius, cfg.crowd.pedestrian_radius)
+    except ConfigError as e:
+        raise ConfigError(f"{path}: {e}") from None
+
+
+def add_time_varying_emotion(
+    scenario: Scenario, seed: int, config: EmoNavConfig | None = None
+) -> Scenario:
+    """Give one pedestrian (chosen by `seed`) an emotion that changes every period (§IV-F).
+
+    The same rule as `sample_scenario` in the time-varying mode, for a scenario from a
+    file: the schedule covers `episode.max_steps` walking steps, every entry differs from
+    the previous one. Raises `ConfigError` if the scenario has no pedestrian or already
+    has a schedule.
+    """
+    cfg = config or EmoNavConfig()
+    if not scenario.pedestrians:
+        raise ConfigError("--time-varying: the scenario has no pedestrian whose emotion could vary")
+    if any(p.emotion_schedule for p in scenario.pedestrians):
+        raise ConfigError(
+            "--time-varying: the scenario already has an emotion_schedule; remove the flag "
+            "or the schedule"
+        )
+    _add_emotion_schedule(
+        scenario.pedestrians, np.random.default_rng(seed), cfg, scenario.emotion_change_period
+    )
+    return scenario
+
+
+def _add_emotion_schedule(
+    pedestrians: list, rng: np.random.Generator, cfg: EmoNavConfig, period: float
+) -> None:
+    who = int(rng.integers(len(pedestrians)))
+    horizon = cfg.episode.max_steps * cfg.robot.step_time
+    n = int(math.ceil(horizon / period)) + 1
+    current = EMOTION_NAMES.index(pedestrians[who].emotion)
+    schedule = [EMOTION_NAMES[current]]
+    for _ in range(n - 1):
+        current = (current + int(rng.integers(1, 3))) % 3  # always a different one
+        schedule.append(EMOTION_NAMES[current])
+    pedestrians[who].emotion_schedule = schedule
 
 
 def dump_scenario(scenario: Scenario) -> str:
@@ -107,7 +194,10 @@ def sample_scenario(seed: int, config: EmoNavConfig | None = None) -> Scenario:
     x ∈ [−3, 3], y ∈ [−1.5, 1.5]; each pedestrian's emotion is drawn from
     `crowd.emotion_probs`. Rejection sampling keeps every pair of objects (including the
     robot at its start and goal) at least 0.2 m apart at the start, so no episode begins
-    in collision. In the time-varying mode, one pedestrian's emotion changes every
+    in collision. An object that finds no free spot in `PLACEMENT_TRIES` draws raises
+    `ScenarioSamplingError` (a `ConfigError`): dropping it would silently sample another
+    distribution than the configured counts (never the case with the paper's settings).
+    In the time-varying mode, one pedestrian's emotion changes every
     `emotion_change_period` seconds to a different one, for the whole episode.
     """
     cfg = config or EmoNavConfig()
@@ -125,8 +215,9 @@ def sample_scenario(seed: int, config: EmoNavConfig | None = None) -> Scenario:
         return all(math.hypot(x - px, y - py) >= r + pr + gap for px, py, pr in placed)
 
     obstacles: list[StaticDiscSpec] = []
-    for _ in range(int(rng.integers(c.min_static, c.max_static + 1))):
-        for _attempt in range(1000):
+    wanted = int(rng.integers(c.min_static, c.max_static + 1))
+    for _ in range(wanted):
+        for _attempt in range(PLACEMENT_TRIES):
             r = float(rng.uniform(c.static_radius_min, c.static_radius_max))
             x = float(rng.uniform(*c.static_x_range))
             y = float(rng.uniform(*c.static_y_range))
@@ -134,11 +225,21 @@ def sample_scenario(seed: int, config: EmoNavConfig | None = None) -> Scenario:
                 placed.append((x, y, r))
                 obstacles.append(StaticDiscSpec(center=[x, y], radius=r))
                 break
+        else:
+            raise ScenarioSamplingError(
+                f"seed {seed}: placed only {len(obstacles)} of {wanted} static discs: no free "
+                f"spot in {PLACEMENT_TRIES} tries for a disc of radius in "
+                f"[{c.static_radius_min}, {c.static_radius_max}] m inside crowd.static_x_range "
+                f"{c.static_x_range} x crowd.static_y_range {c.static_y_range}, {gap} m clear "
+                "of the robot's start and goal and of the other discs; enlarge the box or "
+                "lower crowd.max_static / crowd.static_radius_max"
+            )
 
     pedestrians: list[PedestrianSpec] = []
     probs = np.asarray(c.emotion_probs, dtype=float)
-    for _ in range(int(rng.integers(c.min_pedestrians, c.max_pedestrians + 1))):
-        for _attempt in range(1000):
+    wanted = int(rng.integers(c.min_pedestrians, c.max_pedestrians + 1))
+    for _ in range(wanted):
+        for _attempt in range(PLACEMENT_TRIES):
             radius = float(rng.uniform(c.circle_radius_min, c.circle_radius_max))
             angle = float(rng.uniform(0.0, 2.0 * math.pi))
             sx, sy = radius * math.cos(angle), radius * math.sin(angle)
@@ -147,17 +248,17 @@ def sample_scenario(seed: int, config: EmoNavConfig | None = None) -> Scenario:
                 emotion = EMOTION_NAMES[int(rng.choice(3, p=probs))]
                 pedestrians.append(PedestrianSpec(start=[sx, sy], goal=[-sx, -sy], emotion=emotion))
                 break
+        else:
+            raise ScenarioSamplingError(
+                f"seed {seed}: placed only {len(pedestrians)} of {wanted} pedestrians: no free "
+                f"start/goal pair in {PLACEMENT_TRIES} tries on the circle of radius in "
+                f"[crowd.circle_radius_min {c.circle_radius_min}, crowd.circle_radius_max "
+                f"{c.circle_radius_max}] m, {gap} m clear of the robot, the discs and the other "
+                "pedestrians; widen the circle or lower crowd.max_pedestrians"
+            )
 
     if c.time_varying_emotions and pedestrians:
-        who = int(rng.integers(len(pedestrians)))
-        horizon = cfg.episode.max_steps * robot.step_time
-        n = int(math.ceil(horizon / c.emotion_change_period)) + 1
-        current = EMOTION_NAMES.index(pedestrians[who].emotion)
-        schedule = [EMOTION_NAMES[current]]
-        for _ in range(n - 1):
-            current = (current + int(rng.integers(1, 3))) % 3  # always a different one
-            schedule.append(EMOTION_NAMES[current])
-        pedestrians[who].emotion_schedule = schedule
+        _add_emotion_schedule(pedestrians, rng, cfg, c.emotion_change_period)
 
     return Scenario(
         pedestrians=pedestrians,

@@ -10,6 +10,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from emonav_drake.atomic_io import check_output_dir
+from emonav_drake.params import ConfigError
+
 
 def add_train_parser(sub: argparse._SubParsersAction) -> None:
     t = sub.add_parser("train", help="train a navigation policy (SAC, or the CPU DAgger route)")
@@ -17,35 +20,66 @@ def add_train_parser(sub: argparse._SubParsersAction) -> None:
     t.add_argument(
         "--config",
         type=Path,
-        help="YAML training configuration (SacConfig or "
-        "DaggerConfig fields; env settings under `env:` for SAC)",
+        help="YAML training configuration: top-level SacConfig fields for --algo sac, "
+        "DaggerConfig fields for --algo dagger (see emonav_drake/learning/config.py; the "
+        "navigation environment is the paper's default and not configurable here)",
     )
-    t.add_argument("--steps", type=int, help="SAC environment steps (default from the config)")
-    t.add_argument("--seed", type=int, default=0)
-    t.add_argument("--device", default="cpu", help="cpu or cuda")
-    t.add_argument("--out", type=Path, default=Path("runs/train"))
+    t.add_argument(
+        "--steps", type=int, help="SAC environment steps, >= 1 (default from the config)"
+    )
+    t.add_argument("--seed", type=int, default=0, help="seed of the run (>= 0)")
+    t.add_argument("--device", default="cpu", help="cpu or cuda (cuda:N)")
+    t.add_argument("--out", type=Path, default=Path("runs/train"), help="run directory")
     t.add_argument("--resume", type=Path, help="continue the run in this directory")
     t.set_defaults(func=cmd_train)
 
 
-def cmd_train(args: argparse.Namespace) -> int:
+def _training_config(args: argparse.Namespace):
+    """The typed configuration with the command-line overrides, validated (field named)."""
     from emonav_drake.params import load_typed_yaml
 
-    out = args.resume or args.out
     if args.algo == "dagger":
-        from emonav_drake.learning.dagger import DaggerConfig, train_dagger
+        from emonav_drake.learning.config import DaggerConfig as schema
 
-        cfg = load_typed_yaml(DaggerConfig, path=args.config) if args.config else DaggerConfig()
-        cfg.seed, cfg.device = args.seed, args.device
-        path = train_dagger(out, cfg, resume=args.resume is not None)
-        print(f"policy written to {path}")
-        return 0
-    from emonav_drake.learning.sac_trainer import SacConfig, train_sac
-
-    cfg = load_typed_yaml(SacConfig, path=args.config) if args.config else SacConfig()
+        if args.steps is not None:
+            raise ConfigError("--steps applies to --algo sac only (DAgger counts rounds)")
+    else:
+        from emonav_drake.learning.config import SacConfig as schema
+    cfg = load_typed_yaml(schema, path=args.config) if args.config else schema()
+    if args.seed < 0:
+        raise ConfigError(f"--seed {args.seed}: must be >= 0")
+    if args.steps is not None and args.steps < 1:
+        raise ConfigError(f"--steps {args.steps}: must be >= 1")
     cfg.seed, cfg.device = args.seed, args.device
     if args.steps is not None:
         cfg.total_steps = args.steps
+    where = f"{args.config}: " if args.config else ""
+    try:
+        cfg.validate()
+    except ConfigError as e:
+        raise ConfigError(f"{where}{e}") from None
+    return cfg
+
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from emonav_drake.learning.policy import resolve_device
+
+    cfg = _training_config(args)
+    resolve_device(args.device)
+    if args.resume is not None:
+        if not args.resume.is_dir():
+            raise ConfigError(f"--resume {args.resume}: no such run directory")
+        out = args.resume
+    else:
+        out = check_output_dir(args.out, "--out")
+    if args.algo == "dagger":
+        from emonav_drake.learning.dagger import train_dagger
+
+        path = train_dagger(out, cfg, resume=args.resume is not None)
+        print(f"policy written to {path}")
+        return 0
+    from emonav_drake.learning.sac_trainer import train_sac
+
     train_sac(out, cfg, resume=args.resume is not None)
     return 0
 
@@ -58,8 +92,11 @@ def add_export_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
+    from emonav_drake.atomic_io import check_distinct, check_output_file
     from emonav_drake.learning.policy import DEFAULT_POLICY, export_torchscript
 
+    check_output_file(args.out, "--out")
+    check_distinct({"CHECKPOINT": args.checkpoint, "--out": args.out})
     path = export_torchscript(args.checkpoint or DEFAULT_POLICY, args.out)
     print(
         f"TorchScript written to {path} (inputs: uint8 stack (1, N, M, M), vector state "

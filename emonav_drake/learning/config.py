@@ -1,10 +1,19 @@
 """Training configurations: every hyper-parameter of a run in one typed object.
 
 Loadable from YAML with `emonav_drake.params.load_typed_yaml` (no `from __future__
-import annotations` here: Drake's typed loader needs real types).
+import annotations` here: Drake's typed loader needs real types). `validate()` checks
+every field against its allowed range (`_DAGGER_RANGES`, `_SAC_RANGES`, in the style of
+`params._RANGES`) and the cross-field rules, raising `ConfigError` naming the field.
 """
 
 import dataclasses as dc
+
+from emonav_drake.params import ConfigError, validate_ranges
+
+# The LiDAR of the training environment (EmoNavConfig defaults): the grid size divides it.
+_NUM_BEAMS = 1800
+# The 4-conv encoder (3 x 3, strides 2-1-1-1) needs an input of at least this many cells.
+MIN_ENCODER_INPUT = 15
 
 
 @dc.dataclass
@@ -33,6 +42,12 @@ class DaggerConfig:
     heading_noise: float = 1.5  # their initial heading error, uniform in ± this [rad]
     device: str = "cpu"
     threads: int = 1  # batch-1 acting is fastest on one thread
+
+    def validate(self) -> "DaggerConfig":
+        """Raise `ConfigError` naming the field if a value is out of range."""
+        validate_ranges(self, _DAGGER_RANGES)
+        _choice("grid_kind", self.grid_kind, ("lgm", "ogm"))
+        return self
 
 
 @dc.dataclass
@@ -74,3 +89,86 @@ class SacConfig:
     goal_radius: float = 0.1
     reuse_features: bool = True  # the actor step reuses the critic pass's conv features
     channels_last: bool = False  # NHWC memory format for the conv stacks
+
+    def validate(self) -> "SacConfig":
+        """Raise `ConfigError` naming the field if a value is out of range or inconsistent."""
+        validate_ranges(self, _SAC_RANGES)
+        _choice("grid_kind", self.grid_kind, ("lgm", "ogm", "scan", "drlvo"))
+        _choice("encoder", self.encoder, ("cnn", "lstm"))
+        if self.encoder == "lstm" and self.grid_kind != "scan":
+            raise ConfigError(
+                f"encoder = 'lstm' is invalid with grid_kind = {self.grid_kind!r}: "
+                "the LSTM encoder reads scans (grid_kind: scan)"
+            )
+        if self.grid_kind != "scan":
+            if _NUM_BEAMS % self.grid_size:
+                raise ConfigError(
+                    f"grid_size = {self.grid_size} is invalid: must divide the LiDAR's "
+                    f"{_NUM_BEAMS} beams (e.g. 50, 100, 120, 150)"
+                )
+            if self.grid_size // self.pool < MIN_ENCODER_INPUT:
+                raise ConfigError(
+                    f"pool = {self.pool} is invalid with grid_size = {self.grid_size}: the "
+                    f"encoder needs grid_size // pool >= {MIN_ENCODER_INPUT}"
+                )
+        return self
+
+
+def _choice(name: str, value: str, allowed: tuple[str, ...]) -> None:
+    if value not in allowed:
+        raise ConfigError(f"{name} = {value!r} is invalid: must be one of {list(allowed)}")
+
+
+# Allowed ranges, inclusive; None = unbounded. Sizes and counts are >= 1, seeds >= 0.
+_DAGGER_RANGES = {
+    "seed": (0, None),
+    "expert_episodes": (1, None),
+    "rounds": (1, None),
+    "episodes_per_round": (1, None),
+    "beta": (0.0, 1.0),
+    "grad_steps_first": (1, None),
+    "grad_steps_per_round": (1, None),
+    "batch_size": (1, None),
+    "lr": (1e-8, 1.0),
+    "weight_decay": (0.0, 1.0),
+    "hidden": (1, 65536),
+    "pool": (1, 6),
+    "eval_episodes": (1, None),
+    "train_seed_offset": (0, None),
+    "eval_seed_offset": (0, None),
+    "goal_radius": (0.01, 2.0),
+    "heading_noise_prob": (0.0, 1.0),
+    "heading_noise": (0.0, 3.1416),
+    "threads": (1, 1024),
+}
+
+_SAC_RANGES = {
+    "seed": (0, None),
+    "threads": (1, 1024),
+    "total_steps": (1, None),
+    "random_steps": (0, None),
+    "replay_size": (1, None),
+    "batch_size": (1, None),
+    "hidden": (1, 65536),
+    "features": (1, 65536),
+    "filters": (1, 4096),
+    "pool": (1, 6),
+    "lr": (1e-8, 1.0),
+    "beta1": (0.0, 0.999999),
+    "alpha_lr": (1e-8, 1.0),
+    "alpha_beta1": (0.0, 0.999999),
+    "init_alpha": (1e-8, 1e3),
+    "discount": (0.0, 1.0),
+    "critic_tau": (1e-6, 1.0),
+    "encoder_tau": (1e-6, 1.0),
+    "actor_update_freq": (1, None),
+    "target_update_freq": (1, None),
+    "updates_per_step": (1, 1000),
+    "eval_every": (1, None),
+    "eval_episodes": (1, None),
+    "eval_seed_offset": (0, None),
+    "checkpoint_every": (1, None),
+    "num_frames": (1, 64),
+    "grid_size": (2, 1000),
+    "goal_radius": (0.01, 2.0),
+}

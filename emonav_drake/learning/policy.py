@@ -19,6 +19,7 @@ command — never the privileged crowd state.
 from __future__ import annotations
 
 import io
+import math
 import os
 import tempfile
 from pathlib import Path
@@ -42,6 +43,41 @@ DEFAULT_POLICY = Path(__file__).resolve().parent.parent / "data" / "policy_lgm.p
 
 class PolicyError(ValueError):
     """A policy checkpoint is missing, corrupt, or does not fit the observation."""
+
+
+class DeviceError(ValueError):
+    """A torch device string is malformed or names hardware this machine does not have."""
+
+
+def resolve_device(device: str, flag: str = "--device") -> torch.device:
+    """`device` as a `torch.device`, checked against the hardware; else `DeviceError`.
+
+    Catches the two mistakes that otherwise surface deep inside torch: a malformed name
+    ("bogus") and a GPU that is not there ("cuda" on a CPU-only machine, "cuda:3" on a
+    one-GPU machine), so the error blames the flag and not the checkpoint.
+    """
+    try:
+        d = torch.device(device)
+    except (RuntimeError, ValueError, TypeError):
+        raise DeviceError(
+            f"{flag} {device!r}: not a torch device; use cpu, cuda or cuda:N"
+        ) from None
+    if d.type == "cuda":
+        if not torch.cuda.is_available():
+            raise DeviceError(
+                f"{flag} {device}: no CUDA GPU is available to torch on this machine "
+                "(torch.cuda.is_available() is False); use --device cpu"
+            )
+        if d.index is not None and d.index >= torch.cuda.device_count():
+            raise DeviceError(
+                f"{flag} {device}: only {torch.cuda.device_count()} CUDA device(s) visible"
+            )
+    elif d.type == "mps":
+        if not torch.backends.mps.is_available():
+            raise DeviceError(f"{flag} {device}: the Apple MPS backend is not available here")
+    elif d.type != "cpu":
+        raise DeviceError(f"{flag} {device}: unsupported device type; use cpu or cuda")
+    return d
 
 
 def vector_state(
@@ -101,23 +137,107 @@ def save_policy(path: str | Path, model: torch.nn.Module, meta: dict[str, Any]) 
     atomic_torch_save({"format": FORMAT, **meta, "state_dict": state}, path)
 
 
+def _check_meta(path: Path, blob: dict) -> None:
+    """Every metadata field the planner and the exporter read, present and well-formed."""
+
+    def bad(field: str, why: str) -> PolicyError:
+        return PolicyError(f"{path}: checkpoint field {field} {why}")
+
+    for key in ("kind", "encoder", "hidden", "observation", "bounds", "state_dict"):
+        if key not in blob:
+            raise bad(key, "is missing (not a complete emonav policy; re-export it)")
+    if blob["kind"] not in ("categorical", "gaussian"):
+        raise bad("kind", f"= {blob['kind']!r} is invalid: must be categorical or gaussian")
+    enc = blob["encoder"]
+    if not isinstance(enc, dict) or "type" not in enc:
+        raise bad("encoder", f"= {enc!r} is invalid: must be a mapping with a 'type'")
+    ob = blob["observation"]
+    if not isinstance(ob, dict):
+        raise bad("observation", f"= {ob!r} is invalid: must be a mapping")
+    for key in ("grid_kind", "num_frames", "grid_size"):
+        if key not in ob:
+            raise bad(f"observation.{key}", "is missing")
+    for key in ("num_frames", "grid_size"):
+        if not (isinstance(ob[key], int) and ob[key] >= 1):
+            raise bad(f"observation.{key}", f"= {ob[key]!r} is invalid: must be an integer >= 1")
+    if ob["grid_kind"] not in ("lgm", "ogm", "scan", "drlvo"):
+        raise bad("observation.grid_kind", f"= {ob['grid_kind']!r} is invalid")
+    b = blob["bounds"]
+    if not (
+        isinstance(b, (list, tuple))
+        and len(b) == 2
+        and all(isinstance(v, (int, float)) and math.isfinite(v) and v > 0 for v in b)
+    ):
+        raise bad("bounds", f"= {b!r} is invalid: must be [max_speed, max_heading_change] > 0")
+    if enc["type"] == "lgm":
+        planes = ob["num_frames"] * (3 if ob["grid_kind"] == "drlvo" else 1)
+        if "size" in enc and enc["size"] != ob["grid_size"]:
+            raise bad(
+                "observation.grid_size",
+                f"= {ob['grid_size']} does not fit the encoder (size {enc['size']})",
+            )
+        if "frames" in enc and enc["frames"] != planes:
+            raise bad(
+                "observation.num_frames",
+                f"= {ob['num_frames']} does not fit the encoder ({enc['frames']} input planes)",
+            )
+    if blob["kind"] == "categorical":
+        c = np.asarray(blob.get("commands", []), dtype=float)
+        if c.ndim != 2 or c.shape[1:] != (2,) or len(c) == 0 or not np.isfinite(c).all():
+            raise bad("commands", "is missing or not a non-empty list of [u_v, u_dtheta]")
+
+
+def probe_input(meta: dict[str, Any]) -> tuple[torch.Tensor, torch.Tensor]:
+    """A zero observation of the shape the checkpoint declares (uint8 stack, vector state)."""
+    ob = meta["observation"]
+    frames, size = ob["num_frames"], ob["grid_size"]
+    if ob["grid_kind"] == "drlvo":
+        frames *= 3
+    if ob["grid_kind"] == "scan":
+        beams = meta["encoder"].get("beams", 1800)
+        return torch.zeros(1, frames, beams), torch.zeros(1, 4)
+    return torch.zeros(1, frames, size, size, dtype=torch.uint8), torch.zeros(1, 4)
+
+
 def load_policy(path: str | Path, device: str = "cpu") -> tuple[torch.nn.Module, dict]:
-    """Load a checkpoint; `PolicyError` names what is wrong (file, format, shapes)."""
+    """Load a checkpoint; `PolicyError` names what is wrong (file, format, fields, shapes).
+
+    Besides the weights, the metadata is checked (every field the planner reads) and one
+    forward pass on a zero observation of the declared shape proves that the observation
+    fits the encoder — a wrong `observation.grid_size` fails here, not at the first step.
+    """
     path = Path(path)
+    dev = resolve_device(device)
+    if path.is_dir():
+        raise PolicyError(f"policy checkpoint {path} is a directory, not a file")
     if not path.is_file():
         raise PolicyError(f"policy checkpoint {path} does not exist")
     try:
-        blob = torch.load(io.BytesIO(path.read_bytes()), map_location=device, weights_only=True)
+        blob = torch.load(io.BytesIO(path.read_bytes()), map_location=dev, weights_only=True)
     except Exception as e:
         raise PolicyError(f"{path} is not a readable policy checkpoint ({e})") from None
     if not isinstance(blob, dict) or blob.get("format") != FORMAT:
         raise PolicyError(f"{path} is not an {FORMAT} checkpoint")
+    _check_meta(path, blob)
     try:
         model = build_model(blob)
         model.load_state_dict(blob["state_dict"])
-    except (KeyError, RuntimeError, TypeError) as e:
+    except PolicyError as e:
+        raise PolicyError(f"{path}: {e}") from None
+    except (KeyError, RuntimeError, TypeError, ValueError) as e:
         raise PolicyError(f"{path}: weights do not match the described network: {e}") from None
-    model.to(device).eval()
+    model.to(dev).eval()
+    obs, state = probe_input(blob)
+    try:
+        with torch.no_grad():
+            model(obs.to(dev), state.to(dev))
+    except (RuntimeError, ValueError) as e:
+        ob = blob["observation"]
+        raise PolicyError(
+            f"{path}: observation (grid_kind {ob['grid_kind']}, num_frames {ob['num_frames']}, "
+            f"grid_size {ob['grid_size']}) does not fit the encoder {blob['encoder']}: "
+            f"{str(e).splitlines()[0]}"
+        ) from None
     return model, blob
 
 
@@ -133,7 +253,7 @@ class PolicyPlanner:
 
     def __init__(self, path: str | Path | None = None, device: str = "cpu") -> None:
         self.path = Path(path) if path is not None else DEFAULT_POLICY
-        self.device = torch.device(device)
+        self.device = resolve_device(device)
         self.model, self.meta = load_policy(self.path, device)
         self.bounds = tuple(self.meta["bounds"])
         ob = self.meta["observation"]
@@ -185,15 +305,20 @@ class PolicyPlanner:
 
 
 def export_torchscript(path: str | Path, out: str | Path) -> Path:
-    """Export a checkpoint's network to TorchScript (inputs: uint8 stack, vector state)."""
+    """Export a checkpoint's network to TorchScript (inputs: uint8 stack, vector state).
+
+    The file is written atomically (a temporary sibling renamed when complete).
+    """
+    from emonav_drake.atomic_io import atomic_output, check_output_file
+
+    out = check_output_file(out)
     model, meta = load_policy(path)
-    frames, size = meta["observation"]["num_frames"], meta["observation"]["grid_size"]
-    example = (torch.zeros(1, frames, size, size, dtype=torch.uint8), torch.zeros(1, 4))
+    example = probe_input(meta)
     scripted = torch.jit.trace(
         model if meta["kind"] == "categorical" else _ActorMean(model), example
     )
-    out = Path(out)
-    scripted.save(str(out))
+    with atomic_output(out) as tmp:
+        scripted.save(str(tmp))
     return out
 
 

@@ -148,14 +148,40 @@ def frame_label(faces: Sequence[FaceEmotion]) -> int:
 # --- Images and videos -----------------------------------------------------------------------
 
 
-def load_image(path: str | Path) -> np.ndarray:
-    """Read a PNG/JPEG/… file as a BGR uint8 (H, W, 3) array.
+# Images above MAX_IMAGE_PIXELS are classified on a downscaled copy (the Haar detector's
+# time and memory grow with the pixel count: 8000 x 8000 took 16 s and 1.4 GB); images
+# above HARD_MAX_PIXELS (read from the file header) are refused before decoding.
+MAX_IMAGE_PIXELS = 4096 * 2048
+HARD_MAX_PIXELS = 16384 * 16384
+_REDUCED_FLAGS = {
+    2: cv2.IMREAD_REDUCED_COLOR_2,
+    4: cv2.IMREAD_REDUCED_COLOR_4,
+    8: cv2.IMREAD_REDUCED_COLOR_8,
+}
 
-    Raises:
-        FileNotFoundError: no such file.
-        ImageReadError: the file is empty, corrupted or not an image.
-    """
-    path = Path(path)
+
+def image_header_size(path: str | Path) -> tuple[int, int] | None:
+    """(width, height) from the file header without decoding the pixels; None if unknown."""
+    try:
+        import warnings
+
+        from PIL import Image
+    except ImportError:  # no Pillow: decode to find out
+        return None
+    limit = Image.MAX_IMAGE_PIXELS
+    Image.MAX_IMAGE_PIXELS = None  # our own limit applies (Pillow's would refuse to tell)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            with Image.open(path) as im:
+                return int(im.size[0]), int(im.size[1])
+    except Exception:  # not a format Pillow knows: decode to find out
+        return None
+    finally:
+        Image.MAX_IMAGE_PIXELS = limit
+
+
+def _decode(path: Path, flags: int) -> np.ndarray:
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file")
     data = np.fromfile(path, dtype=np.uint8)
@@ -164,7 +190,7 @@ def load_image(path: str | Path) -> np.ndarray:
     level = cv2.utils.logging.getLogLevel()
     cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)  # our error says it
     try:
-        image = cv2.imdecode(data, cv2.IMREAD_COLOR)
+        image = cv2.imdecode(data, flags)
     finally:
         cv2.utils.logging.setLogLevel(level)
     if image is None or image.size == 0:
@@ -173,6 +199,70 @@ def load_image(path: str | Path) -> np.ndarray:
             "or has another format"
         )
     return image
+
+
+def load_image(path: str | Path) -> np.ndarray:
+    """Read a PNG/JPEG/… file as a BGR uint8 (H, W, 3) array.
+
+    Raises:
+        FileNotFoundError: no such file.
+        ImageReadError: the file is empty, corrupted, not an image, or larger than
+            `HARD_MAX_PIXELS` (checked from the header, before decoding).
+    """
+    path = Path(path)
+    _check_hard_limit(path, image_header_size(path) if path.is_file() else None)
+    return _decode(path, cv2.IMREAD_COLOR)
+
+
+def _check_hard_limit(path: Path, size: tuple[int, int] | None) -> None:
+    if size is not None and size[0] * size[1] > HARD_MAX_PIXELS:
+        raise ImageReadError(
+            f"{path}: {size[0]}x{size[1]} = {size[0] * size[1] / 1e6:.0f} megapixels is more "
+            f"than the {HARD_MAX_PIXELS / 1e6:.0f} this tool decodes; downscale it first"
+        )
+
+
+def fit_pixels(image: np.ndarray, max_pixels: int | None) -> tuple[np.ndarray, float]:
+    """`image` downscaled (area interpolation) to at most `max_pixels`, and the scale used."""
+    h, w = image.shape[:2]
+    if not max_pixels or h * w <= max_pixels:
+        return image, 1.0
+    scale = (max_pixels / (h * w)) ** 0.5
+    size = (max(1, int(w * scale)), max(1, int(h * scale)))
+    return cv2.resize(image, size, interpolation=cv2.INTER_AREA), size[0] / w
+
+
+def load_image_limited(
+    path: str | Path, max_pixels: int | None = MAX_IMAGE_PIXELS
+) -> tuple[np.ndarray, float, tuple[int, int]]:
+    """Read an image at most `max_pixels` large: (BGR image, scale, original (w, h)).
+
+    A larger image is downscaled by `scale` < 1: decoded at 1/2, 1/4 or 1/8 size when that
+    still leaves at least `max_pixels` (JPEG decodes so without ever holding the full
+    image), then area-resized to fit. An
+    image above `HARD_MAX_PIXELS` is refused from its header. `max_pixels` None or 0: no
+    downscaling.
+    """
+    path = Path(path)
+    size = image_header_size(path) if path.is_file() else None
+    _check_hard_limit(path, size)
+    flags = cv2.IMREAD_COLOR
+    if size is not None and max_pixels and size[0] * size[1] > max_pixels:
+        ratio = size[0] * size[1] / max_pixels  # > 1
+        factor = max(f for f in (1, 2, 4, 8) if f * f <= ratio)  # still >= max_pixels
+        flags = _REDUCED_FLAGS.get(factor, cv2.IMREAD_COLOR)
+    image = _decode(path, flags)
+    if size is None or flags == cv2.IMREAD_COLOR:
+        size = (image.shape[1], image.shape[0])
+    image, _ = fit_pixels(image, max_pixels)
+    return image, image.shape[1] / size[0], size
+
+
+def scale_box(box: Sequence[int], scale: float) -> tuple[int, int, int, int]:
+    """A box (x, y, w, h) found in an image downscaled by `scale`, in the original's pixels."""
+    if scale == 1.0:
+        return tuple(int(v) for v in box)  # type: ignore[return-value]
+    return tuple(int(round(v / scale)) for v in box)  # type: ignore[return-value]
 
 
 def is_video_path(path: str | Path) -> bool:

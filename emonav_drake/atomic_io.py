@@ -1,0 +1,193 @@
+"""Output files of the command line: checked before any work, written atomically.
+
+Two rules (docs/reliability.md):
+
+1. **Validate first.** `check_output_file` / `check_output_dir` are called before a
+   sub-command starts its long work: a path that is a directory, whose folder does not
+   exist or is not writable fails at once with `OutputPathError` naming the flag.
+2. **Never a half file.** Every file is written to a temporary sibling named
+   `<stem>.tmp-<pid>-<random><suffix>` (same folder, so the final `os.replace` is
+   atomic; the real suffix is kept so writers that pick a format from the name still
+   work) and renamed onto the target only when complete. On any exception — including
+   Ctrl-C — the temporary file is removed. A process killed with SIGKILL can leave only
+   such a recognisable `*.tmp-*` file, never a truncated target, and the next write of
+   the same target removes it (its process is gone).
+
+JSON is strict: `write_json` turns NaN and ±inf into `null` and serialises with
+`allow_nan=False`, so every file written is valid JSON for any parser.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+TMP_MARK = ".tmp-"
+
+
+class OutputPathError(ValueError):
+    """An output path cannot be written (a directory, a missing or read-only folder…)."""
+
+
+def _where(flag: str | None, path: Path) -> str:
+    return f"{flag} {path}" if flag else str(path)
+
+
+def check_output_file(path: str | Path, flag: str | None = None) -> Path:
+    """`path` as a `Path` if a file can be written there; else `OutputPathError`.
+
+    The target may exist (it is replaced) but must not be a directory or a special file;
+    its folder must exist and be writable. Nothing is created.
+    """
+    p = Path(path)
+    where = _where(flag, p)
+    if str(path).strip() == "":
+        raise OutputPathError(f"{flag or 'output'}: empty path")
+    if p.is_dir():
+        raise OutputPathError(f"{where}: is a directory; give a file name inside it")
+    if p.exists() and not p.is_file():
+        raise OutputPathError(f"{where}: exists and is not a regular file")
+    parent = p.parent
+    if not parent.exists():
+        raise OutputPathError(f"{where}: folder {parent} does not exist (create it first)")
+    if not parent.is_dir():
+        raise OutputPathError(f"{where}: {parent} is not a folder")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise OutputPathError(f"{where}: folder {parent} is not writable")
+    return p
+
+
+def check_output_dir(path: str | Path, flag: str | None = None) -> Path:
+    """`path` as a `Path` if it is (or can be created as) a writable directory.
+
+    Missing folders are allowed (a run directory is created with its parents); the
+    nearest existing ancestor must be a writable directory.
+    """
+    p = Path(path)
+    where = _where(flag, p)
+    if str(path).strip() == "":
+        raise OutputPathError(f"{flag or 'output'}: empty path")
+    if p.exists() and not p.is_dir():
+        raise OutputPathError(f"{where}: exists and is not a directory")
+    probe = p
+    while not probe.exists():
+        probe = probe.parent
+    if not probe.is_dir():
+        raise OutputPathError(f"{where}: {probe} is not a folder")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise OutputPathError(f"{where}: {probe} is not writable")
+    return p
+
+
+def check_distinct(outputs: Mapping[str, Path | None]) -> None:
+    """`OutputPathError` if two output flags name the same file (one would overwrite the other)."""
+    seen: dict[Path, str] = {}
+    for flag, path in outputs.items():
+        if path is None:
+            continue
+        key = Path(os.path.abspath(path))
+        if key in seen:
+            raise OutputPathError(f"{flag} {path}: the same file as {seen[key]}")
+        seen[key] = flag
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # exists, owned by someone else
+        return True
+    return True
+
+
+def clean_stale_temps(path: Path) -> list[Path]:
+    """Remove the temporary siblings of `path` left by writers that no longer run (a
+    SIGKILL during a save): `<stem>.tmp-<pid>-…<suffix>` whose process is gone."""
+    parent = path.parent if str(path.parent) else Path(".")
+    removed = []
+    for tmp in parent.glob(f"{path.stem}{TMP_MARK}*{path.suffix}"):
+        pid = tmp.name[len(path.stem) + len(TMP_MARK) :].split("-", 1)[0]
+        if pid.isdigit() and int(pid) != os.getpid() and not _alive(int(pid)):
+            tmp.unlink(missing_ok=True)
+            removed.append(tmp)
+    return removed
+
+
+def temp_sibling(path: Path) -> Path:
+    """A new empty temporary file next to `path`: `<stem>.tmp-<pid>-<random><suffix>`
+    (stale ones of dead writers are removed first)."""
+    parent = path.parent if str(path.parent) else Path(".")
+    clean_stale_temps(path)
+    fd, tmp = tempfile.mkstemp(
+        dir=parent, prefix=f"{path.stem}{TMP_MARK}{os.getpid()}-", suffix=path.suffix
+    )
+    os.close(fd)
+    return Path(tmp)
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+@contextmanager
+def atomic_output(path: str | Path) -> Iterator[Path]:
+    """Yield a temporary path to write; on success it replaces `path`, on failure it goes.
+
+    Example:
+        with atomic_output("fig.png") as tmp:
+            fig.savefig(tmp)
+    """
+    path = Path(path)
+    tmp = temp_sibling(path)
+    try:
+        yield tmp
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; give the usual mode
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def write_text_atomic(path: str | Path, text: str) -> None:
+    """Write `text` to `path` atomically (never half-written)."""
+    with atomic_output(path) as tmp:
+        tmp.write_text(text)
+
+
+def write_bytes_atomic(path: str | Path, data: bytes) -> None:
+    """Write `data` to `path` atomically (never half-written)."""
+    with atomic_output(path) as tmp:
+        tmp.write_bytes(data)
+
+
+def json_safe(obj: Any) -> Any:
+    """`obj` with NaN/±inf as None, numpy scalars and arrays as Python numbers and lists."""
+    if isinstance(obj, bool) or obj is None or isinstance(obj, (str, int)):
+        return obj
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, Mapping):
+        return {str(k): json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    if isinstance(obj, Path):
+        return str(obj)
+    tolist = getattr(obj, "tolist", None)  # numpy scalars and arrays
+    if callable(tolist):
+        return json_safe(tolist())
+    return obj
+
+
+def write_json(path: str | Path, data: Any) -> None:
+    """Write `data` as strict JSON (NaN → null, `allow_nan=False`), atomically."""
+    text = json.dumps(json_safe(data), indent=2, allow_nan=False) + "\n"
+    write_text_atomic(path, text)
