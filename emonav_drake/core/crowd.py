@@ -37,6 +37,27 @@ class CrowdState:
     emotions: np.ndarray  # (P,) int emotion codes in force now
     substep: int  # number of crowd periods since the episode began
 
+    def to_plain(self) -> dict:
+        """The state as plain data (copies of the arrays; `from_plain` reads it back)."""
+        return {f.name: _copy(getattr(self, f.name)) for f in dc.fields(self)}
+
+    @classmethod
+    def from_plain(cls, d: dict) -> CrowdState:
+        """Inverse of `to_plain`; `ValueError` on missing fields or wrong shapes."""
+        p = np.shape(d["positions"])
+        if len(p) != 2 or p[1] != 2:
+            raise ValueError(f"crowd positions have shape {p}, expected (P, 2)")
+        for name in ("velocities", "goals", "origins"):
+            if np.shape(d[name]) != p:
+                raise ValueError(f"crowd {name} have shape {np.shape(d[name])}, expected {p}")
+        if np.shape(d["emotions"]) != p[:1]:
+            raise ValueError(f"crowd emotions have shape {np.shape(d['emotions'])}")
+        return cls(**{f.name: _copy(d[f.name]) for f in dc.fields(cls)})
+
+
+def _copy(v: object) -> object:
+    return v.copy() if isinstance(v, np.ndarray) else v
+
 
 @dc.dataclass(frozen=True)
 class CrowdSnapshot:

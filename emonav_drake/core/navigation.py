@@ -28,7 +28,7 @@ from emonav_drake.core.lidar import scan_discs
 from emonav_drake.core.lip import LipState, lip_in_step, lip_step, lip_velocity, wrap_angle
 from emonav_drake.core.metrics import EpisodeRecord, EpisodeTracker
 from emonav_drake.core.reward import StepEvaluation, evaluate_step
-from emonav_drake.core.scenario import Scenario
+from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec
 from emonav_drake.params import EmoNavConfig, RobotParams
 
 
@@ -266,6 +266,80 @@ class NavigationWorld:
     def record(self) -> EpisodeRecord:
         return self.tracker.record
 
+    def state_dict(self) -> dict:
+        """The episode as plain data (Python scalars, lists, dicts, NumPy arrays).
+
+        The scenario, goal radius and map kind (what the world was built from) and
+        everything that changes: robot, crowd state, last command, counters, the
+        episode tracker and record, and the frame stack. `from_state_dict` with the same
+        configuration rebuilds a world that continues exactly as this one would.
+        """
+        t = self.tracker
+        return {
+            "scenario": dc.asdict(self.scenario),
+            "goal_radius": self.goal_radius,
+            "grid_kind": self.grid_kind,
+            "robot": list(self.robot),
+            "crowd_state": self.crowd_state.to_plain(),
+            "last_command": np.array(self.last_command),
+            "step_count": self.step_count,
+            "goal_distance": self.goal_distance,
+            "tracker": {
+                "max_steps": t.max_steps,
+                "step_time": t.step_time,
+                "done": t.done,
+                "record": dc.asdict(t.record),
+            },
+            "frames": None if self.frames is None else self.frames.array,
+        }
+
+    @classmethod
+    def from_state_dict(cls, state: dict, config: EmoNavConfig) -> NavigationWorld:
+        """A world rebuilt from `state_dict()` (`ValueError` if it does not fit)."""
+        world = cls(
+            scenario_from_plain(state["scenario"]),
+            config,
+            goal_radius=state["goal_radius"],
+            grid_kind=state["grid_kind"],
+        )
+        world.load_state_dict(state)
+        return world
+
+    def load_state_dict(self, state: dict) -> None:
+        """Restore what `state_dict` saved into a world built from the same scenario."""
+        if state["grid_kind"] != self.grid_kind:
+            raise ValueError(f"saved map kind {state['grid_kind']!r} != {self.grid_kind!r}")
+        if dc.asdict(self.scenario) != state["scenario"]:
+            raise ValueError("the saved episode is of another scenario")
+        self.goal_radius = state["goal_radius"]
+        self.robot = LipState(*state["robot"])
+        self.crowd_state = CrowdState.from_plain(state["crowd_state"])
+        if self.crowd_state.positions.shape[0] != self.crowd.num_pedestrians:
+            raise ValueError("the saved crowd does not match the scenario")
+        self.last_command = np.array(state["last_command"])
+        self.step_count = state["step_count"]
+        self.goal_distance = state["goal_distance"]
+        tr = state["tracker"]
+        self.tracker = EpisodeTracker(tr["max_steps"], tr["step_time"])
+        self.tracker.record = EpisodeRecord(**tr["record"])
+        self.tracker.done = tr["done"]
+        frames = state["frames"]
+        if (frames is None) != (self.frames is None):
+            raise ValueError("the saved frame stack does not match the map kind")
+        if frames is not None:
+            current = self.frames.array
+            if frames.shape != current.shape or frames.dtype != current.dtype:
+                raise ValueError(
+                    f"saved frames are {frames.dtype} {frames.shape}, this world's "
+                    f"{current.dtype} {current.shape}"
+                )
+            if isinstance(self.frames, LatestFrame):
+                self.frames.reset(np.array(frames))
+            else:  # reset to the oldest frame, then push the others: the same stack
+                self.frames.reset(frames[0])
+                for f in frames[1:]:
+                    self.frames.push(f)
+
     def step(self, command: np.ndarray) -> tuple[StepEvaluation, str | None]:
         """Walk one step with a valid command; returns its evaluation and the outcome
         (success | collision | timeout) if the episode ended, else None."""
@@ -295,3 +369,11 @@ class NavigationWorld:
         if self.frames is not None:
             self.frames.push(self._frame())
         return ev, outcome
+
+
+def scenario_from_plain(d: dict) -> Scenario:
+    """A `Scenario` from `dataclasses.asdict(scenario)` (validated)."""
+    d = dict(d)
+    d["pedestrians"] = [PedestrianSpec(**p) for p in d.get("pedestrians", [])]
+    d["obstacles"] = [StaticDiscSpec(**o) for o in d.get("obstacles", [])]
+    return Scenario(**d).validate()

@@ -19,8 +19,19 @@ hours on two cores:
    Each round evaluates the student alone on held-out seeds; the best round is kept.
 
 Frames are stored once in a `FrameStore` and samples index N-frame windows into it
-(90 KB per stack would not fit; 10 KB per frame does). Everything is seeded; a run
-checkpoints after every round (atomically) and `--resume` continues from the last one.
+(90 KB per stack would not fit; 10 KB per frame does). Everything is seeded.
+
+The run directory (`out`): `policy.pt` (the best round so far), `policy_round<r>.pt`,
+`history.json` (one entry per round) and `dagger_state.pt`, the state `--resume DIR`
+continues from — format `emonav-dagger-state/2` (`learning/run_state.py`): the student
+and its optimiser (tensors), the aggregated demonstrations (frames, windows, states,
+labels as arrays), every random state, the round's progress (phase, episodes collected,
+gradient steps done, recent losses) and the history as JSON; read with
+`torch.load(weights_only=True)`, so loading it never runs code. Written atomically after
+every round and on Ctrl-C. Ctrl-C stops at a consistent point: an episode being
+collected or an evaluation in progress is abandoned and rolled back (it runs again on
+resume), a gradient step finishes; a resumed run ends bit-for-bit where an
+uninterrupted one does.
 """
 
 from __future__ import annotations
@@ -29,6 +40,7 @@ import dataclasses as dc
 import json
 import logging
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -40,12 +52,27 @@ from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.metrics import format_summary, summarize
 from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import sample_scenario
+from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.networks import CategoricalPolicy, LgmEncoder
-from emonav_drake.learning.policy import atomic_torch_save, save_policy, vector_state
+from emonav_drake.learning.policy import vector_state
+from emonav_drake.learning.run_state import (
+    DAGGER_FORMAT,
+    InterruptGuard,
+    RunStateError,
+    atomic_write_text,
+    check_state,
+    clean_stale_temp_files,
+    read_run_state,
+    rng_state,
+    set_rng_state,
+    write_policy,
+    write_run_state,
+)
 from emonav_drake.params import EmoNavConfig
 
 log = logging.getLogger(__name__)
+STATE_FILE = "dagger_state.pt"
 
 
 class FrameStore:
@@ -83,6 +110,44 @@ class Demonstrations:
             np.asarray(self.states, np.float32),
             np.asarray(self.labels, np.int64),
         )
+
+    def truncate(self, samples: int, frames: int) -> None:
+        """Back to `samples` samples and `frames` stored frames (undo a partial episode)."""
+        del self.windows[samples:], self.states[samples:], self.labels[samples:]
+        self.store.count = frames
+
+    def to_plain(self, num_frames: int) -> dict:
+        """Frames, windows, vector states and labels as arrays (plain data)."""
+        n = len(self)
+        return {
+            "frames": self.store.frames[: self.store.count].copy(),
+            "windows": np.asarray(self.windows, np.int64).reshape(n, num_frames),
+            "states": np.asarray(self.states, np.float32).reshape(n, 4),
+            "labels": np.asarray(self.labels, np.int64).reshape(n),
+        }
+
+    def load_plain(self, d: dict, num_frames: int) -> None:
+        """Inverse of `to_plain` (`ValueError` if the arrays are inconsistent)."""
+        frames, windows = d["frames"], d["windows"]
+        states, labels = d["states"], d["labels"]
+        n, size = len(labels), self.store.frames.shape[1:]
+        if (
+            frames.dtype != np.uint8
+            or frames.shape[1:] != size
+            or windows.dtype != np.int64
+            or windows.shape != (n, num_frames)
+            or states.dtype != np.float32
+            or states.shape != (n, 4)
+            or labels.dtype != np.int64
+            or labels.shape != (n,)
+            or (n and not ((windows >= 0) & (windows < len(frames))).all())
+        ):
+            raise ValueError("the saved demonstrations are inconsistent or of another size")
+        self.store.frames = frames.copy() if len(frames) else self.store.frames
+        self.store.count = len(frames)
+        self.windows = list(windows)
+        self.states = list(states)
+        self.labels = labels.tolist()
 
 
 def command_index(commands: np.ndarray, command: np.ndarray) -> int:
@@ -146,11 +211,27 @@ class Student:
         self, demos: Demonstrations, steps: int, batch: int, rng: np.random.Generator, desc: str
     ) -> float:
         """`steps` minibatch updates on the aggregate; returns the mean loss of the last 100."""
+        losses: list[float] = []
+        self.train_steps(demos, 0, steps, batch, rng, desc, losses)
+        return float(np.mean(losses[-100:]))
+
+    def train_steps(
+        self,
+        demos: Demonstrations,
+        done: int,
+        steps: int,
+        batch: int,
+        rng: np.random.Generator,
+        desc: str,
+        losses: list[float],
+        stop: Callable[[], bool] | None = None,
+    ) -> int:
+        """Updates `done`..`steps` − 1, appending each loss to `losses`; `stop()` is asked
+        after every update and ends the loop early. Returns the updates done in all."""
         windows, states, labels = demos.arrays()
         frames = demos.store.frames
         self.model.train()
-        losses = []
-        for _ in tqdm(range(steps), desc=desc, unit="upd", leave=False):
+        for _ in tqdm(range(done, steps), desc=desc, unit="upd", leave=False, initial=done):
             idx = rng.integers(0, len(labels), batch)
             mirror = rng.random(batch) < 0.5 if self.mirror_augment else None
             loss = self.loss(frames, windows[idx], states[idx], labels[idx], mirror)
@@ -158,7 +239,10 @@ class Student:
             loss.backward()
             self.optim.step()
             losses.append(loss.item())
-        return float(np.mean(losses[-100:]))
+            done += 1
+            if stop is not None and stop():
+                break
+        return done
 
 
 def run_episode_collect(
@@ -212,41 +296,94 @@ def evaluate_student(student: Student, env_cfg: EmoNavConfig, cfg: DaggerConfig)
     return summarize(records)
 
 
+@dc.dataclass
+class _Progress:
+    """Where a run is inside a round (saved with the state; plain data)."""
+
+    round: int = 0
+    phase: str = "collect"  # collect → train → eval, then the next round
+    episode: int = 0  # episodes collected in this round
+    grad_step: int = 0  # gradient steps done in this round
+    outcomes: list[str] = dc.field(default_factory=list)  # of the episodes collected
+    losses: list[float] = dc.field(default_factory=list)  # the last 100 training losses
+    collect_s: float = 0.0  # wall time so far [s]
+    train_s: float = 0.0
+
+
 def train_dagger(
     out: str | Path,
     cfg: DaggerConfig | None = None,
     env_cfg: EmoNavConfig | None = None,
     resume: bool = False,
 ) -> Path:
-    """Run the CPU route; write `out/policy.pt` (best round) and a per-round log."""
+    """Run the CPU route; write `out/policy.pt` (best round) and a per-round log.
+
+    Returns the path of the best policy, which this run (or the run it resumes) wrote.
+
+    Raises:
+        RunStateError: `resume` and `out` has no DAgger state, or one that is damaged, of
+            an older format, not ours or does not fit; or no round was trained.
+        RunInterrupted: after Ctrl-C, once the state is saved.
+    """
     cfg = cfg or DaggerConfig()
     env_cfg = env_cfg or EmoNavConfig()
     out = Path(out)
+    ckpt = out / STATE_FILE
+    if resume:
+        if not ckpt.is_file():
+            raise RunStateError(
+                f"no DAgger state ({STATE_FILE}) in {out}: nothing to resume "
+                f"(start a new run with --out {out})"
+            )
+        saved, tensors = read_run_state(ckpt, DAGGER_FORMAT)  # before any work
     out.mkdir(parents=True, exist_ok=True)
+    for p in clean_stale_temp_files(out):
+        log.info("removed %s, left by a save that was killed", p)
     torch.set_num_threads(cfg.threads)
     torch.manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
     expert = DwaPlanner(env_cfg)
     commands = expert.candidates.copy()
     student = Student(cfg, env_cfg, commands)
+    n_frames = env_cfg.lidar.num_frames
     demos = Demonstrations(FrameStore(env_cfg.lidar.grid_size))
-    first_round, episode_counter, best_sr, history = 0, 0, -1.0, []
-    ckpt = out / "dagger_state.pt"
-    if resume and ckpt.is_file():
-        st = torch.load(ckpt, weights_only=False)
-        student.model.load_state_dict(st["model"])
-        student.optim.load_state_dict(st["optim"])
-        demos.store.frames, demos.store.count = st["frames"], st["frame_count"]
-        demos.windows, demos.states, demos.labels = (
-            list(st["windows"]),
-            list(st["states"]),
-            list(st["labels"]),
-        )
-        rng.bit_generator.state = st["rng"]
-        torch.set_rng_state(st["torch_rng"])
-        first_round, episode_counter = st["round"] + 1, st["episodes"]
-        best_sr, history = st["best_sr"], st["history"]
-        log.info("resumed after round %d (%d samples)", st["round"], len(demos))
+    prog, episode_counter, best_sr, history = _Progress(), 0, -1.0, []
+    if resume:
+
+        def restore() -> _Progress:
+            if saved["config"] != dc.asdict(cfg) or saved["env_config"] != dc.asdict(env_cfg):
+                log.warning("resuming with a configuration that differs from the saved one")
+            student.model.load_state_dict(tensors["model"])
+            student.optim.load_state_dict(tensors["optim"])
+            demos.load_plain(saved["demos"], n_frames)
+            set_rng_state(rng, saved["rng"], tensors)
+            progress = _Progress(**saved["progress"])
+            if (
+                progress.phase not in ("collect", "train", "eval")
+                or min(progress.round, progress.episode, progress.grad_step) < 0
+            ):
+                raise ValueError(f"progress {saved['progress']} is invalid")
+            return progress
+
+        prog = check_state(f"{STATE_FILE} in {out}", restore)
+        episode_counter, best_sr = int(saved["episodes"]), float(saved["best_sr"])
+        history = list(saved["history"])
+        log.info("resumed in round %d (%s; %d samples)", prog.round, prog.phase, len(demos))
+
+    def save() -> None:
+        rng_plain, rng_tensors = rng_state(rng)
+        state = {
+            "config": dc.asdict(cfg),
+            "env_config": dc.asdict(env_cfg),
+            "progress": dc.asdict(prog) | {"losses": prog.losses[-100:]},
+            "episodes": episode_counter,
+            "best_sr": best_sr,
+            "history": history,
+            "rng": rng_plain,
+            "demos": demos.to_plain(n_frames),
+        }
+        tensors = {"model": student.model.state_dict(), "optim": student.optim.state_dict()}
+        write_run_state(ckpt, DAGGER_FORMAT, state, tensors | rng_tensors)
 
     meta = {
         "kind": "categorical",
@@ -255,80 +392,141 @@ def train_dagger(
         "commands": commands.tolist(),
         "observation": {
             "grid_kind": cfg.grid_kind,
-            "num_frames": env_cfg.lidar.num_frames,
+            "num_frames": n_frames,
             "grid_size": env_cfg.lidar.grid_size,
         },
         "bounds": [env_cfg.robot.max_speed, env_cfg.robot.max_heading_change],
     }
-    for rnd in range(first_round, cfg.rounds + 1):
-        t0 = time.perf_counter()
-        episodes = cfg.expert_episodes if rnd == 0 else cfg.episodes_per_round
-        beta = 1.0 if rnd == 0 else cfg.beta * 0.5 ** (rnd - 1)
-        outcomes = []
-        for _ in tqdm(range(episodes), desc=f"round {rnd} rollouts", unit="ep", leave=False):
-            sc = sample_scenario(cfg.train_seed_offset + episode_counter, env_cfg)
-            episode_counter += 1
-            if rng.random() < cfg.heading_noise_prob:  # start off course: learn to seek the goal
-                sc.robot_heading += float(rng.uniform(-cfg.heading_noise, cfg.heading_noise))
-            world = NavigationWorld(
-                sc, env_cfg, goal_radius=cfg.goal_radius, grid_kind=cfg.grid_kind
-            )
-            outcomes.append(
-                run_episode_collect(world, expert, None if rnd == 0 else student, beta, demos, rng)
-            )
-        t_collect = time.perf_counter() - t0
-        steps = cfg.grad_steps_first if rnd == 0 else cfg.grad_steps_per_round
-        loss = student.train(demos, steps, cfg.batch_size, rng, f"round {rnd} training")
-        t_train = time.perf_counter() - t0 - t_collect
-        summary = evaluate_student(student, env_cfg, cfg)
-        entry = {
-            "round": rnd,
-            "beta": beta,
-            "samples": len(demos),
-            "loss": loss,
-            "rollout_success": outcomes.count("success") / len(outcomes),
-            "eval": summary,
-            "collect_s": t_collect,
-            "train_s": t_train,
-            "eval_s": time.perf_counter() - t0 - t_collect - t_train,
-        }
-        history.append(entry)
-        print(
-            f"round {rnd}: {len(demos)} samples, loss {loss:.3f}, rollouts SR "
-            f"{entry['rollout_success']:.2f} | student: {format_summary(summary)} "
-            f"[{t_collect:.0f}+{t_train:.0f}+{entry['eval_s']:.0f} s]",
-            flush=True,
+    saved_round = None  # the round whose start the state file holds
+    with InterruptGuard() as guard:
+        while prog.round <= cfg.rounds and not guard.requested:
+            rnd = prog.round
+            episodes = cfg.expert_episodes if rnd == 0 else cfg.episodes_per_round
+            beta = 1.0 if rnd == 0 else cfg.beta * 0.5 ** (rnd - 1)
+            if prog.phase == "collect":
+                t0 = time.perf_counter()
+                bar = tqdm(
+                    total=episodes,
+                    initial=prog.episode,
+                    desc=f"round {rnd} rollouts",
+                    unit="ep",
+                    leave=False,
+                )
+                while prog.episode < episodes and not guard.requested:
+                    # An episode is all or nothing: on Ctrl-C it is undone (demonstrations,
+                    # frames and random state back to where it began) and collected again
+                    # on resume.
+                    undo = (rng_state(rng), len(demos), demos.store.count)
+                    try:
+                        with guard.abortable():
+                            sc = sample_scenario(cfg.train_seed_offset + episode_counter, env_cfg)
+                            if rng.random() < cfg.heading_noise_prob:  # off course: seek the goal
+                                sc.robot_heading += float(
+                                    rng.uniform(-cfg.heading_noise, cfg.heading_noise)
+                                )
+                            world = NavigationWorld(
+                                sc, env_cfg, goal_radius=cfg.goal_radius, grid_kind=cfg.grid_kind
+                            )
+                            outcome = run_episode_collect(
+                                world, expert, None if rnd == 0 else student, beta, demos, rng
+                            )
+                    except KeyboardInterrupt:
+                        set_rng_state(rng, *undo[0])
+                        demos.truncate(undo[1], undo[2])
+                        break
+                    episode_counter += 1
+                    prog.episode += 1
+                    prog.outcomes.append(outcome)
+                    bar.update(1)
+                bar.close()
+                prog.collect_s += time.perf_counter() - t0
+                if prog.episode >= episodes:
+                    prog.phase = "train"
+            if prog.phase == "train" and not guard.requested:
+                t0 = time.perf_counter()
+                steps = cfg.grad_steps_first if rnd == 0 else cfg.grad_steps_per_round
+                prog.grad_step = student.train_steps(
+                    demos,
+                    prog.grad_step,
+                    steps,
+                    cfg.batch_size,
+                    rng,
+                    f"round {rnd} training",
+                    prog.losses,
+                    stop=lambda: guard.requested,
+                )
+                prog.train_s += time.perf_counter() - t0
+                if prog.grad_step >= steps:
+                    prog.phase = "eval"
+            if prog.phase == "eval" and not guard.requested:
+                t0 = time.perf_counter()
+                try:  # evaluation changes nothing: abandoned on Ctrl-C, run again on resume
+                    with guard.abortable():
+                        summary = evaluate_student(student, env_cfg, cfg)
+                except KeyboardInterrupt:
+                    break
+                entry = _round_entry(prog, summary, time.perf_counter() - t0, beta, len(demos))
+                history.append(entry)
+                round_meta = {
+                    **meta,
+                    "provenance": {
+                        "route": "dagger",
+                        "round": rnd,
+                        "config": dc.asdict(cfg),
+                        "eval_SR": summary["SR"],
+                    },
+                }
+                write_policy(out / f"policy_round{rnd}.pt", student.model, round_meta)
+                if summary["SR"] >= best_sr:
+                    best_sr = summary["SR"]
+                    write_policy(out / "policy.pt", student.model, round_meta)
+                prog = _Progress(round=rnd + 1)
+                save()
+                saved_round = prog.round
+                atomic_write_text(out / "history.json", json.dumps(history, indent=2))
+        interrupted = guard.requested and prog.round <= cfg.rounds
+        if interrupted:
+            log.warning("interrupted in round %d (%s): saving the state", prog.round, prog.phase)
+            if not (prog.phase == "collect" and prog.episode == 0 and saved_round == prog.round):
+                save()
+            if guard.extra:
+                log.warning("Ctrl-C pressed again while stopping: ignored (the save completed)")
+    if interrupted:
+        where = {
+            "collect": f"{prog.episode} of its episodes collected",
+            "train": f"{prog.grad_step} gradient steps done",
+            "eval": "evaluation to run",
+        }[prog.phase]
+        raise RunInterrupted(
+            f"interrupted in round {prog.round} ({where}); state saved in {out}; continue "
+            f"with `emonav train --algo dagger --resume {out}` (same --config)"
         )
-        round_meta = {
-            **meta,
-            "provenance": {
-                "route": "dagger",
-                "round": rnd,
-                "config": dc.asdict(cfg),
-                "eval_SR": summary["SR"],
-            },
-        }
-        save_policy(out / f"policy_round{rnd}.pt", student.model, round_meta)
-        if summary["SR"] >= best_sr:
-            best_sr = summary["SR"]
-            save_policy(out / "policy.pt", student.model, round_meta)
-        atomic_torch_save(
-            {
-                "model": student.model.state_dict(),
-                "optim": student.optim.state_dict(),
-                "frames": demos.store.frames[: demos.store.count].copy(),
-                "frame_count": demos.store.count,
-                "windows": demos.windows,
-                "states": demos.states,
-                "labels": demos.labels,
-                "rng": rng.bit_generator.state,
-                "torch_rng": torch.get_rng_state(),
-                "round": rnd,
-                "episodes": episode_counter,
-                "best_sr": best_sr,
-                "history": history,
-            },
-            ckpt,
+    policy = out / "policy.pt"
+    if not history or not policy.is_file():
+        raise RunStateError(
+            f"no DAgger round was trained (rounds = {cfg.rounds}): no policy written in {out}"
         )
-        (out / "history.json").write_text(json.dumps(history, indent=2))
-    return out / "policy.pt"
+    return policy
+
+
+def _round_entry(prog: _Progress, summary: dict, eval_s: float, beta: float, samples: int) -> dict:
+    """The round's history entry; printed as one line."""
+    loss = float(np.mean(prog.losses[-100:]))
+    entry = {
+        "round": prog.round,
+        "beta": beta,
+        "samples": samples,
+        "loss": loss,
+        "rollout_success": prog.outcomes.count("success") / len(prog.outcomes),
+        "eval": summary,
+        "collect_s": prog.collect_s,
+        "train_s": prog.train_s,
+        "eval_s": eval_s,
+    }
+    print(
+        f"round {prog.round}: {samples} samples, loss {loss:.3f}, rollouts SR "
+        f"{entry['rollout_success']:.2f} | student: {format_summary(summary)} "
+        f"[{prog.collect_s:.0f}+{prog.train_s:.0f}+{eval_s:.0f} s]",
+        flush=True,
+    )
+    return entry

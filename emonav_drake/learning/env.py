@@ -28,6 +28,8 @@ from emonav_drake.core.navigation import NavigationWorld, PlannerInput
 from emonav_drake.core.scenario import Scenario, sample_scenario
 from emonav_drake.params import EmoNavConfig, load_config
 
+_BIT_GENERATORS = ("PCG64", "PCG64DXSM", "MT19937", "Philox", "SFC64")
+
 
 class EmoNavLIPEnv(gym.Env):
     """Emotion-aware social navigation with the LIP reduced-order robot.
@@ -136,6 +138,38 @@ class EmoNavLIPEnv(gym.Env):
         if outcome is not None:
             info["episode_record"] = self.world.record.to_json()
         return self._observation(), ev.reward, terminated, truncated, info
+
+    def state_dict(self) -> dict:
+        """The environment's state as plain data: the running episode (`NavigationWorld.
+        state_dict`) and gymnasium's `np_random` state; `load_state_dict` reads it back."""
+        rng = self._np_random
+        return {
+            "grid_kind": self.grid_kind,
+            "goal_radius": self.goal_radius,
+            "world": None if self.world is None else self.world.state_dict(),
+            "np_random": None if rng is None else rng.bit_generator.state,
+            "np_random_seed": self._np_random_seed,
+        }
+
+    def load_state_dict(self, state: dict) -> None:
+        """Continue the episode saved by `state_dict` (same configuration and map kind;
+        `ValueError` if it does not fit)."""
+        if state["grid_kind"] != self.grid_kind:
+            raise ValueError(f"saved map kind {state['grid_kind']!r} != {self.grid_kind!r}")
+        self.goal_radius = state["goal_radius"]
+        w = state["world"]
+        self.world = None if w is None else NavigationWorld.from_state_dict(w, self.config)
+        rng_state = state["np_random"]
+        if rng_state is None:
+            self._np_random = None
+        else:
+            name = rng_state["bit_generator"]
+            if name not in _BIT_GENERATORS:
+                raise ValueError(f"unknown bit generator {name!r}")
+            rng = np.random.Generator(getattr(np.random, name)())
+            rng.bit_generator.state = rng_state
+            self._np_random = rng
+        self._np_random_seed = state["np_random_seed"]
 
     def planner_input(self) -> PlannerInput:
         """The privileged view (crowd state included) for model-based planners."""

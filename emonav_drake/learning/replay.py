@@ -82,24 +82,41 @@ class FrameReplayBuffer:
             "not_done": t(self.not_done[idx]),
         }
 
+    _ARRAYS = (
+        "frames",
+        "obs_ids",
+        "next_ids",
+        "state",
+        "next_state",
+        "action",
+        "reward",
+        "not_done",
+    )
+
     def state_dict(self) -> dict:
-        return {
-            k: getattr(self, k)
-            for k in (
-                "frames",
-                "next_frame",
-                "obs_ids",
-                "next_ids",
-                "state",
-                "next_state",
-                "action",
-                "reward",
-                "not_done",
-                "size",
-                "pos",
-            )
-        }
+        """The buffer as plain data: its NumPy arrays (not copies) and counters."""
+        st = {k: getattr(self, k) for k in self._ARRAYS}
+        return st | {"next_frame": self.next_frame, "size": self.size, "pos": self.pos}
 
     def load_state_dict(self, st: dict) -> None:
-        for k, v in st.items():
+        """Restore `state_dict()`; `ValueError` if the arrays do not fit this buffer."""
+        for k in self._ARRAYS:
+            mine, theirs = getattr(self, k), st[k]
+            if not isinstance(theirs, np.ndarray) or theirs.shape != mine.shape:
+                raise ValueError(
+                    f"replay {k}: saved shape {np.shape(theirs)} != {mine.shape} "
+                    "(replay_size, num_frames or the observation differ from the run's)"
+                )
+            if theirs.dtype != mine.dtype:
+                raise ValueError(f"replay {k}: saved dtype {theirs.dtype} != {mine.dtype}")
+        counters = {k: int(st[k]) for k in ("next_frame", "size", "pos")}
+        if not (
+            0 <= counters["next_frame"] < len(self.frames)
+            and 0 <= counters["pos"] < self.capacity
+            and 0 <= counters["size"] <= self.capacity
+        ):
+            raise ValueError(f"replay counters {counters} are out of range")
+        for k in self._ARRAYS:
+            setattr(self, k, st[k])
+        for k, v in counters.items():
             setattr(self, k, v)

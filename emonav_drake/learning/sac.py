@@ -162,6 +162,8 @@ class SacAgent:
         return info
 
     def state_dict(self) -> dict:
+        """Networks, optimisers, temperature and the update counter: tensors and torch
+        optimiser state dicts only, so `torch.load(weights_only=True)` reads it back."""
         return {
             "critic": self.critic.state_dict(),
             "critic_target": self.critic_target.state_dict(),
@@ -174,6 +176,7 @@ class SacAgent:
         }
 
     def load_state_dict(self, st: dict) -> None:
+        """Restore `state_dict()` (the actor's conv weights are re-tied to the critic's)."""
         self.critic.load_state_dict(st["critic"])
         self.critic_target.load_state_dict(st["critic_target"])
         self.actor.load_state_dict(st["actor"])

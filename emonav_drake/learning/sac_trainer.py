@@ -2,11 +2,24 @@
 
 Progress bar, periodic evaluation (deterministic policy, `eval_episodes` held-out
 seeds every `eval_every` steps, the paper: 100 every 2e4), TensorBoard logs and a CSV
-learning curve, checkpoints written atomically every `checkpoint_every` steps and on
-Ctrl-C. A checkpoint holds everything — networks, optimisers, temperature, replay
-buffer, the environment mid-episode and every random state — so `--resume DIR`
-continues exactly where the run stopped: the final weights are bit-for-bit those of an
-uninterrupted run.
+learning curve, checkpoints every `checkpoint_every` steps, at the end and on Ctrl-C.
+
+The run directory (`out`):
+
+* `checkpoint.pt` — everything the run needs to continue: networks, optimisers,
+  temperature, replay buffer, the environment mid-episode (scenario, robot, crowd,
+  tracker, frame stack), the running episode's frame window, every random state (numpy,
+  python `random`, torch CPU and CUDA) and the counters. Format `emonav-sac-checkpoint/2`
+  (`learning/run_state.py`): plain data as JSON plus arrays and tensors, read with
+  `torch.load(weights_only=True)`, so loading it never runs code. Written atomically.
+* `policy.pt` — the current actor as a policy checkpoint (`learning/policy.py`).
+* `learning_curve.csv`, `tensorboard/` — the evaluations.
+
+`--resume DIR` continues exactly where the run stopped: the final weights are
+bit-for-bit those of an uninterrupted run. Ctrl-C stops at a consistent point: the
+current step (environment step, replay insertion, updates) finishes, an evaluation in
+progress is abandoned and rolled back (it runs again on resume), then the checkpoint is
+saved and `RunInterrupted` says where; a second Ctrl-C meanwhile is ignored.
 """
 
 from __future__ import annotations
@@ -14,7 +27,6 @@ from __future__ import annotations
 import csv
 import dataclasses as dc
 import logging
-import pickle
 from pathlib import Path
 
 import numpy as np
@@ -22,15 +34,30 @@ import torch
 from tqdm import tqdm
 
 from emonav_drake.core.metrics import summarize
+from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import SacConfig
 from emonav_drake.learning.env import EmoNavLIPEnv
-from emonav_drake.learning.policy import atomic_torch_save, save_policy, vector_state
+from emonav_drake.learning.policy import vector_state
 from emonav_drake.learning.replay import FrameReplayBuffer
+from emonav_drake.learning.run_state import (
+    SAC_FORMAT,
+    InterruptGuard,
+    RunStateError,
+    atomic_write_text,
+    check_state,
+    clean_stale_temp_files,
+    read_run_state,
+    rng_state,
+    set_rng_state,
+    write_policy,
+    write_run_state,
+)
 from emonav_drake.learning.sac import SacAgent
 from emonav_drake.params import EmoNavConfig
 
 log = logging.getLogger(__name__)
 TRAIN_SEED_OFFSET = 20_000_000
+CHECKPOINT = "checkpoint.pt"
 
 
 def make_env(
@@ -63,6 +90,29 @@ class _Episode:
         self.window = np.r_[self.window[1:], fid]
         self.state = vector_state(obs["goal"], obs["last_action"], self.bounds)
         self.obs = obs[self.key]
+
+    def to_plain(self) -> dict:
+        """The window (frame ids in the replay buffer), vector state and observation."""
+        return {"key": self.key, "window": self.window, "state": self.state, "obs": self.obs}
+
+    @classmethod
+    def from_plain(
+        cls, replay: FrameReplayBuffer, st: dict, bounds: tuple[float, float]
+    ) -> _Episode:
+        """Inverse of `to_plain` (`ValueError` if it does not fit the buffer)."""
+        window = np.asarray(st["window"])
+        if (
+            window.dtype != np.int64
+            or window.shape != (replay.num_frames,)
+            or not ((window >= 0) & (window < len(replay.frames))).all()
+        ):
+            raise ValueError(f"episode window {window!r} does not fit the replay buffer")
+        if st["key"] not in ("scan", "image", "lgm"):
+            raise ValueError(f"episode observation key {st['key']!r}")
+        ep = object.__new__(cls)
+        ep.replay, ep.bounds, ep.key = replay, bounds, st["key"]
+        ep.window, ep.state, ep.obs = window, np.asarray(st["state"]), np.asarray(st["obs"])
+        return ep
 
 
 def evaluate(agent: SacAgent, cfg: SacConfig, episodes: int) -> dict:
@@ -128,9 +178,25 @@ def train_sac(
 
     `stop_at` ends the run early after that many steps as an interruption would (a
     checkpoint is written), for tests and for splitting a long run.
+
+    Raises:
+        RunStateError: `resume` and `out` has no checkpoint, or one that is damaged, of
+            an older format, not ours, or does not fit `cfg`.
+        RunInterrupted: after Ctrl-C, once the checkpoint is saved.
     """
     out = Path(out)
+    ckpt_path = out / CHECKPOINT
+    saved: dict = {}
+    if resume:
+        if not ckpt_path.is_file():
+            raise RunStateError(
+                f"no SAC checkpoint ({CHECKPOINT}) in {out}: nothing to resume "
+                f"(start a new run with --out {out})"
+            )
+        saved, tensors = read_run_state(ckpt_path, SAC_FORMAT)  # before any work
     out.mkdir(parents=True, exist_ok=True)
+    for p in clean_stale_temp_files(out):
+        log.info("removed %s, left by a save that was killed", p)
     torch.set_num_threads(cfg.threads)
     torch.manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
@@ -139,102 +205,133 @@ def train_sac(
     agent = SacAgent(cfg, bounds)
     space = env.observation_space[env.map_key]
     replay = FrameReplayBuffer(cfg.replay_size, space.shape[1:], space.dtype.type, cfg.num_frames)
-    ckpt_path = out / "checkpoint.pt"
-    step, episodes = 0, 0
+    curve = out / "learning_curve.csv"
     if resume:
-        if not ckpt_path.is_file():
-            raise FileNotFoundError(f"nothing to resume: {ckpt_path} does not exist")
-        ck = torch.load(ckpt_path, weights_only=False)
-        if ck["config"] != dc.asdict(cfg):
-            log.warning("resuming with a configuration that differs from the checkpoint's")
-        agent.load_state_dict(ck["agent"])
-        replay.load_state_dict(ck["replay"])
-        rng.bit_generator.state = ck["rng"]
-        torch.set_rng_state(ck["torch_rng"])
-        env = pickle.loads(ck["env"])
-        episode = pickle.loads(ck["episode"])
-        episode.replay = replay
-        step, episodes = ck["step"], ck["episodes"]
+
+        def restore() -> _Episode:
+            if saved["config"] != dc.asdict(cfg):
+                log.warning("resuming with a configuration that differs from the checkpoint's")
+            agent.load_state_dict(tensors["agent"])
+            replay.load_state_dict(saved["replay"])
+            set_rng_state(rng, saved["rng"], tensors)
+            env.load_state_dict(saved["env"])
+            return _Episode.from_plain(replay, saved["episode"], bounds)
+
+        episode = check_state(f"{CHECKPOINT} in {out}", restore)
+        step, episodes = int(saved["step"]), int(saved["episodes"])
+        eval_pending, curve_rows = bool(saved["eval_pending"]), int(saved["curve_rows"])
+        saved_at = (step, eval_pending)
     else:
+        step, episodes, eval_pending, curve_rows, saved_at = 0, 0, False, 0, None
         obs, _ = env.reset(seed=TRAIN_SEED_OFFSET + episodes)
         episode = _Episode(replay, obs, bounds)
+    _truncate_csv(curve, curve_rows)  # drop rows of evaluations after the checkpoint
 
     def save() -> None:
-        ep = pickle.dumps(_detached(episode))
-        atomic_torch_save(
-            {
-                "config": dc.asdict(cfg),
-                "agent": agent.state_dict(),
-                "replay": replay.state_dict(),
-                "rng": rng.bit_generator.state,
-                "torch_rng": torch.get_rng_state(),
-                "env": pickle.dumps(env),
-                "episode": ep,
-                "step": step,
-                "episodes": episodes,
-            },
-            ckpt_path,
-        )
-        save_policy(
+        nonlocal saved_at
+        rng_plain, rng_tensors = rng_state(rng)
+        state = {
+            "config": dc.asdict(cfg),
+            "step": step,
+            "episodes": episodes,
+            "eval_pending": eval_pending,  # the evaluation due at `step` has not run
+            "curve_rows": curve_rows,
+            "rng": rng_plain,
+            "env": env.state_dict(),
+            "episode": episode.to_plain(),
+            "replay": replay.state_dict(),
+        }
+        write_run_state(ckpt_path, SAC_FORMAT, state, {"agent": agent.state_dict()} | rng_tensors)
+        write_policy(
             out / "policy.pt",
             agent.actor,
             policy_meta(cfg, env)
             | {"provenance": {"route": "sac", "step": step, "config": dc.asdict(cfg)}},
         )
+        saved_at = (step, eval_pending)
 
     writer = _tensorboard(out)
-    curve = out / "learning_curve.csv"
     end = cfg.total_steps if stop_at is None else min(stop_at, cfg.total_steps)
     bar = tqdm(total=cfg.total_steps, initial=step, desc="SAC", unit="step", disable=not progress)
-    try:
-        while step < end:
-            if step < cfg.random_steps:
-                action = rng.uniform(-1.0, 1.0, 2).astype(np.float32)
-            else:
-                action = agent.act(episode.obs, episode.state, deterministic=False)
-            obs, reward, term, trunc, _ = env.step(agent.to_command(action))
-            obs_ids, state = episode.window.copy(), episode.state
-            episode.advance(obs)
-            replay.add(obs_ids, state, action, reward, episode.window, episode.state, term)
-            if step >= cfg.random_steps:
-                for _ in range(cfg.updates_per_step):
-                    info = agent.update(replay.sample(cfg.batch_size, rng, agent.device))
-                if writer is not None and step % 100 == 0:
-                    for k, v in info.items():
-                        writer.add_scalar(f"train/{k}", v, step)
-            if term or trunc:
-                episodes += 1
-                obs, _ = env.reset(seed=TRAIN_SEED_OFFSET + episodes)
-                episode = _Episode(replay, obs, bounds)
-            step += 1
-            bar.update(1)
-            if step % cfg.eval_every == 0:
-                summary = evaluate(agent, cfg, cfg.eval_episodes)
-                _append_csv(curve, step, episodes, summary, agent)
-                if writer is not None:
-                    for k in ("SR", "collision_rate", "timeout_rate", "DT", "return_mean"):
-                        writer.add_scalar(f"eval/{k}", summary[k], step)
-                bar.set_postfix(SR=summary["SR"])
-            if step % cfg.checkpoint_every == 0:
-                save()
-    except KeyboardInterrupt:
-        log.warning("interrupted at step %d: saving a checkpoint", step)
-        save()
-        raise
-    finally:
-        bar.close()
-        if writer is not None:
-            writer.close()
-    save()
+    # One iteration = one environment step, its replay insertion, the updates and the
+    # episode reset; the evaluation and checkpoint due at a step run at the top of the
+    # next iteration. Ctrl-C is polled between iterations (replay size = step there). An
+    # evaluation in progress is abandoned at once and rolled back (it does not change the
+    # agent; its random draws are undone), and the checkpoint records that it is due.
+    with InterruptGuard() as guard:
+        try:
+            while True:
+                if eval_pending:
+                    before = rng_state(rng)
+                    try:
+                        with guard.abortable():
+                            summary = evaluate(agent, cfg, cfg.eval_episodes)
+                    except KeyboardInterrupt:
+                        set_rng_state(rng, *before)
+                        break
+                    eval_pending = False
+                    curve_rows += 1
+                    _append_csv(curve, step, episodes, summary, agent)
+                    if writer is not None:
+                        for k in ("SR", "collision_rate", "timeout_rate", "DT", "return_mean"):
+                            writer.add_scalar(f"eval/{k}", summary[k], step)
+                    bar.set_postfix(SR=summary["SR"])
+                if step > 0 and step % cfg.checkpoint_every == 0 and saved_at != (step, False):
+                    save()
+                if guard.requested or step >= end:
+                    break
+                if step < cfg.random_steps:
+                    action = rng.uniform(-1.0, 1.0, 2).astype(np.float32)
+                else:
+                    action = agent.act(episode.obs, episode.state, deterministic=False)
+                obs, reward, term, trunc, _ = env.step(agent.to_command(action))
+                obs_ids, state = episode.window.copy(), episode.state
+                episode.advance(obs)
+                replay.add(obs_ids, state, action, reward, episode.window, episode.state, term)
+                if step >= cfg.random_steps:
+                    for _ in range(cfg.updates_per_step):
+                        info = agent.update(replay.sample(cfg.batch_size, rng, agent.device))
+                    if writer is not None and step % 100 == 0:
+                        for k, v in info.items():
+                            writer.add_scalar(f"train/{k}", v, step)
+                if term or trunc:
+                    episodes += 1
+                    obs, _ = env.reset(seed=TRAIN_SEED_OFFSET + episodes)
+                    episode = _Episode(replay, obs, bounds)
+                step += 1
+                bar.update(1)
+                eval_pending = step % cfg.eval_every == 0
+        finally:
+            bar.close()
+            if writer is not None:
+                writer.close()
+        interrupted = guard.requested and (step < end or eval_pending)
+        if interrupted:
+            log.warning("interrupted at step %d: saving the checkpoint", step)
+        if saved_at != (step, eval_pending):
+            save()
+        if guard.extra:
+            log.warning("Ctrl-C pressed again while stopping: ignored (the save completed)")
+    if interrupted:
+        raise RunInterrupted(
+            f"interrupted at step {step} of {cfg.total_steps}; checkpoint saved in {out}; "
+            f"continue with `emonav train --algo sac --resume {out}` (same --config)"
+        )
     return agent
 
 
-def _detached(episode: _Episode) -> _Episode:
-    """A copy of the episode bookkeeping without the (separately saved) replay buffer."""
-    clone = object.__new__(_Episode)
-    clone.__dict__.update({k: v for k, v in episode.__dict__.items() if k != "replay"})
-    clone.replay = None
-    return clone
+def _truncate_csv(path: Path, rows: int) -> None:
+    """Keep the header and the first `rows` rows of a CSV (none: remove the file)."""
+    if not path.exists():
+        return
+    lines = path.read_text().splitlines(keepends=True)
+    keep = lines[: rows + 1] if rows > 0 else []
+    if keep == lines:
+        return
+    if keep:
+        atomic_write_text(path, "".join(keep))
+    else:
+        path.unlink()
 
 
 def _append_csv(path: Path, step: int, episodes: int, s: dict, agent: SacAgent) -> None:

@@ -1,0 +1,345 @@
+"""Run-directory state of the trainers, stored without pickle; atomic saves; Ctrl-C.
+
+A run directory (`emonav train --out DIR`) holds one state file that `--resume DIR`
+reads back: `checkpoint.pt` (SAC) or `dagger_state.pt` (DAgger). It is a `torch.save`
+zip holding only a dict of
+
+    "format": "emonav-sac-checkpoint/2" | "emonav-dagger-state/2",
+    "state":  JSON text: every counter, the configuration, the numpy and python `random`
+              generator states, the environment mid-episode (scenario, robot, crowd,
+              tracker, frame stack), ...; a NumPy array appears in it as
+              {"__ndarray__": "a<i>"} (a NumPy scalar: {"__ndarray__": ..., "scalar": true}),
+    "arrays": {"a<i>": tensor}: those arrays as CPU tensors of the same dtype and shape,
+    "torch":  torch-native state: network and optimiser state dicts, torch RNG states.
+
+It is read with `torch.load(weights_only=True)`, whose unpickler builds only tensors and
+plain containers (dict, list, tuple, str, numbers, None) and refuses any other Python
+global, then `json.loads`: **loading a run directory never runs code**. A file of the
+pickle-based format 1 (emonav before this format), a crafted file, a truncated file or
+a file of another format is refused with a `RunStateError` naming the file.
+
+Saves are atomic: the file is written to `NAME.emonav-<pid>.tmp` in the same directory,
+flushed and fsynced, then renamed over `NAME` (`os.replace`), and the directory is
+fsynced. A save killed half-way (SIGKILL, power loss) leaves only such a temp file;
+`clean_stale_temp_files` removes those of dead processes when the next run starts.
+
+`InterruptGuard` turns Ctrl-C (and SIGTERM) into a request that the trainer polls at
+consistent points (between SAC steps, between DAgger episodes and updates); a second
+Ctrl-C while the trainer finishes its step or saves is ignored.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import pickle  # only for its exception class: nothing is unpickled with it
+import random
+import re
+import signal
+import threading
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any, BinaryIO
+
+import numpy as np
+import torch
+
+SAC_FORMAT = "emonav-sac-checkpoint/2"
+DAGGER_FORMAT = "emonav-dagger-state/2"
+_ARRAY = "__ndarray__"
+_TMP = re.compile(r"^(?P<name>.+)\.emonav-(?P<pid>\d+)\.tmp$")
+# Temp files of the pickle-era writer (`tempfile.mkstemp(prefix=NAME, suffix=".tmp")`)
+# for the files a run directory holds: also ours, also removed.
+_LEGACY_TMP = re.compile(
+    r"^(checkpoint\.pt|dagger_state\.pt|policy(_round\d+)?\.pt)[a-z0-9_]{8}\.tmp$"
+)
+_UNSAFE_GLOBAL = re.compile(r"\bGLOBAL ([\w.]+)")  # in weights_only errors
+
+
+class RunStateError(ValueError):
+    """A run directory cannot be resumed: no state, or a damaged, foreign or old file."""
+
+
+# ------------------------------------------------------------------------- plain data
+
+
+def pack(tree: Any) -> tuple[str, dict[str, torch.Tensor]]:
+    """Plain data → (JSON text, arrays as tensors).
+
+    Accepts dicts with str keys, lists, tuples (read back as lists), str, bool, int,
+    float (NaN and ±inf included), None, NumPy arrays and NumPy scalars (both read back
+    with their dtype). Anything else raises `TypeError` at save time.
+    """
+    arrays: dict[str, torch.Tensor] = {}
+
+    def enc(x: Any, where: str) -> Any:
+        if x is None or type(x) in (bool, int, float, str):
+            return x
+        if isinstance(x, np.ndarray | np.generic):
+            key = f"a{len(arrays)}"
+            a = np.asarray(x)
+            if a.dtype.kind not in "biuf" or a.dtype.byteorder == ">":
+                raise TypeError(f"{where}: arrays of dtype {a.dtype} are not stored")
+            if not _whole(a):
+                a = a.copy()  # torch.save would write a view's whole storage
+            arrays[key] = torch.from_numpy(a)
+            return {_ARRAY: key, "scalar": True} if isinstance(x, np.generic) else {_ARRAY: key}
+        if isinstance(x, dict):
+            out = {}
+            for k, v in x.items():
+                if type(k) is not str or k == _ARRAY:
+                    raise TypeError(f"{where}: key {k!r} is not a plain string key")
+                out[k] = enc(v, f"{where}.{k}")
+            return out
+        if isinstance(x, list | tuple):
+            return [enc(v, f"{where}[{i}]") for i, v in enumerate(x)]
+        raise TypeError(f"{where}: {type(x).__name__} is not plain data")
+
+    return json.dumps(enc(tree, "state")), arrays
+
+
+def _whole(a: np.ndarray) -> bool:
+    """Whether `a` is C-contiguous, writeable and spans all of its memory buffer."""
+    if not (a.flags.c_contiguous and a.flags.writeable):
+        return False
+    root = a
+    while isinstance(root, np.ndarray) and root.base is not None:
+        root = root.base
+    if isinstance(root, np.ndarray):
+        return root.nbytes == a.nbytes
+    if isinstance(root, torch.Tensor):  # an array read back by `unpack`
+        return root.untyped_storage().nbytes() == a.nbytes
+    return False
+
+
+def unpack(text: str, arrays: dict[str, torch.Tensor]) -> Any:
+    """Inverse of `pack`."""
+
+    def dec(x: Any) -> Any:
+        if isinstance(x, dict):
+            if _ARRAY in x:
+                a = arrays[x[_ARRAY]]
+                if not isinstance(a, torch.Tensor):
+                    raise TypeError(f"array {x[_ARRAY]!r} is not a tensor")
+                a = a.numpy()
+                return a[()] if x.get("scalar") else a
+            return {k: dec(v) for k, v in x.items()}
+        if isinstance(x, list):
+            return [dec(v) for v in x]
+        return x
+
+    return dec(json.loads(text))
+
+
+# ------------------------------------------------------------------------ files
+
+
+def atomic_write(path: str | Path, write: Callable[[BinaryIO], None]) -> None:
+    """Write `path` through `write(file)` to `NAME.emonav-<pid>.tmp`, fsync, rename."""
+    path = Path(path)
+    tmp = path.with_name(f"{path.name}.emonav-{os.getpid()}.tmp")
+    try:
+        with open(tmp, "wb") as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    with contextlib.suppress(OSError):  # make the rename durable (not on every OS/FS)
+        fd = os.open(path.parent, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+def atomic_write_text(path: str | Path, text: str) -> None:
+    atomic_write(path, lambda f: f.write(text.encode()))
+
+
+def write_policy(path: str | Path, model: torch.nn.Module, meta: dict[str, Any]) -> None:
+    """A policy checkpoint (`learning.policy` format), written with `atomic_write`."""
+    from emonav_drake.learning.policy import FORMAT
+
+    state = {k: v.detach().cpu().clone() for k, v in model.state_dict().items()}
+    blob = {"format": FORMAT, **meta, "state_dict": state}
+    atomic_write(path, lambda f: torch.save(blob, f))
+
+
+def clean_stale_temp_files(directory: str | Path) -> list[Path]:
+    """Remove the temp files that killed saves left in a run directory; returns them.
+
+    Only our own names are touched: `NAME.emonav-<pid>.tmp` of a process that is no
+    longer running (or of this process: nothing is being saved yet), and the pickle-era
+    writer's `checkpoint.pt*.tmp`, `dagger_state.pt*.tmp`, `policy*.pt*.tmp`.
+    """
+    removed = []
+    directory = Path(directory)
+    if not directory.is_dir():
+        return removed
+    for p in directory.iterdir():
+        m = _TMP.match(p.name)
+        stale = (m is not None and not _alive(int(m["pid"]))) or bool(_LEGACY_TMP.match(p.name))
+        if stale and p.is_file():
+            with contextlib.suppress(FileNotFoundError):
+                p.unlink()
+                removed.append(p)
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    except (OverflowError, ValueError, OSError):  # not a valid pid
+        return False
+    return True
+
+
+def write_run_state(path: str | Path, fmt: str, state: Any, tensors: dict[str, Any]) -> None:
+    """Save a run's state (`state`: plain data, `tensors`: torch-native) atomically."""
+    text, arrays = pack(state)
+    blob = {"format": fmt, "state": text, "arrays": arrays, "torch": tensors}
+    atomic_write(path, lambda f: torch.save(blob, f))
+
+
+def read_run_state(path: str | Path, fmt: str) -> tuple[Any, dict[str, Any]]:
+    """Load what `write_run_state` wrote, without running code; `RunStateError` if the
+    file is missing, damaged, of another format or not ours."""
+    path = Path(path)
+    where = f"{path.name} in {path.parent}"
+    fresh = f"start a new run (--out DIR) or restore a copy of {path.name}"
+    if not path.is_file():
+        raise RunStateError(f"{where} does not exist: nothing to resume")
+    try:
+        blob = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as e:  # noqa: BLE001 — every failure is reported the same way
+        m = _UNSAFE_GLOBAL.search(str(e)) if isinstance(e, pickle.UnpicklingError) else None
+        if m and m[1].startswith("numpy"):
+            raise RunStateError(
+                f"{where} was written by an older emonav (format 1, pickle-based) and "
+                f"cannot be resumed safely; start a new run"
+            ) from None
+        if m:
+            raise RunStateError(
+                f"{where} is not an emonav run state: loading it would run code "
+                f"({m[1]}); refused — {fresh}"
+            ) from None
+        reason = str(e).splitlines()[0][:200] if str(e) else type(e).__name__
+        raise RunStateError(f"{where} is damaged or truncated ({reason}); {fresh}") from None
+    if not isinstance(blob, dict):
+        raise RunStateError(f"{where} is not an emonav run state; {fresh}")
+    found = blob.get("format")
+    if found is None:
+        raise RunStateError(
+            f"{where} was written by an older emonav (format 1) and cannot be resumed "
+            f"safely; start a new run"
+        )
+    if found != fmt:
+        raise RunStateError(f"{where} has format {found!r}, this emonav reads {fmt!r}; {fresh}")
+    try:
+        state = unpack(blob["state"], blob["arrays"])
+        tensors = blob["torch"]
+        if not isinstance(state, dict) or not isinstance(tensors, dict):
+            raise TypeError("unexpected layout")
+    except (KeyError, TypeError, ValueError, AttributeError, RecursionError) as e:
+        raise RunStateError(f"{where} is damaged ({e}); {fresh}") from None
+    return state, tensors
+
+
+def check_state(where: str, fn: Callable[[], Any]) -> Any:
+    """Run `fn` (restoring from loaded state); a malformed state → `RunStateError`."""
+    try:
+        return fn()
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError, RuntimeError) as e:
+        if isinstance(e, RunStateError):
+            raise
+        raise RunStateError(f"{where} is damaged or does not fit this run ({e})") from None
+
+
+# ------------------------------------------------------------------------ random states
+
+
+def rng_state(rng: np.random.Generator) -> tuple[dict, dict]:
+    """Every random state of a run: (plain data, tensors)."""
+    plain = {"numpy": rng.bit_generator.state, "python": random.getstate()}
+    tensors: dict[str, Any] = {"torch_rng": torch.get_rng_state()}
+    if torch.cuda.is_available():
+        tensors["cuda_rng"] = torch.cuda.get_rng_state_all()
+    return plain, tensors
+
+
+def set_rng_state(rng: np.random.Generator, plain: dict, tensors: dict) -> None:
+    """Inverse of `rng_state`."""
+    rng.bit_generator.state = plain["numpy"]
+    version, internal, gauss = plain["python"]
+    random.setstate((version, tuple(internal), gauss))
+    torch.set_rng_state(tensors["torch_rng"])
+    if torch.cuda.is_available() and "cuda_rng" in tensors:
+        torch.cuda.set_rng_state_all(tensors["cuda_rng"])
+
+
+# ------------------------------------------------------------------------ Ctrl-C
+
+
+class InterruptGuard:
+    """Ctrl-C → a stop request the trainer polls (`requested`) at a consistent point.
+
+    While installed (a `with` block, main thread only) the first SIGINT — or SIGTERM, as
+    a scheduler or `kill` sends — sets `requested`; inside `abortable()` it also raises
+    `KeyboardInterrupt` at once, for work the caller can roll back (an evaluation, an
+    episode being collected). Later signals are counted in `extra` and otherwise ignored,
+    so a second Ctrl-C during the save cannot corrupt it or print a traceback. A SIGINT
+    that was ignored on entry (a background job) stays ignored. The previous handlers are
+    restored on exit.
+    """
+
+    def __init__(self) -> None:
+        self.requested = False
+        self.extra = 0
+        self._raise = False
+        self._previous: dict[int, Any] = {}
+
+    def __enter__(self) -> InterruptGuard:
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                if sig == signal.SIGINT and signal.getsignal(sig) == signal.SIG_IGN:
+                    continue
+                self._previous[sig] = signal.signal(sig, self._handle)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for sig, previous in self._previous.items():
+            if previous is None:  # a handler not set from Python: back to the default
+                previous = signal.default_int_handler if sig == signal.SIGINT else signal.SIG_DFL
+            signal.signal(sig, previous)
+        self._previous.clear()
+
+    def _handle(self, signum: int, frame: object) -> None:
+        # No I/O here: the handler may run in the middle of a write to the terminal.
+        if self.requested:
+            self.extra += 1
+            return
+        self.requested = True
+        if self._raise:
+            self._raise = False
+            raise KeyboardInterrupt
+
+    @contextlib.contextmanager
+    def abortable(self) -> Iterator[None]:
+        """A block that a Ctrl-C interrupts at once (`KeyboardInterrupt`)."""
+        if self.requested:
+            raise KeyboardInterrupt
+        self._raise = True
+        try:
+            yield
+        finally:
+            self._raise = False
