@@ -15,52 +15,11 @@ import argparse
 from pathlib import Path
 
 from emonav_drake.evaluation.walking_sweep import (
+    plot_sweep,
     summarize_sweep,
     sweep_table_markdown,
     sweep_walking_rates,
 )
-
-
-def plot(table: list[dict], path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.ticker import NullFormatter
-
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
-    planners = sorted({r["planner_hz"] for r in table}, reverse=True)
-    for ph in planners:
-        rows = sorted(
-            (r for r in table if r["planner_hz"] == ph), key=lambda r: -r["controller_hz"]
-        )
-        hz = [r["controller_hz"] for r in rows]
-        axes[0].plot(hz, [100 * r["rms_x"] for r in rows], "o-", label=f"planner {ph} Hz")
-        axes[1].plot(hz, [100 * r["rms_y"] for r in rows], "o-", label=f"planner {ph} Hz")
-        axes[2].plot(hz, [r["real_time_factor"] for r in rows], "o-", label=f"planner {ph} Hz")
-        for r in rows:
-            if r["falls"]:
-                axes[0].annotate(f"{r['falls']} falls", (r["controller_hz"], 100 * r["rms_x"]))
-    ticks = sorted({r["controller_hz"] for r in table})
-    for ax, title in zip(
-        axes,
-        [
-            "tracking RMS x [cm]",
-            "tracking RMS y [cm]",
-            "real-time factor (while the sweep ran)",
-        ],
-        strict=True,
-    ):
-        ax.set_xscale("log")
-        ax.xaxis.set_minor_formatter(NullFormatter())
-        ax.set_xticks(ticks, [str(t) for t in ticks])
-        ax.set_xlabel("controller rate [Hz]")
-        ax.set_title(title)
-        ax.set_ylim(0.0, 1.3 * ax.get_ylim()[1])
-        ax.grid(alpha=0.3)
-    axes[0].legend(loc="lower right", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
 
 
 def main() -> None:
@@ -83,7 +42,7 @@ def main() -> None:
     md = sweep_table_markdown(table)
     print(md)
     args.out.with_suffix(".md").write_text(md + "\n")
-    plot(table, args.out.with_suffix(".png"))
+    plot_sweep(table).savefig(args.out.with_suffix(".png"), dpi=120)
     print(f"wrote {args.out.with_suffix('.md')} and {args.out.with_suffix('.png')}")
 
 

@@ -142,3 +142,37 @@ def sweep_table_markdown(table: list[dict]) -> str:
             f"| {r['real_time_factor']:.2f} |"
         )
     return "\n".join(lines)
+
+
+def plot_sweep(table: list[dict]):
+    """Tracking RMS x, y [cm] and the real-time factor against the controller rate, one
+    line per footstep-planner rate; returns the matplotlib figure."""
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
+
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    for ph in sorted({r["planner_hz"] for r in table}, reverse=True):
+        rows = sorted(
+            (r for r in table if r["planner_hz"] == ph), key=lambda r: -r["controller_hz"]
+        )
+        hz = [r["controller_hz"] for r in rows]
+        label = f"footstep planner {ph} Hz"
+        axes[0].plot(hz, [100 * r["rms_x"] for r in rows], "o-", label=label)
+        axes[1].plot(hz, [100 * r["rms_y"] for r in rows], "o-", label=label)
+        axes[2].plot(hz, [r["real_time_factor"] for r in rows], "o-", label=label)
+        for r in rows:
+            if r["falls"]:
+                axes[0].annotate(f"{r['falls']} falls", (r["controller_hz"], 100 * r["rms_x"]))
+    ticks = sorted({r["controller_hz"] for r in table})
+    titles = ["tracking RMS x [cm]", "tracking RMS y [cm]", "real-time factor (while it ran)"]
+    for ax, title in zip(axes, titles, strict=True):
+        ax.set_xscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.set_xticks(ticks, [str(t) for t in ticks])
+        ax.set_xlabel("controller rate [Hz]")
+        ax.set_title(title)
+        ax.set_ylim(0.0, 1.3 * ax.get_ylim()[1])
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    return fig
