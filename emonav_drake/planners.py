@@ -35,14 +35,35 @@ def configure_for(planner, config: EmoNavConfig) -> str:
     """Adapt the diagram's observation settings to a learned policy; return the grid kind.
 
     A policy checkpoint records the observation it was trained on (grid kind, frames,
-    grid size); the LiDAR grid-map builder must produce exactly that.
+    grid size; for scans the beams of its encoder); the diagram's `LidarGridMapBuilder`
+    must produce exactly that: `config.lidar.num_frames` and `grid_size` are set from
+    the checkpoint. Planners without an observation (DWA, MPC) get "lgm" (they ignore it).
+    Raises `ValueError` for an observation the env cannot give either: a scan policy for
+    another number of beams than `lidar.num_beams`, or a DRL-VO* policy of more than one
+    frame (its image has no frame stack).
     """
+    kind = getattr(planner, "grid_kind", None)
     expected = getattr(planner, "expected_shape", None)
-    if expected is None:
+    if kind is None or expected is None:
         return "lgm"
-    config.lidar.num_frames, config.lidar.grid_size = expected[0], expected[1]
-    if planner.grid_kind not in ("lgm", "ogm"):
-        raise ValueError(
-            f"policy observation {planner.grid_kind!r} is not available in the diagram yet"
-        )
-    return planner.grid_kind
+    li = config.lidar
+    if kind == "scan":
+        num_frames, beams = expected
+        if beams != li.num_beams:
+            raise ValueError(
+                f"the policy reads {beams}-beam scans, but lidar.num_beams = {li.num_beams}"
+            )
+        li.num_frames = num_frames
+    elif kind == "drlvo":
+        num_frames, _, size, _ = expected
+        if num_frames != 1:
+            raise ValueError(
+                f"the DRL-VO* policy declares num_frames = {num_frames}: its observation is "
+                "one (3, M, M) image (num_frames 1), as the environment gives it"
+            )
+        li.num_frames, li.grid_size = 1, size
+    elif kind in ("lgm", "ogm"):
+        li.num_frames, li.grid_size = expected[0], expected[1]
+    else:
+        raise ValueError(f"policy observation {kind!r} is unknown")
+    return kind

@@ -247,6 +247,7 @@ def test_json_is_strict_everywhere(tmp_path):
         ("sac", "replay_size: -5\n", "replay_size"),
         ("sac", "grid_size: 7\n", "grid_size"),
         ("sac", "encoder: lstm\n", "encoder"),
+        ("sac", "grid_kind: drlvo\n", "num_frames"),
         ("sac", "env: {max_steps: 10}\n", "env"),
         ("sac", "total_steps: many\n", "total_steps"),
         ("dagger", "rounds: -1\n", "rounds"),

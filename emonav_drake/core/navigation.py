@@ -11,7 +11,21 @@ The timing is the diagram's, step for step (`diagrams/navigation.py`):
 * reward and termination are evaluated on (p_{k+1}, crowd at t_{k+1}).
 
 `NavigationWorld` is what the Gymnasium environment wraps; the Drake systems call the
-same functions (`robot_at_substep`, `Crowd.step`, `lgm_frame`, `evaluate_step`).
+same functions (`robot_at_substep`, `Crowd.step`, `observation_frame`, `evaluate_step`).
+
+Map observations (the planner input's `lgm_stack`; the name is the paper's LGM, the field
+carries whichever map the policy reads), robot frame, from the CoM and heading at the
+foot switch t_k and the crowd at t_k, oldest first:
+
+    kind     variant (paper)                  frame at t_k      stack (observation)
+    "lgm"    EmoBipedNav; N = 1: Single-LGM   uint8 (M, M)      uint8 (N, M, M)
+    "ogm"    OGM (Cartesian occupancy grid)   uint8 (M, M)      uint8 (N, M, M)
+    "scan"   LiDAR-SAC, LNDNL (ranges [m])    float32 (K,)      float32 (N, K)
+    "drlvo"  DRL-VO* (scan OGM + ped. v map)  uint8 (3, M, M)   uint8 (1, 3, M, M)
+
+`observation_frame` computes a frame, `observation_shape` / `observation_dtype` give the
+stack; a stack holds the frames of the last N walking steps (DRL-VO*: the current one
+only), filled with the first frame at the start of the episode.
 """
 
 from __future__ import annotations
@@ -29,7 +43,7 @@ from emonav_drake.core.lip import LipState, lip_in_step, lip_step, lip_velocity,
 from emonav_drake.core.metrics import EpisodeRecord, EpisodeTracker
 from emonav_drake.core.reward import StepEvaluation, evaluate_step
 from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec
-from emonav_drake.params import EmoNavConfig, RobotParams
+from emonav_drake.params import EmoNavConfig, LidarParams, RobotParams
 
 
 @dc.dataclass(frozen=True)
@@ -37,14 +51,16 @@ class PlannerInput:
     """Everything a planner may use at one walking step (world frame, SI units).
 
     Learned policies use only `lgm_stack`, `goal_state()` and `last_command`; model-based
-    planners (DWA, MPC) use the privileged `crowd` snapshot.
+    planners (DWA, MPC) use the privileged `crowd` snapshot and ignore `lgm_stack`.
     """
 
     robot: LipState
     goal_xy: np.ndarray  # (2,) [m]
     last_command: np.ndarray  # (2,) (u_v [m/s], u_Δθ [rad]) of the previous step
     crowd: CrowdSnapshot
-    lgm_stack: np.ndarray | None  # (N, M, M) uint8, oldest first
+    # The map observation of the grid kind, oldest first (module docstring): uint8
+    # (N, M, M) for lgm/ogm, float32 (N, K) for scan, uint8 (1, 3, M, M) for drlvo.
+    lgm_stack: np.ndarray | None
     step: int
 
     def goal_state(self) -> np.ndarray:
@@ -110,14 +126,63 @@ def robot_at_substep(
     )
 
 
+OBSERVATION_KINDS = ("lgm", "ogm", "scan", "drlvo")
+
+
+def check_observation_kind(kind: str) -> str:
+    """`kind` if it is one of `OBSERVATION_KINDS`, else `ValueError`."""
+    if kind not in OBSERVATION_KINDS:
+        raise ValueError(f"grid kind = {kind!r}: must be one of {list(OBSERVATION_KINDS)}")
+    return kind
+
+
+def observation_shape(kind: str, lidar: LidarParams) -> tuple[int, ...]:
+    """Shape of the map observation (the stack) of `kind` (module docstring)."""
+    n, m, k = lidar.num_frames, lidar.grid_size, lidar.num_beams
+    return {"scan": (n, k), "drlvo": (1, 3, m, m)}.get(check_observation_kind(kind), (n, m, m))
+
+
+def observation_dtype(kind: str) -> np.dtype:
+    """dtype of the map observation of `kind`: float32 ranges for scans, else uint8."""
+    return np.dtype(np.float32 if check_observation_kind(kind) == "scan" else np.uint8)
+
+
 def observation_frame(
     robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig, kind: str = "lgm"
 ) -> np.ndarray:
-    """One grid-map frame (M, M) uint8 seen from the robot's CoM and heading."""
+    """One observation frame seen from the robot's CoM and heading (module docstring).
+
+    "lgm" / "ogm": uint8 (M, M) grid map; "scan": float32 (K,) LiDAR ranges [m] in
+    [min_range, max_range]; "drlvo": uint8 (3, M, M), `kinematic_maps.drlvo_image`.
+    The environment (`NavigationWorld`) and the diagram (`LidarGridMapBuilder`) both
+    build their observations from this function.
+    """
+    check_observation_kind(kind)
     centers, radii, margins = obstacle_discs(crowd)
     li = config.lidar
+    xy = np.array([robot.x, robot.y])
+    if kind == "scan":
+        ranges = scan_discs(
+            xy, robot.heading, centers, radii, li.num_beams, li.max_range, li.min_range
+        )
+        return ranges.astype(np.float32)
+    if kind == "drlvo":
+        return drlvo_image(
+            xy,
+            robot.heading,
+            centers,
+            radii,
+            margins,
+            crowd.positions,
+            crowd.velocities,
+            crowd.radius,
+            li.num_beams,
+            li.grid_size,
+            li.max_range,
+            li.min_range,
+        )
     return lgm_frame(
-        np.array([robot.x, robot.y]),
+        xy,
         robot.heading,
         centers,
         radii,
@@ -219,37 +284,12 @@ class NavigationWorld:
         return self.planner_input()
 
     def _frame(self) -> np.ndarray:
-        snapshot = self.crowd.snapshot(self.crowd_state)
-        if self.grid_kind == "drlvo":
-            centers, radii, margins = obstacle_discs(snapshot)
-            li = self.config.lidar
-            return drlvo_image(
-                np.array([self.robot.x, self.robot.y]),
-                self.robot.heading,
-                centers,
-                radii,
-                margins,
-                snapshot.positions,
-                snapshot.velocities,
-                snapshot.radius,
-                li.num_beams,
-                li.grid_size,
-                li.max_range,
-                li.min_range,
-            )[None]
-        if self.grid_kind == "scan":
-            centers, radii, _ = obstacle_discs(snapshot)
-            li = self.config.lidar
-            return scan_discs(
-                np.array([self.robot.x, self.robot.y]),
-                self.robot.heading,
-                centers,
-                radii,
-                li.num_beams,
-                li.max_range,
-                li.min_range,
-            )
-        return observation_frame(self.robot, snapshot, self.config, self.grid_kind or "lgm")
+        """The current frame, as its stack stores it (DRL-VO*: the whole (1, 3, M, M))."""
+        kind = self.grid_kind or "lgm"
+        frame = observation_frame(
+            self.robot, self.crowd.snapshot(self.crowd_state), self.config, kind
+        )
+        return frame[None] if kind == "drlvo" else frame
 
     def planner_input(self) -> PlannerInput:
         """The planner's view of the current walking step."""

@@ -23,6 +23,14 @@ start state, that command and the elapsed time (direct feedthrough from `command
 planner's memory (e.g. the MPC's warm start) lives in the Context: two simulations from
 fresh default contexts, or a cloned context, need no `planner.reset()`.
 
+Observation. The grid-map builder gives the planner the map observation of the
+diagram's `grid_kind` on its `lgm_stack` port — LGM or OGM stack uint8 (N, M, M), raw
+scan stack float32 (N, K) [m] ("scan": LiDAR-SAC, LNDNL), or the DRL-VO* image uint8
+(1, 3, M, M) ("drlvo") — computed by the same `core.navigation.observation_frame` as the
+Gymnasium env's, so any policy checkpoint runs here with its training observation
+(`planners.configure_for` reads the kind and sizes from the checkpoint). DWA and MPC
+ignore it.
+
 `build_navigation_diagram` wires it; `run_episode` simulates one episode walking step
 by walking step and returns its `EpisodeRecord` and a per-step trajectory log.
 """
@@ -139,7 +147,9 @@ def build_navigation_diagram(
             diagram's Context, so one planner object may serve several contexts.
         meshcat: draw into this Meshcat when given.
         show_rays: draw LiDAR rays in Meshcat.
-        grid_kind: "lgm" or "ogm" grid maps for the planner's `lgm_stack` input.
+        grid_kind: the map observation on the planner's `lgm_stack` input: "lgm" (the
+            paper's LGM stack), "ogm", "scan" (raw scan stack) or "drlvo" (DRL-VO*
+            image); see `LidarGridMapBuilder`. A policy's: `planners.configure_for`.
         goal_radius: goal threshold [m]; default `config.episode.goal_radius`.
         emotion_estimate: where the perceived emotions come from (default: ground truth).
             In "confusion" mode an `EmotionEstimateSource` between the crowd and the grid

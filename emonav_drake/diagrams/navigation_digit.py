@@ -9,8 +9,8 @@ MPC or a learned policy) and episode monitor — around the Digit station
        └──────────────────────────────────────────────  plant 1 ms, fall check 200 Hz)
 
 The robot state the navigation stack sees is Digit's CoM, torso yaw and sagittal CoM
-speed, so the walking stack's tracking errors reach the crowd, the LGM and the rewards —
-the discrepancy the paper studies.
+speed, so the walking stack's tracking errors reach the crowd, the policy's observation
+(LGM, scans, ...) and the rewards — the discrepancy the paper studies.
 
 Timing. At t_k = kT the planner computes u_k from the robot, the crowd and the grid maps
 at t_k and holds it. Digit's footstep planner reads the held command at each foot switch
@@ -75,6 +75,9 @@ def build_digit_navigation_diagram(
     """Wire the navigation stack around the Digit station for one scenario.
 
     Digit stands at the scenario's start, facing its heading, in a default context.
+    `grid_kind` ("lgm", "ogm", "scan", "drlvo") selects the map observation the planner
+    reads, seen from Digit's CoM and heading (as `diagrams.navigation`; for a policy,
+    `planners.configure_for`).
     """
     config.validate()
     scenario.validate()

@@ -100,6 +100,11 @@ class SacConfig:
                 f"encoder = 'lstm' is invalid with grid_kind = {self.grid_kind!r}: "
                 "the LSTM encoder reads scans (grid_kind: scan)"
             )
+        if self.grid_kind == "drlvo" and self.num_frames != 1:
+            raise ConfigError(
+                f"num_frames = {self.num_frames} is invalid with grid_kind = 'drlvo': "
+                "DRL-VO* observes one (3, M, M) image (num_frames: 1)"
+            )
         if self.grid_kind != "scan":
             if _NUM_BEAMS % self.grid_size:
                 raise ConfigError(

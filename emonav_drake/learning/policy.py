@@ -4,16 +4,19 @@ A policy checkpoint is one `torch.save` file:
 
     {"format": "emonav-policy/1",
      "kind": "categorical" | "gaussian",       # student over a command grid | SAC actor
-     "encoder": {"type": "lgm" | "scan", ...}, # constructor arguments
+     "encoder": {"type": "lgm" | "scan" | "scan_lstm", ...}, # constructor arguments
      "hidden": int, "commands": [[u_v, u_dθ], ...] (categorical only),
-     "observation": {"grid_kind": "lgm"|"ogm"|"scan", "num_frames": N, "grid_size": M},
+     "observation": {"grid_kind": "lgm"|"ogm"|"scan"|"drlvo", "num_frames": N,
+                     "grid_size": M},
      "bounds": [ū_v, ū_Δθ], "state_dict": {...}, "provenance": {...}}
 
 `PolicyPlanner` implements the planner interface (`systems.navigation_planner.Planner`:
 `plan(PlannerInput)`, `reset`, and the memoryless `initial_memory`/`plan_with_memory`), so a
 policy drives the Drake diagram (`emonav sim --planner sac`) or the Gymnasium env
-exactly like DWA or MPC. It uses only the grid-map stack, the goal state and the last
-command — never the privileged crowd state.
+exactly like DWA or MPC. It uses only the map observation of its grid kind (the planner
+input's `lgm_stack`: uint8 (N, M, M) LGM/OGM stack, float32 (N, K) scan stack [m], uint8
+(1, 3, M, M) DRL-VO* image; `core/navigation.py`), the goal state and the last command —
+never the privileged crowd state.
 """
 
 from __future__ import annotations
@@ -187,6 +190,22 @@ def _check_meta(path: Path, blob: dict) -> None:
             raise bad("commands", "is missing or not a non-empty list of [u_v, u_dtheta]")
 
 
+def observation_spec(meta: dict[str, Any]) -> tuple[str, tuple[int, ...], np.dtype]:
+    """(grid kind, shape, dtype) of the map observation a checkpoint's policy reads.
+
+    The shapes of `core.navigation.observation_shape` with the checkpoint's N, M and, for
+    scans, K = the encoder's beams: uint8 (N, M, M) for "lgm"/"ogm", float32 (N, K) for
+    "scan", uint8 (N, 3, M, M) for "drlvo" (the env and the diagram give N = 1).
+    """
+    ob = meta["observation"]
+    kind, n, m = ob["grid_kind"], ob["num_frames"], ob["grid_size"]
+    if kind == "scan":
+        return kind, (n, int(meta["encoder"].get("beams", 1800))), np.dtype(np.float32)
+    if kind == "drlvo":
+        return kind, (n, 3, m, m), np.dtype(np.uint8)
+    return kind, (n, m, m), np.dtype(np.uint8)
+
+
 def probe_input(meta: dict[str, Any]) -> tuple[torch.Tensor, torch.Tensor]:
     """A zero observation of the shape the checkpoint declares (uint8 stack, vector state)."""
     ob = meta["observation"]
@@ -256,9 +275,7 @@ class PolicyPlanner:
         self.device = resolve_device(device)
         self.model, self.meta = load_policy(self.path, device)
         self.bounds = tuple(self.meta["bounds"])
-        ob = self.meta["observation"]
-        self.grid_kind = ob["grid_kind"]
-        self.expected_shape = (ob["num_frames"], ob["grid_size"], ob["grid_size"])
+        self.grid_kind, self.expected_shape, self.expected_dtype = observation_spec(self.meta)
         if self.meta["kind"] == "categorical":
             self.commands = np.asarray(self.meta["commands"], dtype=float)
 
@@ -276,12 +293,16 @@ class PolicyPlanner:
         return self.plan(obs), None
 
     def check_observation(self, lgm_stack: np.ndarray | None) -> np.ndarray:
+        """`lgm_stack` if it is the observation this policy reads, else `PolicyError`."""
         if lgm_stack is None or not isinstance(lgm_stack, np.ndarray):
-            raise PolicyError(f"policy {self.path.name} needs a grid-map stack, got none")
-        if lgm_stack.shape != self.expected_shape or lgm_stack.dtype != np.uint8:
             raise PolicyError(
-                f"policy {self.path.name} expects a uint8 {self.grid_kind} stack of shape "
-                f"{self.expected_shape}, got {lgm_stack.dtype} {lgm_stack.shape}"
+                f"policy {self.path.name} needs a {self.grid_kind} observation, got none"
+            )
+        if lgm_stack.shape != self.expected_shape or lgm_stack.dtype != self.expected_dtype:
+            raise PolicyError(
+                f"policy {self.path.name} expects a {self.expected_dtype} {self.grid_kind} "
+                f"observation of shape {self.expected_shape}, got {lgm_stack.dtype} "
+                f"{lgm_stack.shape}"
             )
         return lgm_stack
 
@@ -289,7 +310,8 @@ class PolicyPlanner:
     def act(
         self, lgm_stack: np.ndarray, goal_state: np.ndarray, last_command: np.ndarray
     ) -> np.ndarray:
-        """The command (u_v [m/s], u_Δθ [rad]) for one observation."""
+        """The command (u_v [m/s], u_Δθ [rad]) for one observation (`lgm_stack`: the map
+        observation of `grid_kind`, of shape `expected_shape` and dtype `expected_dtype`)."""
         obs = torch.from_numpy(self.check_observation(lgm_stack)[None]).to(self.device)
         state = torch.from_numpy(vector_state(goal_state, last_command, self.bounds)[None])
         state = state.to(self.device)

@@ -1,15 +1,28 @@
-"""`LidarGridMapBuilder`: 1800-beam LiDAR scan → LiDAR grid map (LGM), 9-frame stack.
+"""`LidarGridMapBuilder`: 1800-beam LiDAR scan → the policy's map observation, per step.
+
+Builds, for the grid kind of the planner, exactly the observation the Gymnasium env
+(`core.navigation.NavigationWorld`) gives for the same robot and crowd states: both call
+`core.navigation.observation_frame` (docs/learning.md, "Observation variants").
 
 Input ports:
     robot_state (4): (x, y, θ, v) of the robot CoM, world frame; the LiDAR sits at the
         CoM and beam angles are measured from θ (docs/lidar_grid_maps.md).
     crowd (abstract `CrowdSnapshot`): discs to scan (pedestrians and static obstacles)
-        with their discomfort margins.
+        with their discomfort margins; for "drlvo" also the pedestrians' velocities.
 Output ports:
-    lgm_stack (abstract uint8 array (N, M, M)): the N − 1 frames stored at the previous
-        walking steps followed by the frame seen now (oldest first). Before the first
-        step the current frame is repeated N times.
-    scan (K): the LiDAR ranges now [m], clipped to [0.27, 6.0] (for visualisation).
+    lgm_stack (abstract numpy array): the map observation, robot frame, oldest first —
+        the N − 1 frames stored at the previous walking steps followed by the frame seen
+        now; before the first step the current frame is repeated N times. The name is
+        the paper's LGM; the port carries the observation of `kind` (N = lidar.num_frames,
+        M = lidar.grid_size, K = lidar.num_beams):
+            "lgm"   uint8 (N, M, M): LiDAR grid maps (EmoBipedNav; N = 1: Single-LGM);
+            "ogm"   uint8 (N, M, M): Cartesian occupancy grids (OGM baseline);
+            "scan"  float32 (N, K): raw ranges [m] in [min_range, max_range]
+                    (LiDAR-SAC; LNDNL min-pools and normalises them in its encoder);
+            "drlvo" uint8 (1, 3, M, M): scan OGM + pedestrian velocity map (DRL-VO*,
+                    `core/kinematic_maps.py`); no stack, the current image only.
+    scan (K): the LiDAR ranges now [m], float64, clipped to [0.27, 6.0] (for
+        visualisation).
 Abstract state: the stored frames, pushed at every walking step t_k = kT.
 """
 
@@ -21,49 +34,59 @@ from pydrake.systems.framework import BasicVector, Context, LeafSystem, State, V
 
 from emonav_drake.core.crowd import obstacle_discs
 from emonav_drake.core.lidar import scan_discs
-from emonav_drake.core.navigation import observation_frame
+from emonav_drake.core.navigation import (
+    check_observation_kind,
+    observation_dtype,
+    observation_frame,
+    observation_shape,
+)
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
 
 class LidarGridMapBuilder(LeafSystem):
-    """LiDAR + grid-map stack.
+    """LiDAR + observation stack (grid maps, scans or the DRL-VO* image).
 
     Args:
         config: LiDAR (K, L, M, N) and robot step time.
-        kind: "lgm" (pie-shaped LiDAR grid map, the paper's) or "ogm" (Cartesian).
+        kind: "lgm" (pie-shaped LiDAR grid map, the paper's), "ogm" (Cartesian), "scan"
+            (stacked raw scans) or "drlvo" (scan OGM + pedestrian velocity map).
     """
 
     def __init__(self, config: EmoNavConfig, kind: str = "lgm") -> None:
         super().__init__()
-        if kind not in ("lgm", "ogm"):
-            raise ValueError(f"kind = {kind!r}: must be 'lgm' or 'ogm'")
-        self._config, self._kind = config, kind
-        li = config.lidar
-        self._shape = (li.num_frames, li.grid_size, li.grid_size)
-        # Stored frames (N − 1 of them, oldest first); empty until the first step.
+        self._config, self._kind = config, check_observation_kind(kind)
+        self.shape = observation_shape(kind, config.lidar)  # of `lgm_stack`
+        self.dtype = observation_dtype(kind)
+        frame_shape = self.shape[1:]  # one frame: the stack is (depth, *frame_shape)
+        # Stored frames (depth − 1 of them, oldest first); empty until the first step.
         self._frames = self.DeclareAbstractState(
-            AbstractValue.Make(np.zeros((0, li.grid_size, li.grid_size), np.uint8))
+            AbstractValue.Make(np.zeros((0, *frame_shape), self.dtype))
         )
         self._robot_in = self.DeclareVectorInputPort("robot_state", 4)
         self._crowd_in = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
         self._frame_cache = self.DeclareCacheEntry(
             "frame",
             ValueProducer(
-                lambda: AbstractValue.Make(np.zeros(self._shape[1:], np.uint8)), self._calc_frame
+                lambda: AbstractValue.Make(np.zeros(frame_shape, self.dtype)), self._calc_frame
             ),
             {self.all_input_ports_ticket()},
         )
         self.DeclareAbstractOutputPort(
             "lgm_stack",
-            lambda: AbstractValue.Make(np.zeros(self._shape, np.uint8)),
+            lambda: AbstractValue.Make(np.zeros(self.shape, self.dtype)),
             self._calc_stack,
             {self.all_input_ports_ticket(), self.all_state_ticket()},
         )
+        li = config.lidar
         self.DeclareVectorOutputPort(
             "scan", li.num_beams, self._calc_scan, {self.all_input_ports_ticket()}
         )
         self.DeclarePeriodicUnrestrictedUpdateEvent(config.robot.step_time, 0.0, self._push)
+
+    @property
+    def kind(self) -> str:
+        return self._kind
 
     def _calc_frame(self, context: Context, value: AbstractValue) -> None:
         robot = lip_state_from_vector(self._robot_in.Eval(context))
@@ -74,7 +97,7 @@ class LidarGridMapBuilder(LeafSystem):
         frame = self._frame_cache.Eval(context)
         stored = context.get_abstract_state(self._frames).get_value()
         if len(stored) == 0:
-            return np.repeat(frame[None], self._shape[0], axis=0)
+            return np.repeat(frame[None], self.shape[0], axis=0)
         return np.concatenate([stored, frame[None]], axis=0)
 
     def _calc_stack(self, context: Context, output: AbstractValue) -> None:

@@ -5,8 +5,10 @@ Input ports:
     robot_state (4): (x [m], y [m], θ [rad], v [m/s]) of the robot CoM, world frame.
     crowd (abstract `CrowdSnapshot`): privileged crowd state (used by DWA / MPC): world
         frame positions [m] and velocities [m/s], emotions and discomfort distances.
-    lgm_stack (abstract uint8 (N, M, M)): the grid-map stack, robot frame, oldest first
-        (used by learned policies). May be left unconnected for planners that ignore it.
+    lgm_stack (abstract numpy array): the map observation, robot frame, oldest first
+        (used by learned policies): uint8 (N, M, M) LGM/OGM stack, float32 (N, K) scan
+        stack [m] or uint8 (1, 3, M, M) DRL-VO* image (`LidarGridMapBuilder`). May be
+        left unconnected for planners that ignore it (DWA, MPC).
 Output port:
     command (2): (u_v [m/s], u_Δθ [rad]), the command of the walking step in progress: u_k
         during step k (t_k ≤ t < t_{k+1}); before the update at t_k it is still u_{k−1}.
