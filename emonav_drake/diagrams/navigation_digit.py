@@ -44,7 +44,7 @@ from emonav_drake.evaluation.rates import RateMeasurement
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.episode_monitor import EpisodeMonitor
-from emonav_drake.systems.fall_monitor import FALL, fall_monitor_callback
+from emonav_drake.systems.fall_monitor import FALL
 from emonav_drake.systems.navigation_meshcat import NavigationMeshcatVisualizer
 from emonav_drake.systems.navigation_planner import NavigationPlanner, Planner
 
@@ -147,7 +147,6 @@ def simulate_digit_episode(
 ) -> EpisodeRecord:
     """Run `sim` (built on `nd`, its context at the episode's start) walking step by
     walking step until the episode monitor ends the episode or the robot falls."""
-    sim.set_monitor(fall_monitor_callback(nd.diagram, nd.station.fall_monitor))
     ctx = sim.get_mutable_context()
     status_port = nd.monitor.GetOutputPort("status")
     fall_port = nd.station.GetOutputPort("fall")

@@ -41,7 +41,7 @@ from emonav_drake.systems.alip_footstep_planner import (
     LOG_TIME,
     LOG_YAW,
 )
-from emonav_drake.systems.fall_monitor import FALL, fall_monitor_callback
+from emonav_drake.systems.fall_monitor import FALL
 from emonav_drake.systems.walking_command_source import WalkingCommandSource, command_sequence
 
 log = logging.getLogger(__name__)
@@ -251,7 +251,6 @@ def run_walk(
         v = plant.GetVelocities(plant_ctx).copy()
         v[station.model.base_v[3:]] = push
         plant.SetVelocities(plant_ctx, v)
-    sim.set_monitor(fall_monitor_callback(wd.diagram, station.fall_monitor))
     sim.set_target_realtime_rate(realtime_rate)
     if meshcat is not None and record_html is not None:
         meshcat.StartRecording(set_visualizations_while_recording=False)

@@ -15,8 +15,9 @@ A fall is, in this order of checking: a non-finite plant state; the torso origin
 `walking.fall_height` [m]; or any body but a foot touching the ground (a knee, a shin,
 the torso, an arm — any collision geometry of a non-foot body penetrating the ground's).
 It is an outcome, never an
-exception: `fall_monitor_callback` turns it into a `Simulator` termination, which the
-walking and navigation run loops report as the outcome "fall".
+exception: the check that detects it ends the simulation (a `ReachedTermination` event
+status, so `AdvanceTo` returns at the fall, at no per-step cost), and the walking and
+navigation run loops report the outcome "fall".
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from emonav_drake.core.metrics import FALL
 from emonav_drake.params import WalkingParams
 from emonav_drake.systems.digit_plant import DigitModel
 
-__all__ = ["FALL", "FallMonitor", "FallStatus", "fall_monitor_callback"]
+__all__ = ["FALL", "FallMonitor", "FallStatus"]
 
 
 @dc.dataclass(frozen=True)
@@ -59,10 +60,14 @@ class FallMonitor(LeafSystem):
     Args:
         model: the Digit plant and its index maps (torso height index, non-foot bodies).
         params: `fall_height` [m] and `fall_check_period` [s].
+        terminate: end the simulation at the check that detects the fall (the event
+            returns `EventStatus.ReachedTermination`, so `Simulator.AdvanceTo` returns
+            early); False keeps simulating the fallen robot.
     """
 
-    def __init__(self, model: DigitModel, params: WalkingParams) -> None:
+    def __init__(self, model: DigitModel, params: WalkingParams, terminate: bool = True) -> None:
         super().__init__()
+        self._terminate = terminate
         plant = model.plant
         self._plant = plant
         self._torso_z = int(model.base_q[6])
@@ -97,31 +102,15 @@ class FallMonitor(LeafSystem):
                     return f"{self._non_foot[mine]} touched the ground"
         return ""
 
-    def _check(self, context: Context, state: State) -> None:
+    def _check(self, context: Context, state: State) -> EventStatus:
         if context.get_abstract_state(self._status).get_value().fallen:
-            return
+            return EventStatus.Succeeded()
         reason = self.fall_reason(context)
-        if reason:
-            state.get_mutable_abstract_state(self._status).set_value(
-                FallStatus(True, context.get_time(), reason)
-            )
-
-
-def fall_monitor_callback(diagram, monitor: FallMonitor, then=None):
-    """A `Simulator.set_monitor` callback that ends the simulation at a detected fall.
-
-    Args:
-        diagram: the root diagram (for the termination's system).
-        monitor: the `FallMonitor` in it.
-        then: another callback to run when the robot has not fallen (e.g. the episode
-            monitor's); its status is returned.
-    """
-    port = monitor.GetOutputPort("fall")
-
-    def callback(root_context: Context) -> EventStatus:
-        status = port.Eval(monitor.GetMyContextFromRoot(root_context))
-        if status.fallen:
-            return EventStatus.ReachedTermination(diagram, f"fall: {status.reason}")
-        return then(root_context) if then is not None else EventStatus.Succeeded()
-
-    return callback
+        if not reason:
+            return EventStatus.Succeeded()
+        state.get_mutable_abstract_state(self._status).set_value(
+            FallStatus(True, context.get_time(), reason)
+        )
+        if self._terminate:
+            return EventStatus.ReachedTermination(self, f"fall: {reason}")
+        return EventStatus.Succeeded()
