@@ -428,6 +428,9 @@ def build_parser() -> argparse.ArgumentParser:
     from emonav_drake.cli_walk import add_walk_parser
 
     add_walk_parser(sub)
+    from emonav_drake.cli_benchmark import add_benchmark_parser
+
+    add_benchmark_parser(sub)
     for name, parser in sub.choices.items():
         if name not in ("sim", "eval", "lgm"):
             parser.add_argument(

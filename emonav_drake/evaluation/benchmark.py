@@ -1,0 +1,955 @@
+"""Benchmarks: many methods × many seeded trials, resumable, serial or on Ray.
+
+A *run directory* holds one benchmark:
+
+* `settings.json` — what the run is (methods and their planners, plant, number of trials,
+  first seed, the full resolved configuration as YAML and its hash, time-varying emotions,
+  emotion estimate, checkpoint hashes, package version, git commit and a hash of the
+  package's code). A later run into the same directory must have the same settings — it
+  then only adds the trials that are missing — or is refused with one line naming the
+  difference (`BenchmarkSettingsError`, exit 2). Raising the number of trials is allowed.
+  The code is compared by its hash (an uncommitted edit of a planner counts, a commit of
+  docs does not); the commit is kept for the record.
+* `trials.jsonl` — one JSON line per finished trial, appended as it finishes
+  (`method`, `seed`, `plant`, `record` = `EpisodeRecord.to_json()`, `wall_seconds`), each
+  line written with one `write` + flush + fsync. A kill can leave at most a torn last line;
+  it is detected and dropped (and its trial redone) when the directory is opened again.
+* `tables.md` and `table2.csv`, `table3.csv`, `social.csv`, `pairwise.csv` — the tables of
+  `evaluation.tables`, written at the end and on an interruption, from the sorted trials.
+
+Trial i of every method runs the scenario of seed `first_seed + i` with the evaluation goal
+radius (`episode.eval_goal_radius`, as `emonav eval`).
+
+Engines. `workers=1` (and no Ray address) runs the trials serially in this process. Else
+Ray runs them: one actor per worker (`num_cpus=1`), each holding a `TrialRunner` that
+builds every method's planner once and reuses it for all its trials, one trial per task
+(two in flight per actor to hide the round trip). Reuse is safe because a planner's memory
+lives in the diagram's Context (`initial_memory()` / `plan_with_memory()`): every episode
+builds a new diagram whose planner memory starts from `initial_memory()`; what a planner
+keeps on itself (the MPC's OSQP workspaces, the policy's network) is a cache that does
+not change a command, bit for bit (`docs/mpc.md`; tested here by running seeds in
+different orders and on fresh planners). Torch runs one thread per process in both engines
+(`torch.set_num_threads(1)`), so a Ray run gives record for record the same
+`trials.jsonl` lines as a serial one (order and wall times aside).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import dataclasses as dc
+import datetime
+import hashlib
+import json
+import logging
+import os
+import signal
+import subprocess
+import tempfile
+import threading
+import time
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+from emonav_drake.atomic_io import check_output_dir, json_safe, write_json, write_text_atomic
+from emonav_drake.errors import RunInterrupted
+from emonav_drake.evaluation import tables
+from emonav_drake.params import ConfigError, EmoNavConfig, dump_config, load_config
+
+log = logging.getLogger(__name__)
+
+SETTINGS_FILE = "settings.json"
+TRIALS_FILE = "trials.jsonl"
+TABLES_FILE = "tables.md"
+FORMAT = 1
+BASE_PLANNERS = ("dwa", "mpc", "sac")
+IN_FLIGHT_PER_WORKER = 2
+
+
+class BenchmarkSettingsError(ConfigError):
+    """A run directory holds a benchmark with other settings (or is damaged)."""
+
+
+# --------------------------------------------------------------------------- specs
+@dc.dataclass
+class MethodSpec:
+    """One compared method: a planner kind and, for learned policies, the checkpoint."""
+
+    name: str
+    planner: str  # dwa | mpc | sac (a learned policy)
+    checkpoint: str | None = None  # path; None: the shipped policy for sac
+    checkpoint_sha256: str | None = None
+    observation: str = "state"  # what the method sees: "state" (DWA, MPC) or the grid kind
+
+
+@dc.dataclass
+class BenchmarkSpec:
+    """What a worker needs to run any trial of the benchmark."""
+
+    methods: list[MethodSpec]
+    plant: str
+    config_yaml: str
+    emotion_estimate_yaml: str | None = None
+
+    def method(self, name: str) -> MethodSpec:
+        for m in self.methods:
+            if m.name == name:
+                return m
+        raise KeyError(name)
+
+
+def sha256_bytes(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def sha256_file(path: str | Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def parse_methods(
+    planners: str | Sequence[str], checkpoints: Sequence[str] = ()
+) -> list[MethodSpec]:
+    """`--planners sac,mpc,dwa` and `--checkpoint NAME=PATH …` → the methods (validated).
+
+    A method is `dwa`, `mpc`, `sac` (the shipped policy unless a checkpoint is given) or any
+    other name given a checkpoint with `--checkpoint NAME=PATH` (another learned policy).
+    """
+    names = planners.split(",") if isinstance(planners, str) else list(planners)
+    names = [n.strip() for n in names]
+    if not names or any(not n for n in names):
+        raise ConfigError(f"--planners {','.join(names)!r}: give a comma-separated list of methods")
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise ConfigError(f"--planners: {dup[0]} is listed twice")
+    ckpt: dict[str, Path] = {}
+    for item in checkpoints:
+        name, sep, path = item.partition("=")
+        name = name.strip()
+        if not sep or not name or not path:
+            raise ConfigError(
+                f"--checkpoint {item!r}: expected NAME=PATH (e.g. sac=runs/sac/policy.pt)"
+            )
+        if name in ckpt:
+            raise ConfigError(f"--checkpoint {name}: given twice")
+        if name not in names:
+            raise ConfigError(
+                f"--checkpoint {name}=…: {name} is not among --planners ({','.join(names)})"
+            )
+        if name in ("dwa", "mpc"):
+            raise ConfigError(f"--checkpoint {name}=…: only learned policies take a checkpoint")
+        p = Path(path)
+        if not p.is_file():
+            raise ConfigError(f"--checkpoint {name}={path}: no such file")
+        ckpt[name] = p
+    methods = []
+    for n in names:
+        if n in ("dwa", "mpc"):
+            methods.append(MethodSpec(n, n))
+        elif n == "sac" or n in ckpt:
+            path = ckpt.get(n)
+            if path is None:
+                from emonav_drake.learning.policy import DEFAULT_POLICY
+
+                path = DEFAULT_POLICY
+            methods.append(MethodSpec(n, "sac", str(path), sha256_file(path)))
+        else:
+            raise ConfigError(
+                f"--planners: unknown method {n!r}; use dwa, mpc, sac, or name a learned "
+                f"policy with --checkpoint {n}=PATH"
+            )
+    return methods
+
+
+# --------------------------------------------------------------------------- trials
+class TrialRunner:
+    """Runs trials in one process; each method's planner is built once and reused.
+
+    Args:
+        spec: the benchmark (methods, plant, configuration YAML, emotion estimate).
+        blobs: checkpoint bytes by method name, used where the checkpoint's path does not
+            exist here (a worker on another machine) or holds another file.
+    """
+
+    def __init__(self, spec: BenchmarkSpec, blobs: dict[str, bytes] | None = None) -> None:
+        self.spec = spec
+        self.config = load_config(data=spec.config_yaml)
+        self.estimate = None
+        if spec.emotion_estimate_yaml is not None:
+            from emonav_drake.params import load_typed_yaml
+            from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+
+            self.estimate = load_typed_yaml(
+                EmotionEstimateParams, data=spec.emotion_estimate_yaml
+            ).validate()
+        self._blobs = blobs or {}
+        self._tmp: tempfile.TemporaryDirectory | None = None
+        self._planners: dict[str, tuple[Any, EmoNavConfig, str]] = {}
+
+    def _checkpoint_path(self, m: MethodSpec) -> str | None:
+        if m.checkpoint is None:
+            return None
+        p = Path(m.checkpoint)
+        if p.is_file() and (m.checkpoint_sha256 is None or sha256_file(p) == m.checkpoint_sha256):
+            return str(p)
+        if m.name not in self._blobs:
+            raise ConfigError(f"checkpoint of {m.name}: {p} is missing or differs on this worker")
+        if self._tmp is None:
+            self._tmp = tempfile.TemporaryDirectory(prefix="emonav-bench-")
+        q = Path(self._tmp.name) / f"{m.name}-{p.name}"
+        q.write_bytes(self._blobs[m.name])
+        return str(q)
+
+    def planner(self, name: str) -> tuple[Any, EmoNavConfig, str]:
+        """(planner, its configuration, grid kind) of a method, built on first use."""
+        if name not in self._planners:
+            from emonav_drake.planners import configure_for, make_planner
+
+            m = self.spec.method(name)
+            cfg = copy.deepcopy(self.config)  # a policy adapts the grid-map settings
+            planner = make_planner(m.planner, cfg, checkpoint=self._checkpoint_path(m))
+            self._planners[name] = (planner, cfg, configure_for(planner, cfg))
+        return self._planners[name]
+
+    def observation(self, name: str) -> str:
+        """What the method observes: "state" (privileged crowd state) or its grid kind."""
+        planner, _, kind = self.planner(name)
+        return kind.upper() if hasattr(planner, "expected_shape") else "state"
+
+    def replay(self, method: str, seed: int):
+        """Re-simulate one LIP trial: (scenario, `EpisodeRecord`, `StepLog`) — for plots."""
+        from emonav_drake.core.scenario import sample_scenario
+        from emonav_drake.diagrams.navigation import run_episode
+
+        if self.spec.plant != "lip":
+            raise ConfigError("replay draws LIP trials only (the Digit run keeps no step log)")
+        planner, cfg, grid_kind = self.planner(method)
+        scenario = sample_scenario(seed, self.config)
+        record, step_log = run_episode(
+            scenario,
+            cfg,
+            planner,
+            goal_radius=cfg.episode.eval_goal_radius,
+            grid_kind=grid_kind,
+            emotion_estimate=self.estimate,
+        )
+        return scenario, record, step_log
+
+    def run(self, method: str, seed: int) -> dict:
+        """One trial: method `method` on the scenario of `seed`; the `trials.jsonl` line."""
+        from emonav_drake.core.scenario import sample_scenario
+
+        planner, cfg, grid_kind = self.planner(method)
+        scenario = sample_scenario(seed, self.config)
+        t0 = time.perf_counter()
+        if self.spec.plant == "digit":
+            from emonav_drake.diagrams.navigation_digit import run_digit_episode
+
+            record = run_digit_episode(
+                scenario,
+                cfg,
+                planner,
+                grid_kind=grid_kind,
+                goal_radius=cfg.episode.eval_goal_radius,
+            )
+        else:
+            from emonav_drake.diagrams.navigation import run_episode
+
+            record, _ = run_episode(
+                scenario,
+                cfg,
+                planner,
+                goal_radius=cfg.episode.eval_goal_radius,
+                grid_kind=grid_kind,
+                emotion_estimate=self.estimate,
+            )
+        wall = time.perf_counter() - t0
+        rec = record.to_json()
+        rec["seed"] = seed
+        return {
+            "method": method,
+            "seed": seed,
+            "plant": self.spec.plant,
+            "record": json_safe(rec),
+            "wall_seconds": round(wall, 4),
+        }
+
+
+class _RayWorker:
+    """The Ray actor: one `TrialRunner` per worker process (planners built once)."""
+
+    def __init__(self, spec: BenchmarkSpec, blobs: dict[str, bytes]) -> None:
+        import torch
+
+        torch.set_num_threads(1)  # one core per worker: no oversubscription
+        logging.getLogger("drake").setLevel(logging.WARNING)
+        self.runner = TrialRunner(spec, blobs)
+
+    def identity(self) -> dict:
+        return package_identity(with_commit=False)
+
+    def run(self, method: str, seed: int) -> dict:
+        return self.runner.run(method, seed)
+
+
+# --------------------------------------------------------------------------- identity
+_PACKAGE_DIR = Path(__file__).resolve().parent.parent
+
+
+def code_hash() -> str:
+    """sha256 over the package's Python sources (relative path and bytes, sorted)."""
+    h = hashlib.sha256()
+    for p in sorted(_PACKAGE_DIR.rglob("*.py")):
+        if "__pycache__" in p.parts:
+            continue
+        h.update(str(p.relative_to(_PACKAGE_DIR)).encode() + b"\0")
+        h.update(p.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+def _git(*args: str) -> str | None:
+    root = _PACKAGE_DIR.parent
+    if not (root / ".git").exists():
+        return None
+    try:
+        out = subprocess.run(
+            ["git", "-C", str(root), *args], capture_output=True, text=True, timeout=10
+        )
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout.strip() if out.returncode == 0 else None
+
+
+def package_identity(with_commit: bool = True) -> dict:
+    """Version, git commit (if a checkout) and whether the package differs from it, code hash."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        ver = version("emonav_drake")
+    except PackageNotFoundError:
+        ver = "unknown"
+    out: dict[str, Any] = {"version": ver}
+    if with_commit:
+        out["commit"] = _git("rev-parse", "HEAD")
+        status = _git("status", "--porcelain", "--", "emonav_drake")
+        out["dirty"] = None if status is None else bool(status)
+    out["code_sha256"] = code_hash()
+    return out
+
+
+# --------------------------------------------------------------------------- settings
+def setting_label(config: EmoNavConfig, name: str | None) -> str:
+    """E.g. "var_dd [0.2, 0.35, 0.5] m" (+ ", time-varying"): the DD column of Table III."""
+    r = config.reward
+    label = f"{name or 'config'} [{r.happy_discomfort:g}, {r.neutral_discomfort:g}, "
+    label += f"{r.negative_discomfort:g}] m"
+    if config.crowd.time_varying_emotions:
+        label += ", time-varying"
+    return label
+
+
+def make_settings(
+    methods: Sequence[MethodSpec],
+    plant: str,
+    trials: int,
+    first_seed: int,
+    config: EmoNavConfig,
+    setting: str | None = None,
+    config_source: str = "defaults",
+    emotion_estimate_yaml: str | None = None,
+) -> dict:
+    """The `settings.json` of a run."""
+    cfg_yaml = dump_config(config)
+    return {
+        "format": FORMAT,
+        "planners": [m.name for m in methods],
+        "methods": {m.name: dc.asdict(m) for m in methods},
+        "plant": plant,
+        "trials": trials,
+        "first_seed": first_seed,
+        "setting": setting,
+        "setting_label": setting_label(config, setting or _source_name(config_source)),
+        "config_source": config_source,
+        "config_sha256": sha256_bytes(cfg_yaml.encode()),
+        "config_yaml": cfg_yaml,
+        "time_varying": bool(config.crowd.time_varying_emotions),
+        "goal_radius": config.episode.eval_goal_radius,
+        "emotion_estimate_yaml": emotion_estimate_yaml,
+        "emotion_estimate_sha256": (
+            None if emotion_estimate_yaml is None else sha256_bytes(emotion_estimate_yaml.encode())
+        ),
+        "package": package_identity(),
+        "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+    }
+
+
+def _source_name(config_source: str) -> str:
+    if config_source.startswith("--config"):
+        return Path(config_source.split()[1]).stem
+    return "default"
+
+
+def spec_from_settings(settings: dict) -> BenchmarkSpec:
+    return BenchmarkSpec(
+        methods=[MethodSpec(**settings["methods"][n]) for n in settings["planners"]],
+        plant=settings["plant"],
+        config_yaml=settings["config_yaml"],
+        emotion_estimate_yaml=settings["emotion_estimate_yaml"],
+    )
+
+
+def _short(v: Any) -> str:
+    if isinstance(v, str):
+        return repr(v if len(v) <= 14 else v[:12] + "…")
+    return str(v)
+
+
+def settings_difference(old: dict, new: dict) -> str | None:
+    """The first setting in which `new` differs from a run directory's `old`, as words."""
+    if old.get("format") != FORMAT:
+        return f"format is {old.get('format')!r} there, {FORMAT} here"
+    if set(old["planners"]) != set(new["planners"]):
+        return f"planners are {','.join(old['planners'])} there, {','.join(new['planners'])} here"
+    simple = [
+        ("plant", "plant"),
+        ("first_seed", "first seed"),
+        ("time_varying", "time-varying emotions"),
+        ("config_sha256", "configuration (hash)"),
+        ("emotion_estimate_sha256", "emotion estimate (hash)"),
+    ]
+    for key, what in simple:
+        if old.get(key) != new.get(key):
+            extra = ""
+            if key == "config_sha256":
+                extra = f" — {_config_diff(old['config_yaml'], new['config_yaml'])}"
+            return f"{what} is {_short(old.get(key))} there, {_short(new.get(key))} here{extra}"
+    for name in new["planners"]:
+        a, b = old["methods"][name], new["methods"][name]
+        for key, what in (("planner", "planner"), ("checkpoint_sha256", "checkpoint (hash)")):
+            if a.get(key) != b.get(key):
+                return f"{what} of {name} is {_short(a.get(key))} there, {_short(b.get(key))} here"
+    pa, pb = old.get("package", {}), new.get("package", {})
+    # the code itself, not the commit: a commit of docs or tests does not change a trial,
+    # an uncommitted edit of a planner does (the commit is kept for the record only)
+    for key, what in (
+        ("version", "package version"),
+        ("code_sha256", "package code (hash of emonav_drake/**/*.py)"),
+    ):
+        if pa.get(key) != pb.get(key):
+            return f"{what} is {_short(pa.get(key))} there, {_short(pb.get(key))} here"
+    return None
+
+
+def _config_diff(a: str, b: str) -> str:
+    """The first differing line of two configuration dumps, with its section."""
+    section = ""
+    for la, lb in zip(a.splitlines(), b.splitlines(), strict=False):
+        if not la.startswith(" "):
+            section = la.rstrip(":")
+        if la != lb:
+            key = la.strip().split(":")[0]
+            there, here = (x.split(":", 1)[-1].strip() for x in (la, lb))
+            return f"{section}.{key}: {there} there, {here} here"
+    return "the dumps differ in length"
+
+
+# --------------------------------------------------------------------------- run dir
+def _trial_key(t: dict) -> tuple[str, int]:
+    return t["method"], int(t["seed"])
+
+
+def comparable(t: dict) -> dict:
+    """A trial line without its wall time (what must be equal between engines)."""
+    return {k: v for k, v in t.items() if k != "wall_seconds"}
+
+
+def read_trials(path: Path, repair: bool = False) -> list[dict]:
+    """The trial lines of `trials.jsonl`. A torn last line (a kill while writing: no final
+    newline, or not a trial's JSON) is dropped — and cut from the file with `repair`, so
+    the next append starts on a fresh line; a damaged earlier line is an error."""
+    if not path.exists():
+        return []
+    data = path.read_bytes()
+    trials = []
+    pos = 0
+    number = 0
+    while pos < len(data):
+        number += 1
+        nl = data.find(b"\n", pos)
+        end = len(data) if nl < 0 else nl
+        line = data[pos:end]
+        t = None
+        if nl >= 0 and line.strip():
+            try:
+                t = json.loads(line)
+            except ValueError:
+                t = None
+            if not (isinstance(t, dict) and {"method", "seed", "record"} <= set(t)):
+                t = None
+        elif nl >= 0:  # an empty line
+            pos = nl + 1
+            continue
+        if t is None:
+            if end >= len(data) - 1:  # the last line
+                log.warning("%s: dropping a torn last line (%d bytes)", path, len(line))
+                break
+            raise BenchmarkSettingsError(
+                f"{path}: line {number} is damaged (not a trial's JSON); fix or remove that line"
+            )
+        trials.append(t)
+        pos = nl + 1
+    if repair and pos < len(data):
+        with open(path, "r+b") as f:
+            f.truncate(pos)
+            f.flush()
+            os.fsync(f.fileno())
+    return trials
+
+
+class RunDirectory:
+    """A benchmark's run directory (see the module docstring): settings, trials, tables."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.settings_path = self.path / SETTINGS_FILE
+        self.trials_path = self.path / TRIALS_FILE
+        self._lock_fd: int | None = None
+
+    @contextlib.contextmanager
+    def locked(self) -> Iterator[RunDirectory]:
+        """Exclusive use of the directory (a second benchmark into it is refused)."""
+        import fcntl
+
+        self.path.mkdir(parents=True, exist_ok=True)
+        fd = os.open(self.path, os.O_RDONLY)  # the directory itself: no lock file to leave
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            raise BenchmarkSettingsError(
+                f"--out {self.path}: another emonav benchmark is running in this directory"
+            ) from None
+        self._lock_fd = fd
+        try:
+            yield self
+        finally:
+            fcntl.flock(fd, fcntl.LOCK_UN)
+            os.close(fd)
+            self._lock_fd = None
+
+    def read_settings(self) -> dict | None:
+        if not self.settings_path.exists():
+            return None
+        try:
+            return json.loads(self.settings_path.read_text())
+        except ValueError as e:
+            raise BenchmarkSettingsError(f"{self.settings_path}: not valid JSON ({e})") from None
+
+    def open(self, settings: dict) -> tuple[dict, list[dict]]:
+        """Check or create `settings.json`; the valid trials already done (torn line cut).
+
+        Returns the directory's settings (its planners' order and first creation kept; the
+        number of trials raised to `settings["trials"]`) and the finished trials.
+        """
+        old = self.read_settings()
+        if old is None:
+            if self.trials_path.exists() and self.trials_path.stat().st_size:
+                raise BenchmarkSettingsError(
+                    f"--out {self.path}: has {TRIALS_FILE} but no {SETTINGS_FILE}; use an empty "
+                    "or new directory"
+                )
+            write_json(self.settings_path, settings)
+            return settings, []
+        diff = settings_difference(old, settings)
+        if diff is not None:
+            raise BenchmarkSettingsError(
+                f"--out {self.path}: holds a benchmark with other settings: {diff}; use another "
+                "--out, or the same settings to continue it"
+            )
+        if settings["trials"] < old["trials"]:
+            raise BenchmarkSettingsError(
+                f"--trials {settings['trials']}: {self.path} already plans {old['trials']} trials "
+                f"per method; give --trials >= {old['trials']} (a run can only be extended)"
+            )
+        merged = dict(old)
+        if settings["trials"] > old["trials"]:
+            merged["trials"] = settings["trials"]
+            merged.setdefault("extended", []).append(
+                {"from": old["trials"], "to": settings["trials"], "at": settings["created"]}
+            )
+            write_json(self.settings_path, merged)
+        trials = read_trials(self.trials_path, repair=True)
+        return merged, self._check_trials(trials, merged)
+
+    def _check_trials(self, trials: list[dict], settings: dict) -> list[dict]:
+        seen: dict[tuple[str, int], dict] = {}
+        lo = settings["first_seed"]
+        hi = lo + settings["trials"]
+        for t in trials:
+            key = _trial_key(t)
+            if t["method"] not in settings["planners"] or t.get("plant") != settings["plant"]:
+                raise BenchmarkSettingsError(
+                    f"{self.trials_path}: a trial of {t['method']!r} on {t.get('plant')!r} "
+                    "does not belong to this run's settings"
+                )
+            if not lo <= key[1] < hi:
+                raise BenchmarkSettingsError(
+                    f"{self.trials_path}: seed {key[1]} is outside this run's seeds [{lo}, {hi})"
+                )
+            if key in seen:
+                if comparable(seen[key]) != comparable(t):
+                    raise BenchmarkSettingsError(
+                        f"{self.trials_path}: two different results for {key[0]} seed {key[1]}"
+                    )
+                continue
+            seen[key] = t
+        return list(seen.values())
+
+    def append(self, trial: dict) -> None:
+        """Append one trial line: one write, flushed and fsynced."""
+        line = json.dumps(json_safe(trial), allow_nan=False) + "\n"
+        with open(self.trials_path, "ab") as f:
+            f.write(line.encode())
+            f.flush()
+            os.fsync(f.fileno())
+
+    def write_tables(
+        self, settings: dict, trials: Sequence[dict], interrupted: bool = False
+    ) -> Path:
+        """tables.md and the CSVs, from the trials sorted by method and seed."""
+        methods = settings["planners"]
+        rank = {m: i for i, m in enumerate(methods)}
+        trials = sorted(trials, key=lambda t: (rank.get(t["method"], len(rank)), t["seed"]))
+        md = self.path / TABLES_FILE
+        if not trials:
+            return md
+        obs = {m: settings["methods"][m]["observation"] for m in methods}
+        label = settings["setting_label"]
+        plant = settings["plant"]
+        summary = tables.summarize_methods(trials, methods)
+        pairs = tables.pairwise_comparisons(trials, methods)
+        counts = ", ".join(f"{m} {s['episodes']}" for m, s in summary.items())
+        pkg = settings.get("package", {})
+        notes = [
+            f"plant: {plant}; setting: {label}; seeds {settings['first_seed']}–"
+            f"{settings['first_seed'] + settings['trials'] - 1} "
+            f"({settings['trials']} planned per method; done: {counts})"
+            + (" — INTERRUPTED, partial" if interrupted else ""),
+            f"goal radius {settings['goal_radius']} m (evaluation); configuration hash "
+            f"{settings['config_sha256'][:12]}; emotion estimate: "
+            f"{'ground truth' if settings['emotion_estimate_yaml'] is None else 'confusion model'}",
+            f"package {pkg.get('version')} commit {str(pkg.get('commit'))[:12]}"
+            + (" (with uncommitted changes)" if pkg.get("dirty") else ""),
+        ]
+        write_text_atomic(
+            md,
+            tables.render_markdown(
+                trials, methods, label, plant, obs, title=f"Benchmark {self.path.name}", notes=notes
+            ),
+        )
+        write_text_atomic(self.path / "table2.csv", tables.table2_csv(summary))
+        write_text_atomic(self.path / "table3.csv", tables.table3_csv(summary, label, plant, obs))
+        write_text_atomic(self.path / "social.csv", tables.social_csv(summary))
+        write_text_atomic(self.path / "pairwise.csv", tables.pairwise_csv(pairs))
+        return md
+
+
+def load_run(path: str | Path) -> tuple[dict, list[dict]]:
+    """(settings, trials sorted by method and seed) of a run directory (read only)."""
+    rd = RunDirectory(path)
+    settings = rd.read_settings()
+    if settings is None:
+        raise BenchmarkSettingsError(f"{path}: no {SETTINGS_FILE}: not a benchmark run directory")
+    rank = {m: i for i, m in enumerate(settings["planners"])}
+    trials = read_trials(rd.trials_path)
+    trials.sort(key=lambda t: (rank.get(t["method"], len(rank)), t["seed"]))
+    return settings, trials
+
+
+# --------------------------------------------------------------------------- engine
+@dc.dataclass
+class BenchmarkResult:
+    path: Path
+    settings: dict
+    trials: list[dict]  # all finished trials of the directory, sorted
+    ran: int  # trials run by this call
+    wall_seconds: float
+
+
+class _Progress:
+    """tqdm bar with the running SR per method."""
+
+    def __init__(self, total: int, done: list[dict], methods: Sequence[str], enabled: bool):
+        from tqdm import tqdm
+
+        self.methods = list(methods)
+        self.k = {m: 0 for m in methods}
+        self.n = {m: 0 for m in methods}
+        for t in done:
+            self._count(t)
+        self.bar = tqdm(total=total, initial=len(done), unit="trial", disable=not enabled)
+        self._postfix()
+
+    def _count(self, t: dict) -> None:
+        self.n[t["method"]] += 1
+        self.k[t["method"]] += t["record"]["outcome"] == "success"
+
+    def _postfix(self) -> None:
+        parts = [
+            f"{m} SR {self.k[m] / self.n[m]:.3f} ({self.n[m]})" if self.n[m] else f"{m} -"
+            for m in self.methods
+        ]
+        self.bar.set_postfix_str(" | ".join(parts), refresh=False)
+
+    def update(self, t: dict) -> None:
+        self._count(t)
+        self._postfix()
+        self.bar.update(1)
+
+    def close(self) -> None:
+        self.bar.close()
+
+
+def _ray_init(workers: int, address: str | None):
+    try:
+        import ray
+    except ImportError:
+        raise ConfigError("--workers > 1 needs ray (pip install ray), or use --workers 1") from None
+    os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
+    kwargs: dict[str, Any] = dict(
+        include_dashboard=False,
+        log_to_driver=False,
+        logging_level=logging.ERROR,
+        ignore_reinit_error=True,
+    )
+    # Ray's core worker installs its own SIGTERM handler in the driver (it would kill the
+    # process at once); keep ours, which turns SIGTERM into a Ctrl-C (tables written, exit 130)
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.getsignal(signal.SIGTERM) if main else None
+    if address:
+        ray.init(address=address, **kwargs)
+    else:
+        ray.init(num_cpus=workers, **kwargs)
+    if main and previous is not None:
+        signal.signal(signal.SIGTERM, previous)
+    return ray
+
+
+def _run_serial(
+    spec: BenchmarkSpec,
+    tasks: list[tuple[str, int]],
+    on_result: Callable[[dict], None],
+) -> None:
+    import torch
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)  # as in a Ray worker: identical arithmetic, no oversubscription
+    try:
+        runner = TrialRunner(spec)
+        for method, seed in tasks:
+            on_result(runner.run(method, seed))
+    finally:
+        torch.set_num_threads(threads)
+
+
+def _run_ray(
+    spec: BenchmarkSpec,
+    tasks: list[tuple[str, int]],
+    on_result: Callable[[dict], None],
+    workers: int | None,
+    address: str | None,
+) -> None:
+    ray = _ray_init(workers or 1, address)
+    try:
+        if workers is None:  # a cluster: one worker per CPU it has
+            workers = max(1, int(ray.cluster_resources().get("CPU", 1)))
+        workers = max(1, min(workers, len(tasks)))
+        if address:
+            # workers may be on other machines: ship the checkpoints (through the object
+            # store; an actor restarted after a crash could not get them back, so none is:
+            # a crash stops the run, and the same command continues it)
+            blobs = {
+                m.name: Path(m.checkpoint).read_bytes()
+                for m in spec.methods
+                if m.checkpoint is not None
+            }
+            actor_cls = ray.remote(num_cpus=1)(_RayWorker)
+            blobs_ref = ray.put(blobs)
+            actors = [actor_cls.remote(spec, blobs_ref) for _ in range(workers)]
+        else:
+            # local workers read the checkpoints from their paths (hashes checked); a worker
+            # that dies is restarted and its trials retried (they are deterministic)
+            actor_cls = ray.remote(num_cpus=1, max_restarts=2, max_task_retries=2)(_RayWorker)
+            actors = [actor_cls.remote(spec, {}) for _ in range(workers)]
+        mine = package_identity(with_commit=False)["code_sha256"]
+        for ident in ray.get([a.identity.remote() for a in actors]):
+            if ident["code_sha256"] != mine:
+                raise ConfigError(
+                    "a Ray worker runs other emonav_drake code than this driver (code hash "
+                    f"{ident['code_sha256'][:12]} vs {mine[:12]}); install the same version"
+                )
+        queue = list(reversed(tasks))
+        pending: dict[Any, Any] = {}
+
+        def submit(actor) -> None:
+            if queue:
+                method, seed = queue.pop()
+                pending[actor.run.remote(method, seed)] = actor
+
+        for _ in range(IN_FLIGHT_PER_WORKER):
+            for a in actors:
+                submit(a)
+        while pending:
+            ready, _ = ray.wait(list(pending), num_returns=1)
+            for ref in ready:
+                actor = pending.pop(ref)
+                try:
+                    result = ray.get(ref)
+                except ray.exceptions.RayTaskError as e:
+                    cause = getattr(e, "cause", None)
+                    raise (cause if isinstance(cause, Exception) else e) from None
+                on_result(result)
+                submit(actor)
+    finally:
+        with contextlib.suppress(Exception):
+            ray.shutdown()
+
+
+def run_benchmark(
+    out: str | Path,
+    methods: Sequence[MethodSpec],
+    plant: str,
+    trials: int,
+    first_seed: int,
+    config: EmoNavConfig,
+    workers: int | None = 1,
+    ray_address: str | None = None,
+    setting: str | None = None,
+    config_source: str = "defaults",
+    emotion_estimate_yaml: str | None = None,
+    progress: bool = True,
+    on_trial: Callable[[dict, int], None] | None = None,
+) -> BenchmarkResult:
+    """Run (or continue) the benchmark in the run directory `out`; see the module.
+
+    Args:
+        workers: 1 (and no `ray_address`): serial in this process; > 1: a local Ray with
+            that many workers; None with `ray_address`: one worker per CPU of the cluster.
+        on_trial: called with every new trial line and the number written by this call,
+            after it is on disk (tests raise `KeyboardInterrupt` from it to simulate Ctrl-C).
+    Raises:
+        BenchmarkSettingsError: `out` holds another benchmark.
+        RunInterrupted: after Ctrl-C / SIGTERM: the finished trials are kept and the
+            tables of them written; running the same call again continues.
+    """
+    if plant not in ("lip", "digit"):
+        raise ConfigError(f"--plant {plant!r}: choose lip or digit")
+    if trials < 1:
+        raise ConfigError(f"--trials {trials}: must be >= 1")
+    if first_seed < 0:
+        raise ConfigError(f"--first-seed {first_seed}: must be >= 0")
+    if workers is not None and workers < 1:
+        raise ConfigError(f"--workers {workers}: must be >= 1")
+    if workers is None and not ray_address:
+        workers = os.cpu_count() or 1
+    if emotion_estimate_yaml is not None and plant == "digit":
+        raise ConfigError("--emotion-estimate is available with --plant lip only")
+    out = check_output_dir(out, "--out")
+    # the same YAML text drives every engine (the driver's and the workers' configs are equal)
+    config = load_config(data=dump_config(config))
+    _check_scenarios(config, first_seed, trials, config_source)
+    spec = BenchmarkSpec(list(methods), plant, dump_config(config), emotion_estimate_yaml)
+    probe = TrialRunner(spec)  # builds every planner now: a bad checkpoint fails before work
+    for m in spec.methods:
+        m.observation = probe.observation(m.name)
+    del probe
+    settings = make_settings(
+        spec.methods,
+        plant,
+        trials,
+        first_seed,
+        config,
+        setting,
+        config_source,
+        emotion_estimate_yaml,
+    )
+    rd = RunDirectory(out)
+    t0 = time.perf_counter()
+    with rd.locked():
+        settings, done = rd.open(settings)
+        # the directory's method order; this call's checkpoint paths (same hashes)
+        given = {m.name: m for m in spec.methods}
+        spec.methods = [given[n] for n in settings["planners"]]
+        have = {_trial_key(t) for t in done}
+        seeds = range(settings["first_seed"], settings["first_seed"] + settings["trials"])
+        tasks = [(m, s) for s in seeds for m in settings["planners"] if (m, s) not in have]
+        all_trials = list(done)
+        new: list[dict] = []
+        bar = _Progress(len(done) + len(tasks), done, settings["planners"], progress)
+
+        def on_result(t: dict) -> None:
+            rd.append(t)
+            all_trials.append(t)
+            new.append(t)
+            bar.update(t)
+            if on_trial is not None:
+                on_trial(t, len(new))
+
+        try:
+            if tasks:
+                if workers == 1 and not ray_address:
+                    _run_serial(spec, tasks, on_result)
+                else:
+                    _run_ray(spec, tasks, on_result, workers, ray_address)
+        except KeyboardInterrupt:
+            bar.close()
+            md = rd.write_tables(settings, all_trials, interrupted=True)
+            total = len(seeds) * len(settings["planners"])
+            if not all_trials:
+                raise RunInterrupted(
+                    f"interrupted before the first trial finished; {out} holds the settings "
+                    "only; run the same command again to start"
+                ) from None
+            raise RunInterrupted(
+                f"interrupted after {len(new)} new trials ({len(all_trials)} of {total} in "
+                f"{out}); tables of the finished ones in {md}; run the same command again "
+                "to continue"
+            ) from None
+        except BaseException:
+            bar.close()
+            rd.write_tables(settings, all_trials, interrupted=True)
+            raise
+        bar.close()
+        rd.write_tables(settings, all_trials)
+    rank = {m: i for i, m in enumerate(settings["planners"])}
+    all_trials.sort(key=lambda t: (rank[t["method"]], t["seed"]))
+    return BenchmarkResult(out, settings, all_trials, len(new), time.perf_counter() - t0)
+
+
+def _check_scenarios(config: EmoNavConfig, first_seed: int, trials: int, where: str) -> None:
+    """Sample every scenario now (cheap): a crowd that does not fit fails before any trial."""
+    from emonav_drake.core.scenario import ScenarioSamplingError, sample_scenario
+
+    for seed in range(first_seed, first_seed + trials):
+        try:
+            sample_scenario(seed, config)
+        except ScenarioSamplingError as e:
+            raise ScenarioSamplingError(f"{where}: {e}") from None
+
+
+def table3_across_runs(paths: Sequence[str | Path]) -> str:
+    """Table III style over several run directories (one row per method and setting)."""
+    header, rows = None, []
+    for p in paths:
+        settings, trials = load_run(p)
+        summary = tables.summarize_methods(trials, settings["planners"])
+        obs = {m: settings["methods"][m]["observation"] for m in settings["planners"]}
+        header, r = tables.table3_rows(summary, settings["setting_label"], settings["plant"], obs)
+        rows += r
+    if header is None:
+        raise ValueError("no run directories given")
+    return tables.markdown_table(header, rows) + "\n"

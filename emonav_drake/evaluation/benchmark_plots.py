@@ -1,0 +1,140 @@
+"""Figures of a benchmark run (`notebooks/benchmark.ipynb`): rates with their 95 %
+intervals and the trajectories of chosen trials.
+
+* `plot_summary(trials, methods)`: SR per method with its Wilson interval; DT and IDT per
+  trial (mean over the trials with a 95 % Student-t interval of the mean).
+* `plot_trajectory(ax, scenario, step_log, config)`: the robot's path, every pedestrian's
+  path coloured by its emotion at each step (a time-varying emotion changes colour along
+  the path), the static discs with their discomfort rings, start and goal.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from emonav_drake.evaluation import tables
+from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
+
+EMOTION_COLORS = {"happy": "tab:green", "neutral": "tab:blue", "negative": "tab:red"}
+IDT_LABELS = ("static", "happy", "neutral", "negative")
+
+
+def mean_interval(values: Sequence[float]) -> tuple[float, float]:
+    """Mean and the half width of its 95 % Student-t interval (0 for fewer than 2 values)."""
+    x = np.asarray(values, dtype=float)
+    if x.size < 2:
+        return float(x.mean()) if x.size else math.nan, 0.0
+    from scipy.stats import t
+
+    half = t.ppf(0.975, x.size - 1) * x.std(ddof=1) / math.sqrt(x.size)
+    return float(x.mean()), float(half)
+
+
+def plot_summary(trials: Sequence[dict], methods: Sequence[str] | None = None):
+    """A figure with SR (Wilson 95 %), DT per trial and IDT per trial (t 95 %) by method."""
+    import matplotlib.pyplot as plt
+
+    summary = tables.summarize_methods(trials, methods)
+    names = list(summary)
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8), gridspec_kw={"width_ratios": [1, 1, 2]})
+    x = np.arange(len(names))
+    colors = [f"C{i}" for i in range(len(names))]
+
+    sr = np.array([summary[m]["SR"] for m in names])
+    ci = np.array([summary[m]["SR_ci"] for m in names])
+    ax = axes[0]
+    ax.bar(x, sr, color=colors)
+    ax.errorbar(x, sr, yerr=[sr - ci[:, 0], ci[:, 1] - sr], fmt="none", ecolor="k", capsize=4)
+    ax.set_xticks(x, [f"{m}\n(n={summary[m]['episodes']})" for m in names])
+    ax.set_ylim(0, 1.05)
+    ax.set_ylabel("success rate")
+    ax.set_title("SR (95 % Wilson interval)")
+
+    per = {m: [t for t in trials if t["method"] == m] for m in names}
+    ax = axes[1]
+    dt = [mean_interval([t["record"]["discomfort_steps"] for t in per[m]]) for m in names]
+    ax.bar(x, [d[0] for d in dt], color=colors)
+    ax.errorbar(x, [d[0] for d in dt], yerr=[d[1] for d in dt], fmt="none", ecolor="k", capsize=4)
+    ax.set_xticks(x, names)
+    ax.set_ylabel("discomfort steps per trial")
+    ax.set_title("DT per trial (95 % t interval)")
+
+    ax = axes[2]
+    width = 0.8 / len(names)
+    for j, m in enumerate(names):
+        idt = [mean_interval([t["record"]["idt"][i] for t in per[m]]) for i in range(4)]
+        pos = np.arange(4) + (j - (len(names) - 1) / 2) * width
+        ax.bar(pos, [v[0] for v in idt], width, color=colors[j], label=m)
+        ax.errorbar(
+            pos, [v[0] for v in idt], yerr=[v[1] for v in idt], fmt="none", ecolor="k", capsize=3
+        )
+    ax.set_xticks(np.arange(4), IDT_LABELS)
+    ax.set_ylabel("steps per trial")
+    ax.set_title("IDT per trial [static; happy, neutral, negative] (95 % t interval)")
+    ax.legend()
+    for ax in axes:
+        ax.set_ylim(bottom=0)
+        ax.grid(axis="y", alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def _emotion_at(ped, k: int, step_time: float, period: float) -> str:
+    """A pedestrian's emotion during walking step k (its schedule, or its constant one)."""
+    if not ped.emotion_schedule:
+        return ped.emotion
+    i = min(int(k * step_time / period + 1e-9), len(ped.emotion_schedule) - 1)
+    return ped.emotion_schedule[i]
+
+
+def plot_trajectory(ax, scenario, step_log, config: EmoNavConfig, title: str = "") -> None:
+    """Draw one episode: robot path, pedestrians coloured by emotion, discs, start, goal."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Circle
+
+    robot = np.array([r[:2] for r in step_log.robot])
+    peds = np.array(step_log.pedestrians)  # (K + 1, P, 2)
+    T = config.robot.step_time
+    rd = config.reward
+    for ob in scenario.obstacles:
+        c, r = ob.center, ob.radius
+        ax.add_patch(Circle(c, r, color="0.45", zorder=2))
+        ax.add_patch(
+            Circle(c, r + rd.static_discomfort, fill=False, ls="--", ec="0.45", lw=0.8, zorder=2)
+        )
+    dist = dict(zip(EMOTION_NAMES, rd.emotion_distances(), strict=True))
+    rp = config.crowd.pedestrian_radius
+    for i, ped in enumerate(scenario.pedestrians):
+        path = peds[:, i, :]
+        colors = [
+            EMOTION_COLORS[_emotion_at(ped, k, T, scenario.emotion_change_period)]
+            for k in range(len(path) - 1)
+        ]
+        segments = np.stack([path[:-1], path[1:]], axis=1)
+        ax.add_collection(LineCollection(segments, colors=colors, lw=1.8, zorder=3))
+        end = _emotion_at(ped, len(path) - 1, T, scenario.emotion_change_period)
+        ax.add_patch(Circle(path[-1], rp, fc="none", ec=EMOTION_COLORS[end], lw=1.5, zorder=4))
+        ax.add_patch(
+            Circle(path[-1], rp + dist[end], fc="none", ec=EMOTION_COLORS[end], ls=":", zorder=4)
+        )
+        ax.plot(*path[0], "o", color=EMOTION_COLORS[ped.emotion], ms=4, zorder=4)
+    ax.plot(*robot.T, color="k", lw=2.2, zorder=5)
+    ax.add_patch(Circle(robot[-1], config.robot.radius, fc="none", ec="k", lw=1.5, zorder=5))
+    ax.plot(*scenario.robot_start, "ks", ms=7, zorder=6)
+    ax.plot(*scenario.robot_goal, "k*", ms=14, zorder=6)
+    handles = [Line2D([], [], color="k", lw=2.2, label="robot")]
+    handles += [Line2D([], [], color=c, lw=2, label=e) for e, c in EMOTION_COLORS.items()]
+    handles.append(Line2D([], [], color="0.45", marker="o", ls="none", label="static disc"))
+    ax.legend(handles=handles, loc="lower left", fontsize=7, ncol=2)
+    ax.set_aspect("equal")
+    ax.set_xlim(-5.5, 5.5)
+    ax.set_ylim(-5, 5)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(alpha=0.3)
+    if title:
+        ax.set_title(title, fontsize=9)
