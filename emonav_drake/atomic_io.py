@@ -23,10 +23,10 @@ import json
 import math
 import os
 import tempfile
-from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager, suppress
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 TMP_MARK = ".tmp-"
 
@@ -97,13 +97,16 @@ def check_distinct(outputs: Mapping[str, Path | None]) -> None:
         seen[key] = flag
 
 
-def _alive(pid: int) -> bool:
+def process_alive(pid: int) -> bool:
+    """Whether a process with this id runs (another user's counts; a bad id does not)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
     except PermissionError:  # exists, owned by someone else
         return True
+    except (OverflowError, ValueError, OSError):  # not a valid pid
+        return False
     return True
 
 
@@ -114,7 +117,7 @@ def clean_stale_temps(path: Path) -> list[Path]:
     removed = []
     for tmp in parent.glob(f"{path.stem}{TMP_MARK}*{path.suffix}"):
         pid = tmp.name[len(path.stem) + len(TMP_MARK) :].split("-", 1)[0]
-        if pid.isdigit() and int(pid) != os.getpid() and not _alive(int(pid)):
+        if pid.isdigit() and int(pid) != os.getpid() and not process_alive(int(pid)):
             tmp.unlink(missing_ok=True)
             removed.append(tmp)
     return removed
@@ -191,3 +194,26 @@ def write_json(path: str | Path, data: Any) -> None:
     """Write `data` as strict JSON (NaN → null, `allow_nan=False`), atomically."""
     text = json.dumps(json_safe(data), indent=2, allow_nan=False) + "\n"
     write_text_atomic(path, text)
+
+
+def atomic_write(path: str | Path, write: Callable[[BinaryIO], None]) -> None:
+    """Durable atomic write for state files: `write(file)` into `NAME.emonav-<pid>.tmp`,
+    flush and fsync, rename over `path`, fsync the directory. A save killed half-way
+    leaves only that temp file (`learning.run_state.clean_stale_temp_files` removes it)."""
+    path = Path(path)
+    tmp = path.with_name(f"{path.name}.emonav-{os.getpid()}.tmp")
+    try:
+        with open(tmp, "wb") as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    with suppress(OSError):  # make the rename durable (not on every OS/FS)
+        fd = os.open(path.parent, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)

@@ -249,8 +249,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from emonav_drake.core.metrics import format_summary, summarize
-    from emonav_drake.diagrams.navigation import run_episode
-    from emonav_drake.diagrams.navigation_digit import run_digit_episode
+    from emonav_drake.diagrams.evaluation_episode import run_evaluation_episode
     from emonav_drake.planners import configure_for, make_planner
 
     seeds = range(args.first_seed, args.first_seed + args.episodes)
@@ -263,23 +262,9 @@ def cmd_eval(args: argparse.Namespace) -> int:
     with tqdm(total=len(seeds), desc=f"{args.planner}/{args.plant}", unit="ep") as bar:
         try:
             for scenario in scenarios:
-                if args.plant == "digit":
-                    rec = run_digit_episode(
-                        scenario,
-                        cfg,
-                        planner,
-                        grid_kind=grid_kind,
-                        goal_radius=cfg.episode.eval_goal_radius,
-                    )
-                else:
-                    rec, _ = run_episode(
-                        scenario,
-                        cfg,
-                        planner,
-                        goal_radius=cfg.episode.eval_goal_radius,
-                        grid_kind=grid_kind,
-                        emotion_estimate=estimate,
-                    )
+                rec = run_evaluation_episode(
+                    args.plant, scenario, cfg, planner, grid_kind, estimate
+                )
                 records.append(rec)
                 bar.update(1)
         except KeyboardInterrupt:

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from benchmarks.reference.lgm_reference import ranges_per_beam
 from emonav_drake.core.grid_maps import (
     FrameStack,
     lgm_cell_area,
@@ -402,42 +403,6 @@ def test_frame_stack_reset_and_push():
 
 
 # --------------------------------------------------------------------------- reference
-
-
-def ranges_per_beam(origin, heading, centers, radii, num_beams=K, max_range=L, min_range=RMIN):
-    """Plain-Python per-beam ranges: every beam against every disc, smallest positive root.
-
-    Same formulas in the same floating-point order as the fast cast (centres rotated into
-    the robot frame, math.cos/math.sin per beam, b = c·u, disc = r² − (d² − b²)), so the
-    two must agree bit for bit; it shares no code with `emonav_drake.core.lidar`.
-    """
-    step = 0.003490659 if num_beams == 1800 else 2.0 * math.pi / num_beams
-    ox, oy = float(origin[0]), float(origin[1])
-    ch, sh = math.cos(heading), math.sin(heading)
-    discs = []
-    for (cx, cy), r in zip(centers, radii, strict=True):
-        dx, dy = float(cx) - ox, float(cy) - oy
-        discs.append((ch * dx + sh * dy, ch * dy - sh * dx, float(r)))
-    ranges = []
-    for i in range(num_beams):
-        angle = (i - (num_beams - 1) / 2) * step
-        ux, uy = math.cos(angle), math.sin(angle)
-        best = math.inf
-        for px, py, r in discs:
-            d2, r2 = px * px + py * py, r * r
-            b = px * ux + py * uy
-            disc = r2 - (d2 - b * b)
-            if d2 > r2:  # outside: the entry root b − √disc, if real and ahead
-                if b <= 0.0 or disc < 0.0:
-                    continue
-                t = b - math.sqrt(disc)
-            else:  # inside: the exit root b + √disc; on the circle only if b > 0
-                if d2 == r2 and b <= 0.0:
-                    continue
-                t = b + math.sqrt(max(disc, 0.0))
-            best = min(best, t)
-        ranges.append(max(min(best, max_range), min_range))
-    return ranges
 
 
 def frame_per_beam(

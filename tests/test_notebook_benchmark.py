@@ -1,34 +1,15 @@
 """The benchmark notebook runs headless in its short mode: a tiny benchmark, its tables,
 the bar charts and the re-simulated trajectories of a success and a failure."""
 
-from pathlib import Path
-
-import nbformat
-from nbclient import NotebookClient
-
-NOTEBOOK = Path(__file__).resolve().parent.parent / "notebooks" / "benchmark.ipynb"
+from tests.notebook_runner import run_short
 
 
 def test_benchmark_notebook_runs_in_short_mode(monkeypatch):
-    monkeypatch.setenv("EMONAV_SHORT", "1")
-    monkeypatch.setenv("MPLBACKEND", "Agg")
-    nb = nbformat.read(NOTEBOOK, as_version=4)
-    NotebookClient(
-        nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": NOTEBOOK.parent}}
-    ).execute()
-    outputs = "".join(
-        o.get("text", "") for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
-    )
+    outputs, cells = run_short("benchmark.ipynb", monkeypatch)
     assert "6 trials of dwa, sac on lip" in outputs
     assert "## Table II" in outputs and "(n=3)" in outputs and "McNemar" in outputs
     # a success and a failure, re-simulated to the recorded outcome
     assert "re-simulated sac seed 4: success, as recorded" in outputs
     assert "re-simulated sac seed 5: collision, as recorded" in outputs
-    images = [
-        o
-        for c in nb.cells
-        if c.cell_type == "code"
-        for o in c.get("outputs", [])
-        if "image/png" in o.get("data", {})
-    ]
+    images = [o for c in cells for o in c.get("outputs", []) if "image/png" in o.get("data", {})]
     assert len(images) == 2  # the bar charts and the trajectories

@@ -24,34 +24,40 @@ def _step(num_beams: int) -> float:
     return 0.003490659 if num_beams == 1800 else 2.0 * math.pi / num_beams
 
 
-def _ranges_reference(
-    origin_xy, heading, centers, radii, num_beams, max_range, min_range
+def ranges_per_beam(
+    origin, heading, centers, radii, num_beams=1800, max_range=6.0, min_range=0.27
 ) -> list[float]:
-    """Per-beam ranges [m]: nearest disc surface, clipped to [min_range, max_range]."""
-    ox, oy = float(origin_xy[0]), float(origin_xy[1])
+    """Plain-Python per-beam ranges: every beam against every disc, smallest positive root.
+
+    Same formulas in the same floating-point order as the fast cast (centres rotated into
+    the robot frame, math.cos/math.sin per beam, b = c·u, disc = r² − (d² − b²)), so the
+    two must agree bit for bit; it shares no code with `emonav_drake.core.lidar`.
+    """
+    step = _step(num_beams)
+    ox, oy = float(origin[0]), float(origin[1])
     ch, sh = math.cos(heading), math.sin(heading)
-    # Disc centres in the robot frame (x forward, y left).
     discs = []
     for (cx, cy), r in zip(centers, radii, strict=True):
         dx, dy = float(cx) - ox, float(cy) - oy
         discs.append((ch * dx + sh * dy, ch * dy - sh * dx, float(r)))
     ranges = []
     for i in range(num_beams):
-        angle = (i - (num_beams - 1) / 2) * _step(num_beams)
+        angle = (i - (num_beams - 1) / 2) * step
         ux, uy = math.cos(angle), math.sin(angle)
         best = math.inf
         for px, py, r in discs:
-            d2 = px * px + py * py
-            r2 = r * r
-            t = px * ux + py * uy
-            disc = r2 - (d2 - t * t)
-            if disc < 0.0:
-                continue
-            root = math.sqrt(disc)
-            for hit in (t - root, t + root):  # the smallest positive root
-                if hit > 0.0:
-                    best = min(best, hit)
-                    break
+            d2, r2 = px * px + py * py, r * r
+            b = px * ux + py * uy
+            disc = r2 - (d2 - b * b)
+            if d2 > r2:  # outside: the entry root b − √disc, if real and ahead
+                if b <= 0.0 or disc < 0.0:
+                    continue
+                t = b - math.sqrt(disc)
+            else:  # inside: the exit root b + √disc; on the circle only if b > 0
+                if d2 == r2 and b <= 0.0:
+                    continue
+                t = b + math.sqrt(max(disc, 0.0))
+            best = min(best, t)
         ranges.append(max(min(best, max_range), min_range))
     return ranges
 
@@ -75,8 +81,8 @@ def lgm_frame_reference(
     centers = np.asarray(centers, dtype=float).reshape(-1, 2)
     radii = [float(r) for r in radii]
     inflated = [r + float(m) for r, m in zip(radii, margins, strict=True)]
-    hit = _ranges_reference(origin_xy, heading, centers, radii, num_beams, max_range, min_range)
-    infl = _ranges_reference(origin_xy, heading, centers, inflated, num_beams, max_range, min_range)
+    hit = ranges_per_beam(origin_xy, heading, centers, radii, num_beams, max_range, min_range)
+    infl = ranges_per_beam(origin_xy, heading, centers, inflated, num_beams, max_range, min_range)
     grid = np.zeros((grid_size, grid_size), dtype=np.uint8)
     for value, ranges in ((255, hit), (127, infl)):
         for i, rng in enumerate(ranges):

@@ -113,7 +113,6 @@ class DigitStation(Diagram):
         self.com = com
         self.fall_monitor = fall
         self.com_height = H
-        self.pose = tuple(float(v) for v in pose)
 
     @property
     def plant(self):
@@ -122,7 +121,8 @@ class DigitStation(Diagram):
 
     def initial_state(self) -> np.ndarray:
         """The plant's default (q, v): standing still at the station's pose."""
-        return standing_state(self.model, pose=self.pose)
+        q = self.model.plant.GetDefaultPositions()
+        return np.concatenate([q, np.zeros(self.model.plant.num_velocities())])
 
 
 def AddDigitStation(

@@ -242,31 +242,14 @@ class TrialRunner:
     def run(self, method: str, seed: int) -> dict:
         """One trial: method `method` on the scenario of `seed`; the `trials.jsonl` line."""
         from emonav_drake.core.scenario import sample_scenario
+        from emonav_drake.diagrams.evaluation_episode import run_evaluation_episode
 
         planner, cfg, grid_kind = self.planner(method)
         scenario = sample_scenario(seed, self.config)
         t0 = time.perf_counter()
-        if self.spec.plant == "digit":
-            from emonav_drake.diagrams.navigation_digit import run_digit_episode
-
-            record = run_digit_episode(
-                scenario,
-                cfg,
-                planner,
-                grid_kind=grid_kind,
-                goal_radius=cfg.episode.eval_goal_radius,
-            )
-        else:
-            from emonav_drake.diagrams.navigation import run_episode
-
-            record, _ = run_episode(
-                scenario,
-                cfg,
-                planner,
-                goal_radius=cfg.episode.eval_goal_radius,
-                grid_kind=grid_kind,
-                emotion_estimate=self.estimate,
-            )
+        record = run_evaluation_episode(
+            self.spec.plant, scenario, cfg, planner, grid_kind, self.estimate
+        )
         wall = time.perf_counter() - t0
         rec = record.to_json()
         rec["seed"] = seed

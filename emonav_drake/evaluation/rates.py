@@ -78,22 +78,25 @@ def _callback_kind(fn) -> str:
     return "helper"
 
 
-def python_callbacks(systems: list[tuple[str, System]]) -> dict[_Key, Callback]:
-    """The methods of every Python-defined leaf system, keyed like cProfile's stats."""
-    table: dict[_Key, Callback] = {}
+def _system_methods(systems: list[tuple[str, System]]):
+    """(system name, attribute, code object, function) of every method that the Python
+    classes of `systems` define (Drake's own classes excluded)."""
     for name, sys_ in systems:
-        cls = type(sys_)
-        if cls.__module__.startswith("pydrake"):
-            continue
-        for klass in cls.__mro__:
+        for klass in type(sys_).__mro__:
             if klass in (LeafSystem, object) or klass.__module__.startswith("pydrake"):
                 continue
             for attr, fn in vars(klass).items():
                 code = getattr(fn, "__code__", None)
-                if code is None:
-                    continue
-                key = (code.co_filename, code.co_firstlineno, code.co_name)
-                table.setdefault(key, Callback(name, attr, _callback_kind(fn)))
+                if code is not None:
+                    yield name, attr, code, fn
+
+
+def python_callbacks(systems: list[tuple[str, System]]) -> dict[_Key, Callback]:
+    """The methods of every Python-defined leaf system, keyed like cProfile's stats."""
+    table: dict[_Key, Callback] = {}
+    for name, attr, code, fn in _system_methods(systems):
+        key = (code.co_filename, code.co_firstlineno, code.co_name)
+        table.setdefault(key, Callback(name, attr, _callback_kind(fn)))
     return table
 
 
@@ -209,15 +212,11 @@ def record_event_times(
     Python profile hook: keep the run to a few seconds.
     """
     systems = leaf_systems(diagram)
-    codes = {}
-    for name, sys_ in systems:
-        for klass in type(sys_).__mro__:
-            if klass in (LeafSystem, object) or klass.__module__.startswith("pydrake"):
-                continue
-            for fn in vars(klass).values():
-                code = getattr(fn, "__code__", None)
-                if code is not None and _callback_kind(fn) == "event":
-                    codes[code] = name
+    codes = {
+        code: name
+        for name, _, code, fn in _system_methods(systems)
+        if _callback_kind(fn) == "event"
+    }
     times: dict[str, list[float]] = {n: [] for n in set(codes.values())}
     plant_name = next(
         (n for n, s in systems if type(s).__name__.startswith("MultibodyPlant")), "plant"

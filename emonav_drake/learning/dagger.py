@@ -55,7 +55,7 @@ from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.networks import CategoricalPolicy, LgmEncoder
-from emonav_drake.learning.policy import vector_state
+from emonav_drake.learning.policy import save_policy, vector_state
 from emonav_drake.learning.run_state import (
     DAGGER_FORMAT,
     InterruptGuard,
@@ -66,7 +66,6 @@ from emonav_drake.learning.run_state import (
     read_run_state,
     rng_state,
     set_rng_state,
-    write_policy,
     write_run_state,
 )
 from emonav_drake.params import EmoNavConfig
@@ -476,10 +475,10 @@ def train_dagger(
                         "eval_SR": summary["SR"],
                     },
                 }
-                write_policy(out / f"policy_round{rnd}.pt", student.model, round_meta)
+                save_policy(out / f"policy_round{rnd}.pt", student.model, round_meta)
                 if summary["SR"] >= best_sr:
                     best_sr = summary["SR"]
-                    write_policy(out / "policy.pt", student.model, round_meta)
+                    save_policy(out / "policy.pt", student.model, round_meta)
                 prog = _Progress(round=rnd + 1)
                 save()
                 saved_round = prog.round

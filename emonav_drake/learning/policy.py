@@ -23,14 +23,13 @@ from __future__ import annotations
 
 import io
 import math
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import torch
 
+from emonav_drake.atomic_io import atomic_write
 from emonav_drake.core.navigation import PlannerInput
 from emonav_drake.learning.networks import (
     Actor,
@@ -120,18 +119,10 @@ def build_model(meta: dict[str, Any]) -> torch.nn.Module:
 
 
 def atomic_torch_save(obj: Any, path: str | Path) -> None:
-    """Write `obj` with torch.save to a temporary file, then rename: never half-written."""
+    """`torch.save` of `obj`, durable and atomic (`atomic_io.atomic_write`)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            torch.save(obj, f)
-        os.chmod(tmp, 0o644)  # mkstemp creates 0600
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    atomic_write(path, lambda f: torch.save(obj, f))
 
 
 def save_policy(path: str | Path, model: torch.nn.Module, meta: dict[str, Any]) -> None:

@@ -40,10 +40,12 @@ import signal
 import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import Any
 
 import numpy as np
 import torch
+
+from emonav_drake.atomic_io import atomic_write, process_alive
 
 SAC_FORMAT = "emonav-sac-checkpoint/2"
 DAGGER_FORMAT = "emonav-dagger-state/2"
@@ -135,38 +137,8 @@ def unpack(text: str, arrays: dict[str, torch.Tensor]) -> Any:
 # ------------------------------------------------------------------------ files
 
 
-def atomic_write(path: str | Path, write: Callable[[BinaryIO], None]) -> None:
-    """Write `path` through `write(file)` to `NAME.emonav-<pid>.tmp`, fsync, rename."""
-    path = Path(path)
-    tmp = path.with_name(f"{path.name}.emonav-{os.getpid()}.tmp")
-    try:
-        with open(tmp, "wb") as f:
-            write(f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    with contextlib.suppress(OSError):  # make the rename durable (not on every OS/FS)
-        fd = os.open(path.parent, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-
-
 def atomic_write_text(path: str | Path, text: str) -> None:
     atomic_write(path, lambda f: f.write(text.encode()))
-
-
-def write_policy(path: str | Path, model: torch.nn.Module, meta: dict[str, Any]) -> None:
-    """A policy checkpoint (`learning.policy` format), written with `atomic_write`."""
-    from emonav_drake.learning.policy import FORMAT
-
-    state = {k: v.detach().cpu().clone() for k, v in model.state_dict().items()}
-    blob = {"format": FORMAT, **meta, "state_dict": state}
-    atomic_write(path, lambda f: torch.save(blob, f))
 
 
 def clean_stale_temp_files(directory: str | Path) -> list[Path]:
@@ -182,26 +154,15 @@ def clean_stale_temp_files(directory: str | Path) -> list[Path]:
         return removed
     for p in directory.iterdir():
         m = _TMP.match(p.name)
-        stale = (m is not None and not _alive(int(m["pid"]))) or bool(_LEGACY_TMP.match(p.name))
+        writer = int(m["pid"]) if m is not None else None
+        # ours and gone, or ours from this very process (it saves nothing yet)
+        ours_stale = writer is not None and (writer == os.getpid() or not process_alive(writer))
+        stale = ours_stale or bool(_LEGACY_TMP.match(p.name))
         if stale and p.is_file():
             with contextlib.suppress(FileNotFoundError):
                 p.unlink()
                 removed.append(p)
     return removed
-
-
-def _alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # another user's process
-        return True
-    except (OverflowError, ValueError, OSError):  # not a valid pid
-        return False
-    return True
 
 
 def write_run_state(path: str | Path, fmt: str, state: Any, tensors: dict[str, Any]) -> None:

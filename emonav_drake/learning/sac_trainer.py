@@ -37,7 +37,7 @@ from emonav_drake.core.metrics import summarize
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import SacConfig
 from emonav_drake.learning.env import EmoNavLIPEnv
-from emonav_drake.learning.policy import vector_state
+from emonav_drake.learning.policy import save_policy, vector_state
 from emonav_drake.learning.replay import FrameReplayBuffer
 from emonav_drake.learning.run_state import (
     SAC_FORMAT,
@@ -49,7 +49,6 @@ from emonav_drake.learning.run_state import (
     read_run_state,
     rng_state,
     set_rng_state,
-    write_policy,
     write_run_state,
 )
 from emonav_drake.learning.sac import SacAgent
@@ -242,7 +241,7 @@ def train_sac(
             "replay": replay.state_dict(),
         }
         write_run_state(ckpt_path, SAC_FORMAT, state, {"agent": agent.state_dict()} | rng_tensors)
-        write_policy(
+        save_policy(
             out / "policy.pt",
             agent.actor,
             policy_meta(cfg, env)

@@ -1,0 +1,53 @@
+"""One evaluation episode on either robot: what `emonav eval` and `emonav benchmark` run.
+
+`run_evaluation_episode` simulates a scenario with the LIP plant (`diagrams/navigation.py`)
+or the full-order Digit (`diagrams/navigation_digit.py`) at the evaluation goal radius
+(`episode.eval_goal_radius`, 0.2 m) and returns the episode's record.
+"""
+
+from __future__ import annotations
+
+from emonav_drake.core.metrics import EpisodeRecord
+from emonav_drake.core.scenario import Scenario
+from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+from emonav_drake.systems.navigation_planner import Planner
+
+
+def run_evaluation_episode(
+    plant: str,
+    scenario: Scenario,
+    config: EmoNavConfig,
+    planner: Planner,
+    grid_kind: str = "lgm",
+    emotion_estimate: EmotionEstimateParams | None = None,
+) -> EpisodeRecord:
+    """The record of one evaluation episode.
+
+    Args:
+        plant: "lip" or "digit".
+        scenario, config, planner, grid_kind: as `run_episode`.
+        emotion_estimate: perceived emotions (LIP plant only).
+    """
+    goal_radius = config.episode.eval_goal_radius
+    if plant == "digit":
+        from emonav_drake.diagrams.navigation_digit import run_digit_episode
+
+        if emotion_estimate is not None:
+            raise ConfigError("--emotion-estimate is available with --plant lip only")
+        return run_digit_episode(
+            scenario, config, planner, grid_kind=grid_kind, goal_radius=goal_radius
+        )
+    if plant != "lip":
+        raise ConfigError(f"plant = {plant!r} is invalid: must be 'lip' or 'digit'")
+    from emonav_drake.diagrams.navigation import run_episode
+
+    record, _ = run_episode(
+        scenario,
+        config,
+        planner,
+        goal_radius=goal_radius,
+        grid_kind=grid_kind,
+        emotion_estimate=emotion_estimate,
+    )
+    return record
