@@ -31,7 +31,10 @@ from emonav_drake.atomic_io import (
     write_json,
 )
 from emonav_drake.errors import RunInterrupted
+from emonav_drake.learning.variants import VARIANTS, is_learned
 from emonav_drake.params import ConfigError, EmoNavConfig, load_config
+
+PLANNER_CHOICES = ["dwa", "mpc", "sac", *VARIANTS]
 
 # Exit codes.
 EXIT_USAGE = 2  # a user error: bad flag, file, field or output path
@@ -48,10 +51,10 @@ def _add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--checkpoint",
         type=Path,
-        help="policy checkpoint for --planner sac (default: the shipped policy)",
+        help="policy checkpoint for a learned planner (default: the one shipped under its name)",
     )
     p.add_argument(
-        "--device", default="cpu", help="torch device for --planner sac (cpu, cuda, cuda:N)"
+        "--device", default="cpu", help="torch device for a learned planner (cpu, cuda, cuda:N)"
     )
     p.add_argument(
         "--emotion-estimate",
@@ -107,12 +110,16 @@ def _emotion_estimate(args: argparse.Namespace):
 
 
 def _check_planner_flags(args: argparse.Namespace) -> None:
-    """--checkpoint / --device only mean something with --planner sac; check them early."""
-    if args.planner != "sac":
+    """--checkpoint / --device only mean something with a learned planner; check them early."""
+    if not is_learned(args.planner):
         if args.checkpoint is not None:
-            raise ConfigError(f"--checkpoint applies to --planner sac only, not {args.planner}")
+            raise ConfigError(
+                f"--checkpoint applies to learned planners (sac, variants), not {args.planner}"
+            )
         if args.device != "cpu":
-            raise ConfigError(f"--device applies to --planner sac only, not {args.planner}")
+            raise ConfigError(
+                f"--device applies to learned planners (sac, variants), not {args.planner}"
+            )
         return
     from emonav_drake.learning.policy import resolve_device
 
@@ -360,7 +367,7 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser(
         "sim", parents=[debug], help="run one navigation episode in the Drake diagram"
     )
-    s.add_argument("--planner", default="dwa", choices=["dwa", "mpc", "sac"])
+    s.add_argument("--planner", default="dwa", choices=PLANNER_CHOICES)
     s.add_argument("--plant", default="lip", choices=["lip", "digit"])
     s.add_argument("--seed", type=int, default=0, help="scenario seed (>= 0)")
     s.add_argument("--scenario", type=Path, help="YAML scenario instead of a sampled one")
@@ -380,7 +387,7 @@ def build_parser() -> argparse.ArgumentParser:
     e = sub.add_parser(
         "eval", parents=[debug], help="evaluate a planner over many seeds (SR, NT, DT, IDT)"
     )
-    e.add_argument("--planner", default="dwa", choices=["dwa", "mpc", "sac"])
+    e.add_argument("--planner", default="dwa", choices=PLANNER_CHOICES)
     e.add_argument("--plant", default="lip", choices=["lip", "digit"])
     e.add_argument("--episodes", type=int, default=100, help=">= 1")
     e.add_argument("--first-seed", type=int, default=0, help=">= 0")

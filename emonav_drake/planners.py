@@ -8,14 +8,17 @@ on the object, `reset()` between episodes).
 
 from __future__ import annotations
 
+from emonav_drake.learning.variants import VARIANTS, is_learned, shipped_checkpoint
 from emonav_drake.params import EmoNavConfig
 
-PLANNERS = ("dwa", "mpc", "sac")
+# "sac" is the shipped policy (the EmoBipedNav variant); the other learned methods of the
+# paper by their variant name (`learning/variants.py`).
+PLANNERS = ("dwa", "mpc", "sac", *VARIANTS)
 
 
 def make_planner(name: str, config: EmoNavConfig, checkpoint=None, device: str = "cpu"):
-    """Create the planner called `name`: "dwa", "mpc", or "sac" (a trained policy;
-    `checkpoint` defaults to the policy shipped with the package)."""
+    """Create the planner called `name`: "dwa", "mpc", "sac" or a variant name (a trained
+    policy; `checkpoint` defaults to the policy shipped under that name)."""
     if name == "dwa":
         from emonav_drake.core.dwa import DwaPlanner
 
@@ -24,9 +27,11 @@ def make_planner(name: str, config: EmoNavConfig, checkpoint=None, device: str =
         from emonav_drake.core.mpc import MpcPlanner
 
         return MpcPlanner(config)
-    if name == "sac":
+    if is_learned(name):
         from emonav_drake.learning.policy import PolicyPlanner
 
+        if checkpoint is None and name != "sac":
+            checkpoint = shipped_checkpoint(name)
         return PolicyPlanner(checkpoint, device=device)
     raise ValueError(f"unknown planner {name!r}: choose one of {list(PLANNERS)}")
 

@@ -195,6 +195,26 @@ def observation_frame(
     )
 
 
+def mirror_observation(stacks: np.ndarray, kind: str) -> np.ndarray:
+    """The observation of the left-right mirrored world (y → −y in the robot frame).
+
+    Works on one frame, a stack or a batch of stacks (the trailing axes are a frame):
+    "lgm" (…, M, M): sector i ↔ M − 1 − i (rows; beam i ↔ K − 1 − i); "ogm" (…, M, M):
+    column j ↔ M − 1 − j (y ↔ −y); "scan" (…, K): beam i ↔ K − 1 − i; "drlvo"
+    (…, 3, M, M): columns reversed and the v_y plane negated about its zero, 128
+    (256 − value, at most 255). Returns a new array.
+    """
+    check_observation_kind(kind)
+    x = np.asarray(stacks)
+    if kind == "lgm":
+        return np.ascontiguousarray(x[..., ::-1, :])
+    out = np.ascontiguousarray(x[..., ::-1])
+    if kind == "drlvo":
+        vy = out[..., 2, :, :]
+        out[..., 2, :, :] = np.minimum(256 - vy.astype(np.int16), 255).astype(np.uint8)
+    return out
+
+
 class ScanStack:
     """The last N LiDAR scans (N, K) float32, oldest first (the LiDAR-SAC observation)."""
 

@@ -55,6 +55,7 @@ from typing import Any
 from emonav_drake.atomic_io import check_output_dir, json_safe, write_json, write_text_atomic
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.evaluation import tables
+from emonav_drake.learning.variants import VARIANTS, is_learned, shipped_checkpoint
 from emonav_drake.params import ConfigError, EmoNavConfig, dump_config, load_config
 
 log = logging.getLogger(__name__)
@@ -116,8 +117,9 @@ def parse_methods(
 ) -> list[MethodSpec]:
     """`--planners sac,mpc,dwa` and `--checkpoint NAME=PATH …` → the methods (validated).
 
-    A method is `dwa`, `mpc`, `sac` (the shipped policy unless a checkpoint is given) or any
-    other name given a checkpoint with `--checkpoint NAME=PATH` (another learned policy).
+    A method is `dwa`, `mpc`, `sac` (the shipped policy unless a checkpoint is given), a
+    variant of `learning/variants.py` (its shipped policy unless a checkpoint is given) or
+    any other name given a checkpoint with `--checkpoint NAME=PATH` (another learned policy).
     """
     names = planners.split(",") if isinstance(planners, str) else list(planners)
     names = [n.strip() for n in names]
@@ -150,17 +152,19 @@ def parse_methods(
     for n in names:
         if n in ("dwa", "mpc"):
             methods.append(MethodSpec(n, n))
-        elif n == "sac" or n in ckpt:
+        elif is_learned(n) or n in ckpt:
             path = ckpt.get(n)
-            if path is None:
+            if path is None and n == "sac":
                 from emonav_drake.learning.policy import DEFAULT_POLICY
 
                 path = DEFAULT_POLICY
+            elif path is None:
+                path = shipped_checkpoint(n)
             methods.append(MethodSpec(n, "sac", str(path), sha256_file(path)))
         else:
             raise ConfigError(
-                f"--planners: unknown method {n!r}; use dwa, mpc, sac, or name a learned "
-                f"policy with --checkpoint {n}=PATH"
+                f"--planners: unknown method {n!r}; use dwa, mpc, sac, a variant "
+                f"({', '.join(VARIANTS)}), or name a learned policy with --checkpoint {n}=PATH"
             )
     return methods
 

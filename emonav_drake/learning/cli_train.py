@@ -1,6 +1,7 @@
 """`emonav train`: the SAC trainer (paper-scale, `--algo sac`) or the CPU route (`--algo dagger`).
 
 emonav train --algo dagger --out runs/dagger --seed 0 [--device cpu] [--resume runs/dagger]
+emonav train --variant NAME [--out runs/NAME] [--seed 0] [--resume runs/NAME]
 emonav train --algo sac [--config FILE] [--steps N] [--device cpu|cuda] [--out DIR]
              [--resume DIR]
 """
@@ -8,15 +9,25 @@ emonav train --algo sac [--config FILE] [--steps N] [--device cpu|cuda] [--out D
 from __future__ import annotations
 
 import argparse
+import shlex
+import sys
 from pathlib import Path
 
 from emonav_drake.atomic_io import check_output_dir
+from emonav_drake.learning.variants import VARIANTS, variant
 from emonav_drake.params import ConfigError
 
 
 def add_train_parser(sub: argparse._SubParsersAction) -> None:
     t = sub.add_parser("train", help="train a navigation policy (SAC, or the CPU DAgger route)")
     t.add_argument("--algo", choices=["sac", "dagger"], default="sac")
+    t.add_argument(
+        "--variant",
+        choices=list(VARIANTS),
+        help="train one of the paper's observation variants by the CPU route of the shipped "
+        "policy (--algo dagger with emonav_drake/configs/variants/NAME.yaml; default --out "
+        "runs/NAME)",
+    )
     t.add_argument(
         "--config",
         type=Path,
@@ -29,9 +40,29 @@ def add_train_parser(sub: argparse._SubParsersAction) -> None:
     )
     t.add_argument("--seed", type=int, default=0, help="seed of the run (>= 0)")
     t.add_argument("--device", default="cpu", help="cpu or cuda (cuda:N)")
-    t.add_argument("--out", type=Path, default=Path("runs/train"), help="run directory")
+    t.add_argument(
+        "--out", type=Path, help="run directory (default: runs/train, or runs/NAME with --variant)"
+    )
     t.add_argument("--resume", type=Path, help="continue the run in this directory")
     t.set_defaults(func=cmd_train)
+
+
+def _apply_variant(args: argparse.Namespace) -> None:
+    """--variant NAME → --algo dagger --config <the variant's YAML>, --out runs/NAME."""
+    if args.variant is None:
+        if args.out is None:
+            args.out = Path("runs/train")
+        return
+    if args.config is not None:
+        raise ConfigError(
+            f"--variant {args.variant} brings its configuration "
+            f"({variant(args.variant).config.name}); --config cannot be combined with it"
+        )
+    if args.algo == "sac" and "--algo" in sys.argv[1:]:
+        raise ConfigError("--variant trains by the CPU route: drop --algo sac")
+    args.algo, args.config = "dagger", variant(args.variant).config
+    if args.out is None:
+        args.out = Path("runs") / args.variant
 
 
 def _training_config(args: argparse.Namespace):
@@ -64,6 +95,7 @@ def _training_config(args: argparse.Namespace):
 def cmd_train(args: argparse.Namespace) -> int:
     from emonav_drake.learning.policy import resolve_device
 
+    _apply_variant(args)
     cfg = _training_config(args)
     resolve_device(args.device)
     if args.resume is not None:
@@ -75,7 +107,10 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.algo == "dagger":
         from emonav_drake.learning.dagger import train_dagger
 
-        path = train_dagger(out, cfg, resume=args.resume is not None)
+        command = "emonav " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+        path = train_dagger(
+            out, cfg, resume=args.resume is not None, command=command, variant=args.variant
+        )
         print(f"policy written to {path}")
         return 0
     from emonav_drake.learning.sac_trainer import train_sac

@@ -36,8 +36,12 @@ class DaggerConfig:
     train_seed_offset: int = 1_000_000  # training scenarios: seeds offset + i
     eval_seed_offset: int = 500_000  # held-out seeds for the per-round evaluation
     goal_radius: float = 0.2
+    # Observation variant, as in `SacConfig`: "lgm" (paper), "ogm", "scan" (LiDAR-SAC; with
+    # encoder "lstm": LNDNL), "drlvo" (DRL-VO*, num_frames 1); num_frames 1 = Single-LGM.
     grid_kind: str = "lgm"
-    mirror_augment: bool = True  # mirror half of every batch left-right (LGM only)
+    num_frames: int = 9
+    encoder: str = "cnn"
+    mirror_augment: bool = True  # mirror half of every batch left-right (every kind)
     heading_noise_prob: float = 0.5  # fraction of training episodes starting off course
     heading_noise: float = 1.5  # their initial heading error, uniform in ± this [rad]
     device: str = "cpu"
@@ -46,7 +50,7 @@ class DaggerConfig:
     def validate(self) -> "DaggerConfig":
         """Raise `ConfigError` naming the field if a value is out of range."""
         validate_ranges(self, _DAGGER_RANGES)
-        _choice("grid_kind", self.grid_kind, ("lgm", "ogm"))
+        _check_observation(self.grid_kind, self.encoder, self.num_frames)
         return self
 
 
@@ -93,18 +97,7 @@ class SacConfig:
     def validate(self) -> "SacConfig":
         """Raise `ConfigError` naming the field if a value is out of range or inconsistent."""
         validate_ranges(self, _SAC_RANGES)
-        _choice("grid_kind", self.grid_kind, ("lgm", "ogm", "scan", "drlvo"))
-        _choice("encoder", self.encoder, ("cnn", "lstm"))
-        if self.encoder == "lstm" and self.grid_kind != "scan":
-            raise ConfigError(
-                f"encoder = 'lstm' is invalid with grid_kind = {self.grid_kind!r}: "
-                "the LSTM encoder reads scans (grid_kind: scan)"
-            )
-        if self.grid_kind == "drlvo" and self.num_frames != 1:
-            raise ConfigError(
-                f"num_frames = {self.num_frames} is invalid with grid_kind = 'drlvo': "
-                "DRL-VO* observes one (3, M, M) image (num_frames: 1)"
-            )
+        _check_observation(self.grid_kind, self.encoder, self.num_frames)
         if self.grid_kind != "scan":
             if _NUM_BEAMS % self.grid_size:
                 raise ConfigError(
@@ -117,6 +110,22 @@ class SacConfig:
                     f"encoder needs grid_size // pool >= {MIN_ENCODER_INPUT}"
                 )
         return self
+
+
+def _check_observation(grid_kind: str, encoder: str, num_frames: int) -> None:
+    """The observation variant's cross-field rules (shared by both trainers)."""
+    _choice("grid_kind", grid_kind, ("lgm", "ogm", "scan", "drlvo"))
+    _choice("encoder", encoder, ("cnn", "lstm"))
+    if encoder == "lstm" and grid_kind != "scan":
+        raise ConfigError(
+            f"encoder = 'lstm' is invalid with grid_kind = {grid_kind!r}: "
+            "the LSTM encoder reads scans (grid_kind: scan)"
+        )
+    if grid_kind == "drlvo" and num_frames != 1:
+        raise ConfigError(
+            f"num_frames = {num_frames} is invalid with grid_kind = 'drlvo': "
+            "DRL-VO* observes one (3, M, M) image (num_frames: 1)"
+        )
 
 
 def _choice(name: str, value: str, allowed: tuple[str, ...]) -> None:
@@ -145,6 +154,7 @@ _DAGGER_RANGES = {
     "heading_noise_prob": (0.0, 1.0),
     "heading_noise": (0.0, 3.1416),
     "threads": (1, 1024),
+    "num_frames": (1, 64),
 }
 
 _SAC_RANGES = {

@@ -36,6 +36,7 @@ uninterrupted one does.
 
 from __future__ import annotations
 
+import copy
 import dataclasses as dc
 import json
 import logging
@@ -50,12 +51,17 @@ from tqdm import tqdm
 
 from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.metrics import format_summary, summarize
-from emonav_drake.core.navigation import NavigationWorld
+from emonav_drake.core.navigation import (
+    NavigationWorld,
+    mirror_observation,
+    observation_dtype,
+    observation_shape,
+)
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import DaggerConfig
-from emonav_drake.learning.networks import CategoricalPolicy, LgmEncoder
-from emonav_drake.learning.policy import save_policy, vector_state
+from emonav_drake.learning.networks import CategoricalPolicy
+from emonav_drake.learning.policy import build_encoder, encoder_spec, save_policy, vector_state
 from emonav_drake.learning.run_state import (
     DAGGER_FORMAT,
     InterruptGuard,
@@ -75,15 +81,24 @@ STATE_FILE = "dagger_state.pt"
 
 
 class FrameStore:
-    """Append-only uint8 frames (F, M, M); samples refer to frames by index."""
+    """Append-only observation frames; samples refer to frames by index.
 
-    def __init__(self, size: int, capacity: int = 4096) -> None:
-        self.frames = np.zeros((capacity, size, size), np.uint8)
+    Args:
+        shape: one frame's shape — (M, M) grid maps, (K,) scans, (3, M, M) DRL-VO* images;
+            an int M means (M, M).
+        dtype: the frames' dtype (uint8 maps, float32 scans).
+    """
+
+    def __init__(
+        self, shape: int | tuple[int, ...], capacity: int = 4096, dtype: type = np.uint8
+    ) -> None:
+        shape = (shape, shape) if isinstance(shape, int) else tuple(shape)
+        self.frames = np.zeros((capacity, *shape), dtype)
         self.count = 0
 
     def add(self, frame: np.ndarray) -> int:
         if self.count == len(self.frames):
-            grown = np.zeros((2 * len(self.frames), *self.frames.shape[1:]), np.uint8)
+            grown = np.zeros((2 * len(self.frames), *self.frames.shape[1:]), self.frames.dtype)
             grown[: self.count] = self.frames[: self.count]
             self.frames = grown
         self.frames[self.count] = frame
@@ -131,7 +146,7 @@ class Demonstrations:
         states, labels = d["states"], d["labels"]
         n, size = len(labels), self.store.frames.shape[1:]
         if (
-            frames.dtype != np.uint8
+            frames.dtype != self.store.frames.dtype
             or frames.shape[1:] != size
             or windows.dtype != np.int64
             or windows.shape != (n, num_frames)
@@ -155,26 +170,29 @@ def command_index(commands: np.ndarray, command: np.ndarray) -> int:
 
 
 class Student:
-    """The LGM student: network, optimiser and greedy action."""
+    """The student: network over the variant's observation, optimiser and greedy action.
+
+    The encoder is the one the SAC trainer uses for the same variant (`encoder_spec`):
+    the paper's 2-D CNN on grid maps (max-pooled by `cfg.pool`), a 1-D CNN on scans, an
+    LSTM on scans (LNDNL).
+    """
 
     def __init__(self, cfg: DaggerConfig, env_cfg: EmoNavConfig, commands: np.ndarray) -> None:
         li = env_cfg.lidar
-        self.encoder_spec = {
-            "type": "lgm",
-            "frames": li.num_frames,
-            "size": li.grid_size,
-            "pool": cfg.pool,
-        }
+        self.grid_kind = cfg.grid_kind
+        self.encoder_spec = encoder_spec(
+            cfg.grid_kind, cfg.encoder, cfg.num_frames, li.grid_size, pool=cfg.pool
+        )
         self.model = CategoricalPolicy(
-            LgmEncoder(li.num_frames, li.grid_size, pool=cfg.pool), len(commands), cfg.hidden
+            build_encoder(self.encoder_spec), len(commands), cfg.hidden
         ).to(cfg.device)
         self.optim = torch.optim.AdamW(
             self.model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay
         )
         self.commands = commands
-        # The LGM is exactly left-right symmetric (beam i ↔ K − 1 − i, sector i ↔ M − 1 − i):
+        # Every observation is exactly left-right symmetric (`mirror_observation`):
         # mirrored samples double the data and make the student's choices symmetric.
-        self.mirror_augment = cfg.mirror_augment and cfg.grid_kind == "lgm"
+        self.mirror_augment = cfg.mirror_augment
         self.mirrored = np.array([command_index(commands, c * [1.0, -1.0]) for c in commands])
         self.device = cfg.device
         self.bounds = (env_cfg.robot.max_speed, env_cfg.robot.max_heading_change)
@@ -198,7 +216,7 @@ class Student:
         stacks = frames[windows]
         if mirror is not None and mirror.any():
             stacks, states, labels = stacks.copy(), states.copy(), labels.copy()
-            stacks[mirror] = stacks[mirror][:, :, ::-1, :]  # sector i ↔ M − 1 − i
+            stacks[mirror] = mirror_observation(stacks[mirror], self.grid_kind)
             states[mirror, 1] *= -1.0  # goal bearing
             states[mirror, 3] *= -1.0  # last heading change
             labels[mirror] = self.mirrored[labels[mirror]]
@@ -314,10 +332,15 @@ def train_dagger(
     cfg: DaggerConfig | None = None,
     env_cfg: EmoNavConfig | None = None,
     resume: bool = False,
+    command: str | None = None,
+    variant: str | None = None,
 ) -> Path:
     """Run the CPU route; write `out/policy.pt` (best round) and a per-round log.
 
     Returns the path of the best policy, which this run (or the run it resumes) wrote.
+    Every policy file carries its provenance: the route, `variant` and `command` (as
+    given), round, seed, configuration, samples, cumulative wall time, the training
+    scenario seeds and the seeds the round was evaluated (selected) on.
 
     Raises:
         RunStateError: `resume` and `out` has no DAgger state, or one that is damaged, of
@@ -325,7 +348,8 @@ def train_dagger(
         RunInterrupted: after Ctrl-C, once the state is saved.
     """
     cfg = cfg or DaggerConfig()
-    env_cfg = env_cfg or EmoNavConfig()
+    env_cfg = copy.deepcopy(env_cfg or EmoNavConfig())
+    env_cfg.lidar.num_frames = cfg.num_frames  # the variant's stack depth
     out = Path(out)
     ckpt = out / STATE_FILE
     if resume:
@@ -345,7 +369,8 @@ def train_dagger(
     commands = expert.candidates.copy()
     student = Student(cfg, env_cfg, commands)
     n_frames = env_cfg.lidar.num_frames
-    demos = Demonstrations(FrameStore(env_cfg.lidar.grid_size))
+    frame_shape = observation_shape(cfg.grid_kind, env_cfg.lidar)[1:]
+    demos = Demonstrations(FrameStore(frame_shape, dtype=observation_dtype(cfg.grid_kind).type))
     prog, episode_counter, best_sr, history = _Progress(), 0, -1.0, []
     if resume:
 
@@ -466,12 +491,26 @@ def train_dagger(
                     break
                 entry = _round_entry(prog, summary, time.perf_counter() - t0, beta, len(demos))
                 history.append(entry)
+                wall = sum(h["collect_s"] + h["train_s"] + h["eval_s"] for h in history)
                 round_meta = {
                     **meta,
                     "provenance": {
                         "route": "dagger",
+                        "variant": variant,
+                        "command": command,
                         "round": rnd,
+                        "seed": cfg.seed,
                         "config": dc.asdict(cfg),
+                        "samples": len(demos),
+                        "wall_seconds": round(wall, 1),
+                        "training_seeds": [
+                            cfg.train_seed_offset,
+                            cfg.train_seed_offset + episode_counter - 1,
+                        ],
+                        "selection_seeds": [
+                            cfg.eval_seed_offset,
+                            cfg.eval_seed_offset + cfg.eval_episodes - 1,
+                        ],
                         "eval_SR": summary["SR"],
                     },
                 }

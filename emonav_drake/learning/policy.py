@@ -97,6 +97,34 @@ def vector_state(
     )
 
 
+def encoder_spec(
+    grid_kind: str,
+    encoder: str,
+    num_frames: int,
+    grid_size: int,
+    features: int = 50,
+    filters: int = 32,
+    pool: int = 1,
+) -> dict[str, Any]:
+    """The checkpoint's encoder description for an observation variant (`build_encoder`).
+
+    "scan" with encoder "lstm" → LSTM over scans (LNDNL); "scan" → 1-D CNN (LiDAR-SAC);
+    every grid kind → the paper's 2-D CNN on N (DRL-VO*: 3 N) planes of M × M cells.
+    """
+    if grid_kind == "scan" and encoder == "lstm":
+        return {"type": "scan_lstm", "frames": num_frames, "features": features}
+    if grid_kind == "scan":
+        return {"type": "scan", "frames": num_frames, "features": features, "filters": filters}
+    return {
+        "type": "lgm",
+        "frames": num_frames * (3 if grid_kind == "drlvo" else 1),
+        "size": grid_size,
+        "features": features,
+        "filters": filters,
+        "pool": pool,
+    }
+
+
 def build_encoder(spec: dict[str, Any]) -> torch.nn.Module:
     args = {k: v for k, v in spec.items() if k != "type"}
     if spec["type"] == "lgm":

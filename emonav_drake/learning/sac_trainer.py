@@ -37,7 +37,7 @@ from emonav_drake.core.metrics import summarize
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import SacConfig
 from emonav_drake.learning.env import EmoNavLIPEnv
-from emonav_drake.learning.policy import save_policy, vector_state
+from emonav_drake.learning.policy import encoder_spec, save_policy, vector_state
 from emonav_drake.learning.replay import FrameReplayBuffer
 from emonav_drake.learning.run_state import (
     SAC_FORMAT,
@@ -133,25 +133,15 @@ def evaluate(agent: SacAgent, cfg: SacConfig, episodes: int) -> dict:
 
 
 def policy_meta(cfg: SacConfig, env: EmoNavLIPEnv) -> dict:
-    if cfg.grid_kind == "scan" and cfg.encoder == "lstm":
-        enc = {"type": "scan_lstm", "frames": cfg.num_frames, "features": cfg.features}
-    elif cfg.grid_kind == "scan":
-        enc = {
-            "type": "scan",
-            "frames": cfg.num_frames,
-            "features": cfg.features,
-            "filters": cfg.filters,
-        }
-    else:
-        planes = cfg.num_frames * (3 if cfg.grid_kind == "drlvo" else 1)
-        enc = {
-            "type": "lgm",
-            "frames": planes,
-            "size": cfg.grid_size,
-            "features": cfg.features,
-            "filters": cfg.filters,
-            "pool": cfg.pool,
-        }
+    enc = encoder_spec(
+        cfg.grid_kind,
+        cfg.encoder,
+        cfg.num_frames,
+        cfg.grid_size,
+        features=cfg.features,
+        filters=cfg.filters,
+        pool=cfg.pool,
+    )
     r = env.config.robot
     return {
         "kind": "gaussian",

@@ -1,0 +1,100 @@
+"""The paper's learned methods by name: observation variant, training route, shipped policy.
+
+Every variant differs from EmoBipedNav by its observation only and is trained by the same
+CPU route with the same budget (`learning/dagger.py`; the DWA expert round and 10 DAgger
+rounds, each round evaluated on the selection seeds 600 000 … 600 199 and the best kept).
+The route's settings are the YAML files in `emonav_drake/configs/variants/`
+(`DaggerConfig` fields); `emonav train --variant NAME` runs it. A trained policy ships as
+`emonav_drake/data/policies/NAME.pt` (EmoBipedNav: `data/policy_lgm.pt`) and is then a
+planner name of `emonav sim|eval|benchmark` (`--planner NAME`, `--planners NAME,…`).
+
+| name | paper | observation |
+|---|---|---|
+| `emobipednav` | EmoBipedNav | 9 LiDAR grid maps (the shipped policy, also `sac`) |
+| `single_lgm` | Single-LGM | 1 LiDAR grid map |
+| `ogm` | OGM | 9 Cartesian occupancy grids |
+| `lidar_sac` | LiDAR-SAC | 9 raw scans, 1-D CNN |
+| `lndnl` | LNDNL | 9 raw scans, LSTM |
+| `drlvo` | DRL-VO* | scan OGM + pedestrian velocity maps (1 image) |
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+from pathlib import Path
+
+from emonav_drake.params import ConfigError
+
+_PACKAGE = Path(__file__).resolve().parent.parent
+CONFIG_DIR = _PACKAGE / "configs" / "variants"
+POLICY_DIR = _PACKAGE / "data" / "policies"
+
+
+@dc.dataclass(frozen=True)
+class PolicyVariant:
+    """One learned method of the paper.
+
+    Attributes:
+        name: the registry name (planner name on the command line).
+        paper: the method's name in the paper's Table II.
+        observation: what the policy sees, in words.
+        checkpoint_file: the shipped policy file, relative to the package's `data/`.
+    """
+
+    name: str
+    paper: str
+    observation: str
+    checkpoint_file: str
+
+    @property
+    def config(self) -> Path:
+        """The route's `DaggerConfig` YAML."""
+        return CONFIG_DIR / f"{self.name}.yaml"
+
+    @property
+    def checkpoint(self) -> Path:
+        """Where the shipped policy is (it may not be shipped yet: `is_shipped`)."""
+        return _PACKAGE / "data" / self.checkpoint_file
+
+    @property
+    def is_shipped(self) -> bool:
+        return self.checkpoint.is_file()
+
+
+VARIANTS: dict[str, PolicyVariant] = {
+    v.name: v
+    for v in (
+        PolicyVariant("emobipednav", "EmoBipedNav", "9 LiDAR grid maps", "policy_lgm.pt"),
+        PolicyVariant("single_lgm", "Single-LGM", "1 LiDAR grid map", "policies/single_lgm.pt"),
+        PolicyVariant("ogm", "OGM", "9 Cartesian occupancy grids", "policies/ogm.pt"),
+        PolicyVariant("lidar_sac", "LiDAR-SAC", "9 raw scans, 1-D CNN", "policies/lidar_sac.pt"),
+        PolicyVariant("lndnl", "LNDNL", "9 raw scans, LSTM", "policies/lndnl.pt"),
+        PolicyVariant(
+            "drlvo", "DRL-VO*", "scan OGM + pedestrian velocity maps", "policies/drlvo.pt"
+        ),
+    )
+}
+
+
+def variant(name: str) -> PolicyVariant:
+    """The variant called `name`; `ConfigError` listing the names otherwise."""
+    if name not in VARIANTS:
+        raise ConfigError(f"unknown variant {name!r}: choose one of {', '.join(VARIANTS)}")
+    return VARIANTS[name]
+
+
+def shipped_checkpoint(name: str) -> Path:
+    """The shipped policy of variant `name`; `ConfigError` saying how to train it if absent."""
+    v = variant(name)
+    if not v.is_shipped:
+        raise ConfigError(
+            f"{name} ({v.paper}) has no shipped policy in this version: train it with "
+            f"`emonav train --variant {name} --out runs/{name}` and pass "
+            f"--checkpoint runs/{name}/policy.pt"
+        )
+    return v.checkpoint
+
+
+def is_learned(name: str) -> bool:
+    """True for the names of learned planners: `sac` (the shipped policy) and the variants."""
+    return name == "sac" or name in VARIANTS

@@ -1,0 +1,127 @@
+"""The paper's observation variants, trained by the CPU route and registered by name.
+
+`emonav train --variant NAME` runs the DAgger route on the variant's observation (tiny
+budget here); the checkpoint it writes records the observation and its provenance and
+runs one episode on the LIP plant and on Digit through `--planner NAME --checkpoint`.
+Shipped variant policies run by name without a checkpoint.
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+from emonav_drake.cli import main
+from emonav_drake.learning.config import DaggerConfig
+from emonav_drake.learning.policy import load_policy
+from emonav_drake.learning.variants import VARIANTS, shipped_checkpoint, variant
+from emonav_drake.params import ConfigError, load_typed_yaml
+
+
+@pytest.fixture(scope="module")
+def tiny_variants(tmp_path_factory):
+    """A directory for the tiny variant runs (one per variant)."""
+    return tmp_path_factory.mktemp("variants")
+
+
+def _tiny_run(root, name: str):
+    """`emonav train --variant NAME` with the variant's YAML shrunk to a tiny budget."""
+    out = root / name
+    if (out / "policy.pt").is_file():
+        return out
+    cfg = load_typed_yaml(DaggerConfig, path=variant(name).config)
+    cfg.expert_episodes, cfg.episodes_per_round, cfg.rounds = 2, 1, 1
+    cfg.grad_steps_first, cfg.grad_steps_per_round, cfg.batch_size = 4, 2, 8
+    cfg.hidden, cfg.eval_episodes = 16, 1
+    from emonav_drake.learning.dagger import train_dagger
+
+    train_dagger(out, cfg.validate(), command=f"test {name}", variant=name)
+    return out
+
+
+@pytest.mark.parametrize("name", list(VARIANTS))
+def test_each_variant_trains_and_its_checkpoint_runs_on_both_plants(tiny_variants, name):
+    out = _tiny_run(tiny_variants, name)
+    model, meta = load_policy(out / "policy.pt")
+    cfg = load_typed_yaml(DaggerConfig, path=variant(name).config)
+    assert meta["observation"]["grid_kind"] == cfg.grid_kind
+    assert meta["observation"]["num_frames"] == cfg.num_frames
+    expected_encoder = {"lgm": "lgm", "ogm": "lgm", "drlvo": "lgm", "scan": "scan"}[cfg.grid_kind]
+    if cfg.encoder == "lstm":
+        expected_encoder = "scan_lstm"
+    assert meta["encoder"]["type"] == expected_encoder
+    prov = meta["provenance"]
+    assert prov["variant"] == name and prov["command"] == f"test {name}"
+    assert prov["selection_seeds"] == [600_000, 600_000]  # the variant YAML's offset, 1 ep
+    assert prov["training_seeds"] == [1_000_000, 1_000_002]  # 2 expert + 1 DAgger episode
+    assert prov["wall_seconds"] > 0 and prov["samples"] > 0
+    history = json.loads((out / "history.json").read_text())
+    assert [h["round"] for h in history] == [0, 1]
+    short = out / "short.yaml"
+    short.write_text("episode: {max_steps: 2}\n")
+    for plant in ("lip", "digit"):
+        rec = out / f"{plant}.json"
+        argv = ["sim", "--planner", name, "--checkpoint", str(out / "policy.pt")]
+        argv += ["--plant", plant, "--config", str(short), "--seed", "4", "--json", str(rec)]
+        assert main(argv) == 0
+        record = json.loads(rec.read_text())
+        assert record["steps"] == 2 and record["outcome"] == "timeout", (plant, record)
+
+
+def test_variants_differ_from_the_shipped_route_by_observation_only():
+    base = load_typed_yaml(DaggerConfig, path=variant("emobipednav").config)
+    observation = {"grid_kind", "num_frames", "encoder"}
+    for name in VARIANTS:
+        cfg = load_typed_yaml(DaggerConfig, path=variant(name).config).validate()
+        differ = {k for k, v in vars(cfg).items() if v != getattr(base, k) and k not in observation}
+        assert not differ, f"{name} changes {differ}: not the same route"
+    assert base.rounds == 10 and base.eval_episodes == 200 and base.eval_seed_offset == 600_000
+
+
+def test_the_mirrored_batch_is_the_mirrored_world_for_scans():
+    # the student's augmentation flips scans beam i <-> K-1-i and the label's turn
+    from emonav_drake.core.dwa import DwaPlanner
+    from emonav_drake.learning.dagger import Student
+    from emonav_drake.params import EmoNavConfig
+
+    env_cfg = EmoNavConfig()
+    commands = DwaPlanner(env_cfg).candidates
+    student = Student(DaggerConfig(grid_kind="scan", hidden=8), env_cfg, commands)
+    for i, c in enumerate(commands):
+        m = commands[student.mirrored[i]]
+        np.testing.assert_allclose(m, c * [1.0, -1.0], atol=1e-12)
+    assert student.mirror_augment and student.grid_kind == "scan"
+
+
+def test_shipped_variants_run_by_name_and_missing_ones_say_how_to_train(tmp_path):
+    short = tmp_path / "short.yaml"
+    short.write_text("episode: {max_steps: 2}\n")
+    for name, v in VARIANTS.items():
+        if v.is_shipped:
+            _, meta = load_policy(shipped_checkpoint(name))
+            assert (
+                meta["observation"]["grid_kind"]
+                == load_typed_yaml(DaggerConfig, path=v.config).grid_kind
+            )
+            rec = tmp_path / f"{name}.json"
+            argv = ["sim", "--planner", name, "--config", str(short), "--json", str(rec)]
+            assert main(argv) == 0
+            assert json.loads(rec.read_text())["steps"] == 2
+        else:
+            with pytest.raises(ConfigError, match=f"emonav train --variant {name}"):
+                shipped_checkpoint(name)
+    assert VARIANTS["emobipednav"].is_shipped  # the shipped LGM policy
+
+
+def test_train_variant_refuses_a_second_configuration(tmp_path, capsys):
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("rounds: 2\n")
+    code = main(["train", "--variant", "ogm", "--config", str(cfg), "--out", str(tmp_path / "o")])
+    assert code == 2
+    assert "--config cannot be combined" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_unknown_variant_is_refused():
+    with pytest.raises(ConfigError, match="choose one of emobipednav"):
+        variant("lstm_lgm")
