@@ -20,28 +20,60 @@ the choice is deterministic.
 
 from __future__ import annotations
 
+import dataclasses as dc
 import math
 
 import numpy as np
 
+from emonav_drake.core.lip import LipState
 from emonav_drake.core.navigation import PlannerInput
+from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.params import DwaParams, EmoNavConfig
+
+
+@dc.dataclass(frozen=True)
+class ResponseMemory:
+    """What a planner with a response model remembers from the previous planner instant.
+
+    Attributes:
+        command: u_{k−2}, the command that was the previous command one step ago.
+        pose: (x [m], y [m], θ [rad]) of the robot then, or None at the first step.
+    """
+
+    command: np.ndarray = dc.field(default_factory=lambda: np.zeros(2))
+    pose: np.ndarray | None = None
+
+    def step_speed(self, robot: LipState, step_time: float) -> float:
+        """v̄: the forward displacement since then over T (the robot's own speed at the
+        first step) — the speed the response model is written in."""
+        if self.pose is None:
+            return float(robot.speed)
+        dx, dy = robot.x - self.pose[0], robot.y - self.pose[1]
+        th = self.pose[2]
+        return float((math.cos(th) * dx + math.sin(th) * dy) / step_time)
+
 
 _SAFETY = 0.05  # extra collision margin in the rollout [m]
 _LATE_COLLISION_PENALTY = 5.0
 
 
 class DwaPlanner:
-    """DWA over LIP walking steps.
+    """DWA over LIP walking steps, or over the steps of a fitted response model.
 
     Args:
         config: robot bounds and LIP constants, and the `dwa` weights.
+        response: None rolls out the LIP (Eq. 1) from the robot's state; a
+            `StepResponseModel` rolls out the calibrated robot instead, with the commands
+            already sent (u_{k−2} from the memory, u_{k−1} = `obs.last_command`) first and
+            the step-averaged speed measured from the memory's previous pose.
     """
 
     name = "dwa"
 
-    def __init__(self, config: EmoNavConfig) -> None:
+    def __init__(self, config: EmoNavConfig, response: StepResponseModel | None = None) -> None:
         self.config = config
+        self.response = response
+        self._memory = self.initial_memory()
         p: DwaParams = config.dwa
         r = config.robot
         speeds = np.linspace(0.0, r.max_speed, p.speed_samples)
@@ -53,16 +85,33 @@ class DwaPlanner:
         wh = r.omega * r.step_time / 2
         self._ch_mid, self._sh_mid = math.cosh(wh), math.sinh(wh)
 
-    def initial_memory(self) -> None:
-        """DWA keeps no memory between steps."""
-        return None
+    def initial_memory(self) -> ResponseMemory | None:
+        """None on the LIP; with a response model, what the robot did one step ago."""
+        return None if self.response is None else ResponseMemory()
 
     def reset(self) -> None:
-        """DWA keeps no memory between steps."""
+        """Back to `initial_memory()` (a new episode)."""
+        self._memory = self.initial_memory()
 
-    def plan_with_memory(self, obs: PlannerInput, memory: None) -> tuple[np.ndarray, None]:
-        """`plan(obs)` and the (empty) memory: the planner interface of the diagram."""
-        return self.plan(obs), None
+    def plan_with_memory(
+        self, obs: PlannerInput, memory: ResponseMemory | None
+    ) -> tuple[np.ndarray, ResponseMemory | None]:
+        """The command and the next memory: the planner interface of the diagram."""
+        if self.response is None:
+            rb = obs.robot
+            return self._choose(obs, self._rollout(rb.x, rb.y, rb.heading, rb.speed)), None
+        memory = memory if memory is not None else ResponseMemory()
+        rb = obs.robot
+        speed = memory.step_speed(rb, self.config.robot.step_time)
+        committed = np.stack([memory.command, np.asarray(obs.last_command, float)])
+        start = type(rb)(rb.x, rb.y, rb.heading, speed)
+        traj = self.response.rollout(
+            start, committed, self.candidates, self.config.dwa.horizon_steps
+        )
+        command = self._choose(obs, traj)
+        return command, ResponseMemory(
+            np.asarray(obs.last_command, float).copy(), np.array([rb.x, rb.y, rb.heading])
+        )
 
     def _rollout(self, x0: float, y0: float, th0: float, v0: float) -> np.ndarray:
         """CoM positions (C, 2·H, 2) at the middle and end of each of H steps."""
@@ -87,10 +136,14 @@ class DwaPlanner:
 
     def plan(self, obs: PlannerInput) -> np.ndarray:
         """The command (u_v [m/s], u_Δθ [rad]) for this walking step."""
+        command, self._memory = self.plan_with_memory(obs, self._memory)
+        return command
+
+    def _choose(self, obs: PlannerInput, traj: np.ndarray) -> np.ndarray:
+        """The best candidate given its predicted CoM positions (C, S, 2)."""
         cfg, p = self.config, self.config.dwa
         r_robot, step_time = cfg.robot.radius, cfg.robot.step_time
         rb = obs.robot
-        traj = self._rollout(rb.x, rb.y, rb.heading, rb.speed)  # (C, S, 2)
         samples = traj.shape[1]
         times = step_time * (np.arange(samples) + 1) / 2  # mid and end of each step
         crowd = obs.crowd

@@ -43,6 +43,7 @@ from emonav_drake.core.lip import LipState, lip_in_step, lip_step, lip_velocity,
 from emonav_drake.core.metrics import EpisodeRecord, EpisodeTracker
 from emonav_drake.core.reward import StepEvaluation, evaluate_step
 from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec
+from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.params import EmoNavConfig, LidarParams, RobotParams
 
 
@@ -127,6 +128,7 @@ def robot_at_substep(
 
 
 OBSERVATION_KINDS = ("lgm", "ogm", "scan", "drlvo")
+RESPONSE_SEED_SALT = 0x5E5  # the calibrated robot's residual draws: seeded by (salt, scenario)
 
 
 def check_observation_kind(kind: str) -> str:
@@ -259,6 +261,14 @@ class NavigationWorld:
         grid_kind: "lgm" (the paper's map), "ogm" (Cartesian baseline), "scan" (stacked
             raw LiDAR scans, the LiDAR-SAC baseline), "drlvo" (scan OGM + pedestrian
             velocity map, (1, 3, M, M), the DRL-VO* baseline) or None (no map).
+        response: None walks the paper's LIP (Eq. 1); a fitted
+            `core.step_response.StepResponseModel` walks the Digit-calibrated reduced
+            robot instead: each step's outcome from the step-averaged speed and the
+            commands u_{k−2}, u_{k−1}, u_k, plus one residual draw per step (seeded by the
+            scenario's seed) unless `response_noise` is False. The robot's `speed` is then
+            the step-averaged speed v̄, and within a step the crowd sees the robot moving
+            at constant velocity between the two instants.
+        response_noise: add the model's residuals (True) or walk its expectation.
     """
 
     def __init__(
@@ -267,7 +277,11 @@ class NavigationWorld:
         config: EmoNavConfig,
         goal_radius: float | None = None,
         grid_kind: str | None = "lgm",
+        response: StepResponseModel | None = None,
+        response_noise: bool = True,
     ) -> None:
+        self.response = response
+        self.response_noise = response_noise
         self.scenario = scenario
         self.config = config
         self.goal_radius = config.episode.goal_radius if goal_radius is None else goal_radius
@@ -285,6 +299,8 @@ class NavigationWorld:
         )
         self.crowd_state: CrowdState = self.crowd.initial_state()
         self.last_command = np.zeros(2)
+        self.command_before = np.zeros(2)  # u_{k−2}: the calibrated robot still feels it
+        self.response_rng = np.random.default_rng([RESPONSE_SEED_SALT, s.seed])
         self.step_count = 0
         self.goal_distance = float(goal_state(self.robot, self.goal_xy)[0])
         self.tracker = EpisodeTracker(
@@ -342,6 +358,8 @@ class NavigationWorld:
             "robot": list(self.robot),
             "crowd_state": self.crowd_state.to_plain(),
             "last_command": np.array(self.last_command),
+            "command_before": np.array(self.command_before),
+            "response_rng": self.response_rng.bit_generator.state,
             "step_count": self.step_count,
             "goal_distance": self.goal_distance,
             "tracker": {
@@ -377,6 +395,9 @@ class NavigationWorld:
         if self.crowd_state.positions.shape[0] != self.crowd.num_pedestrians:
             raise ValueError("the saved crowd does not match the scenario")
         self.last_command = np.array(state["last_command"])
+        if "command_before" in state:  # absent in states saved before the calibrated robot
+            self.command_before = np.array(state["command_before"])
+            self.response_rng.bit_generator.state = state["response_rng"]
         self.step_count = state["step_count"]
         self.goal_distance = state["goal_distance"]
         tr = state["tracker"]
@@ -406,12 +427,23 @@ class NavigationWorld:
         u, _ = check_command(command, self.config.robot)
         start = self.robot
         crowd = self.crowd_state
-        for j in range(self._substeps):
-            seen = robot_at_substep(start, u, j, self.config)
-            crowd = self.crowd.step(crowd, np.array([seen.x, seen.y]), lip_velocity(seen))
         r = self.config.robot
-        self.robot = lip_step(start, float(u[0]), float(u[1]), r.omega, r.step_time)
+        if self.response is None:
+            for j in range(self._substeps):
+                seen = robot_at_substep(start, u, j, self.config)
+                crowd = self.crowd.step(crowd, np.array([seen.x, seen.y]), lip_velocity(seen))
+            self.robot = lip_step(start, float(u[0]), float(u[1]), r.omega, r.step_time)
+        else:
+            commands = np.stack([self.command_before, self.last_command, u])
+            rng = self.response_rng if self.response_noise else None
+            end = self.response.step(start, commands, rng)
+            delta = np.array([end.x - start.x, end.y - start.y])
+            for j in range(self._substeps):
+                xy = np.array([start.x, start.y]) + delta * (j / self._substeps)
+                crowd = self.crowd.step(crowd, xy, delta / r.step_time)
+            self.robot = end
         self.crowd_state = crowd
+        self.command_before = self.last_command
         self.last_command = u
         self.step_count += 1
         robot_xy = np.array([self.robot.x, self.robot.y])

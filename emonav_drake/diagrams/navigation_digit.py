@@ -118,12 +118,15 @@ def run_digit_episode(
     realtime_rate: float = 0.0,
     record_html: str | Path | None = None,
     rates: RateMeasurement | None = None,
+    trace: list[dict] | None = None,
 ) -> EpisodeRecord:
     """Simulate one navigation episode with the full-order Digit; returns its record
     (outcome success | collision | timeout | fall).
 
     With `rates`, the simulation runs under the profiler of `evaluation.rates` and the
-    per-system rates and wall-time shares are left in `rates.report`."""
+    per-system rates and wall-time shares are left in `rates.report`. With `trace`, the
+    robot state and held command at every planner instant are appended to it
+    (`simulate_digit_episode`)."""
     if record_html is not None and meshcat is None:
         meshcat = Meshcat()
     nd = build_digit_navigation_diagram(scenario, config, planner, meshcat, grid_kind, goal_radius)
@@ -132,9 +135,9 @@ def run_digit_episode(
     if record_html is not None:
         meshcat.StartRecording(set_visualizations_while_recording=False)
     if rates is not None:
-        record = rates.run(sim, nd.diagram, lambda: simulate_digit_episode(sim, nd, config))
+        record = rates.run(sim, nd.diagram, lambda: simulate_digit_episode(sim, nd, config, trace))
     else:
-        record = simulate_digit_episode(sim, nd, config)
+        record = simulate_digit_episode(sim, nd, config, trace)
     if record_html is not None:
         meshcat.StopRecording()
         meshcat.PublishRecording()
@@ -143,17 +146,36 @@ def run_digit_episode(
 
 
 def simulate_digit_episode(
-    sim: Simulator, nd: DigitNavigationDiagram, config: EmoNavConfig
+    sim: Simulator,
+    nd: DigitNavigationDiagram,
+    config: EmoNavConfig,
+    trace: list[dict] | None = None,
 ) -> EpisodeRecord:
     """Run `sim` (built on `nd`, its context at the episode's start) walking step by
-    walking step until the episode monitor ends the episode or the robot falls."""
+    walking step until the episode monitor ends the episode or the robot falls.
+
+    With `trace`, one entry per planner instant t_k = kT is appended, taken before the
+    updates at t_k (what the planner sees): {"k", "t" [s], "robot": [x, y, θ, v] (CoM
+    [m], torso yaw [rad], sagittal CoM speed [m/s], world frame W), "held": the command
+    held since t_{k−1}, u_{k−1} = [u_v, u_Δθ]}; the last entry is the episode's end."""
     ctx = sim.get_mutable_context()
     status_port = nd.monitor.GetOutputPort("status")
     fall_port = nd.station.GetOutputPort("fall")
+    robot_port = nd.station.GetOutputPort("robot_state")
+    command_port = nd.planner.GetOutputPort("command")
     T = config.robot.step_time
     sim.Initialize()
     k = round(ctx.get_time() / T)
     while True:
+        if trace is not None:
+            trace.append(
+                {
+                    "k": k,
+                    "t": ctx.get_time(),
+                    "robot": robot_port.Eval(nd.station.GetMyContextFromRoot(ctx)).tolist(),
+                    "held": command_port.Eval(nd.planner.GetMyContextFromRoot(ctx)).tolist(),
+                }
+            )
         status = status_port.Eval(nd.monitor.GetMyContextFromRoot(ctx))
         fall = fall_port.Eval(nd.station.GetMyContextFromRoot(ctx))
         if fall.fallen:
