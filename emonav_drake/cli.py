@@ -423,6 +423,9 @@ def build_parser() -> argparse.ArgumentParser:
     from emonav_drake.cli_benchmark import add_benchmark_parser
 
     add_benchmark_parser(sub)
+    from emonav_drake.learning.cli_calibrate import add_calibrate_parser
+
+    add_calibrate_parser(sub)
     for name, parser in sub.choices.items():
         if name not in ("sim", "eval", "lgm"):
             parser.add_argument(

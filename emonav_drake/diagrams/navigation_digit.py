@@ -67,7 +67,7 @@ class DigitNavigationDiagram:
 def build_digit_navigation_diagram(
     scenario: Scenario,
     config: EmoNavConfig,
-    planner: Planner,
+    planner: Planner | None,
     meshcat: Meshcat | None = None,
     grid_kind: str = "lgm",
     goal_radius: float | None = None,
@@ -77,7 +77,9 @@ def build_digit_navigation_diagram(
     Digit stands at the scenario's start, facing its heading, in a default context.
     `grid_kind` ("lgm", "ogm", "scan", "drlvo") selects the map observation the planner
     reads, seen from Digit's CoM and heading (as `diagrams.navigation`; for a policy,
-    `planners.configure_for`).
+    `planners.configure_for`). `planner` None builds the diagram for an external agent:
+    an `action` input (the planner's, sampled at every t_k) and an `observation` output
+    (the Gymnasium observation of `EmoNavDigit-v0`, `systems.navigation_observation`).
     """
     config.validate()
     scenario.validate()
@@ -90,6 +92,17 @@ def build_digit_navigation_diagram(
     )
     crowd, nav, monitor = stack.crowd, stack.planner, stack.monitor
     b.Connect(nav.GetOutputPort("command"), station.GetInputPort("command"))
+    if planner is None:  # an external agent: the Gymnasium env EmoNavDigit-v0
+        from emonav_drake.systems.navigation_observation import NavigationObservation
+
+        b.ExportInput(nav.GetInputPort("action"), "action")
+        obs = b.AddNamedSystem(
+            "observation", NavigationObservation(scenario.robot_goal, config, grid_kind)
+        )
+        b.Connect(robot_state, obs.GetInputPort("robot_state"))
+        b.Connect(stack.grid_maps.GetOutputPort("lgm_stack"), obs.GetInputPort("lgm_stack"))
+        b.Connect(nav.GetOutputPort("command"), obs.GetInputPort("last_action"))
+        b.ExportOutput(obs.GetOutputPort("observation"), "observation")
     if meshcat is not None:
         MeshcatVisualizer.AddToBuilder(
             b,

@@ -743,13 +743,19 @@ def _run_serial(
         torch.set_num_threads(threads)
 
 
-def _run_ray(
+def run_on_ray(
     spec: BenchmarkSpec,
     tasks: list[tuple[str, int]],
     on_result: Callable[[dict], None],
     workers: int | None,
     address: str | None,
+    worker_cls: type | None = None,
 ) -> None:
+    """Run `worker.run(method, seed)` for every task on Ray actors, `on_result` in the
+    order they finish. `worker_cls(spec, blobs)` (default: the benchmark's trial worker)
+    must offer `identity()` and `run(method, seed) -> dict`; the checkpoints of learned
+    methods reach workers on other machines as bytes."""
+    worker_cls = worker_cls or _RayWorker
     ray = _ray_init(workers or 1, address)
     try:
         if workers is None:  # a cluster: one worker per CPU it has
@@ -764,13 +770,13 @@ def _run_ray(
                 for m in spec.methods
                 if m.checkpoint is not None
             }
-            actor_cls = ray.remote(num_cpus=1)(_RayWorker)
+            actor_cls = ray.remote(num_cpus=1)(worker_cls)
             blobs_ref = ray.put(blobs)
             actors = [actor_cls.remote(spec, blobs_ref) for _ in range(workers)]
         else:
             # local workers read the checkpoints from their paths (hashes checked); a worker
             # that dies is restarted and its trials retried (they are deterministic)
-            actor_cls = ray.remote(num_cpus=1, max_restarts=2, max_task_retries=2)(_RayWorker)
+            actor_cls = ray.remote(num_cpus=1, max_restarts=2, max_task_retries=2)(worker_cls)
             actors = [actor_cls.remote(spec, {}) for _ in range(workers)]
         mine = package_identity(with_commit=False)["code_sha256"]
         for ident in ray.get([a.identity.remote() for a in actors]):
@@ -891,7 +897,7 @@ def run_benchmark(
                 if workers == 1 and not ray_address:
                     _run_serial(spec, tasks, on_result)
                 else:
-                    _run_ray(spec, tasks, on_result, workers, ray_address)
+                    run_on_ray(spec, tasks, on_result, workers, ray_address)
         except KeyboardInterrupt:
             bar.close()
             md = rd.write_tables(settings, all_trials, interrupted=True)

@@ -42,6 +42,13 @@ class DaggerConfig:
     num_frames: int = 9
     encoder: str = "cnn"
     mirror_augment: bool = True  # mirror half of every batch left-right (every kind)
+    # The robot of the training world and of the expert's predictions: "" = the paper's LIP;
+    # "digit" = the shipped Digit step-response model; or the path of a fitted model JSON
+    # (`emonav calibrate fit`). See core/step_response.py.
+    response: str = ""
+    # Start the student from this policy checkpoint ("" = from scratch; "shipped" = the
+    # shipped LGM policy); its network must be the one this configuration builds.
+    init_policy: str = ""
     heading_noise_prob: float = 0.5  # fraction of training episodes starting off course
     heading_noise: float = 1.5  # their initial heading error, uniform in ± this [rad]
     device: str = "cpu"

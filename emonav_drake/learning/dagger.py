@@ -57,11 +57,20 @@ from emonav_drake.core.navigation import (
     observation_dtype,
     observation_shape,
 )
-from emonav_drake.core.scenario import sample_scenario
+from emonav_drake.core.scenario import Scenario, sample_scenario
+from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.errors import RunInterrupted
+from emonav_drake.learning.calibration import load_response
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.networks import CategoricalPolicy
-from emonav_drake.learning.policy import build_encoder, encoder_spec, save_policy, vector_state
+from emonav_drake.learning.policy import (
+    DEFAULT_POLICY,
+    build_encoder,
+    encoder_spec,
+    load_policy,
+    save_policy,
+    vector_state,
+)
 from emonav_drake.learning.run_state import (
     DAGGER_FORMAT,
     InterruptGuard,
@@ -74,7 +83,7 @@ from emonav_drake.learning.run_state import (
     set_rng_state,
     write_run_state,
 )
-from emonav_drake.params import EmoNavConfig
+from emonav_drake.params import ConfigError, EmoNavConfig
 
 log = logging.getLogger(__name__)
 STATE_FILE = "dagger_state.pt"
@@ -197,6 +206,23 @@ class Student:
         self.device = cfg.device
         self.bounds = (env_cfg.robot.max_speed, env_cfg.robot.max_heading_change)
 
+    def load_weights(self, policy: str) -> None:
+        """Start from a trained policy ("shipped" = the shipped LGM policy, or a path);
+        `ConfigError` if its network or command grid is not this student's."""
+        path = DEFAULT_POLICY if policy == "shipped" else Path(policy)
+        model, meta = load_policy(path)
+        if meta["kind"] != "categorical" or meta["encoder"] != self.encoder_spec:
+            raise ConfigError(
+                f"init_policy {path}: its network ({meta['kind']}, encoder {meta['encoder']}) "
+                f"is not this configuration's (categorical, encoder {self.encoder_spec})"
+            )
+        if not np.allclose(np.asarray(meta["commands"]), self.commands):
+            raise ConfigError(f"init_policy {path}: its command grid is not the expert's")
+        try:
+            self.model.load_state_dict(model.state_dict())
+        except RuntimeError as e:
+            raise ConfigError(f"init_policy {path}: {str(e).splitlines()[0]}") from None
+
     @torch.no_grad()
     def act(self, stack: np.ndarray, state: np.ndarray) -> int:
         self.model.eval()
@@ -272,6 +298,7 @@ def run_episode_collect(
 ) -> str:
     """One episode; the student acts (expert with probability `beta`); label every state."""
     n = world.config.lidar.num_frames
+    expert.reset()  # a model-aware expert remembers the episode's commands
     obs = world.planner_input()
     frame_ids: list[int] = []
     if demos is not None:
@@ -300,14 +327,31 @@ def run_episode_collect(
         k += 1
 
 
-def evaluate_student(student: Student, env_cfg: EmoNavConfig, cfg: DaggerConfig) -> dict:
-    """The student alone on the held-out evaluation seeds."""
+def make_world(
+    scenario: Scenario,
+    env_cfg: EmoNavConfig,
+    cfg: DaggerConfig,
+    response: StepResponseModel | None,
+) -> NavigationWorld:
+    """The training world of the route: the LIP, or the calibrated robot of `response`."""
+    return NavigationWorld(
+        scenario, env_cfg, goal_radius=cfg.goal_radius, grid_kind=cfg.grid_kind, response=response
+    )
+
+
+def evaluate_student(
+    student: Student,
+    env_cfg: EmoNavConfig,
+    cfg: DaggerConfig,
+    response: StepResponseModel | None = None,
+) -> dict:
+    """The student alone on the held-out evaluation seeds (in the route's world)."""
     records = []
-    expert = DwaPlanner(env_cfg)
+    expert = DwaPlanner(env_cfg, response=response)
     rng = np.random.default_rng(0)
     for i in range(cfg.eval_episodes):
         sc = sample_scenario(cfg.eval_seed_offset + i, env_cfg)
-        world = NavigationWorld(sc, env_cfg, goal_radius=cfg.goal_radius, grid_kind=cfg.grid_kind)
+        world = make_world(sc, env_cfg, cfg, response)
         run_episode_collect(world, expert, student, 0.0, None, rng)
         records.append(world.record)
     return summarize(records)
@@ -365,9 +409,12 @@ def train_dagger(
     torch.set_num_threads(cfg.threads)
     torch.manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
-    expert = DwaPlanner(env_cfg)
+    response = load_response(cfg.response)
+    expert = DwaPlanner(env_cfg, response=response)
     commands = expert.candidates.copy()
     student = Student(cfg, env_cfg, commands)
+    if cfg.init_policy and not resume:
+        student.load_weights(cfg.init_policy)
     n_frames = env_cfg.lidar.num_frames
     frame_shape = observation_shape(cfg.grid_kind, env_cfg.lidar)[1:]
     demos = Demonstrations(FrameStore(frame_shape, dtype=observation_dtype(cfg.grid_kind).type))
@@ -448,9 +495,7 @@ def train_dagger(
                                 sc.robot_heading += float(
                                     rng.uniform(-cfg.heading_noise, cfg.heading_noise)
                                 )
-                            world = NavigationWorld(
-                                sc, env_cfg, goal_radius=cfg.goal_radius, grid_kind=cfg.grid_kind
-                            )
+                            world = make_world(sc, env_cfg, cfg, response)
                             outcome = run_episode_collect(
                                 world, expert, None if rnd == 0 else student, beta, demos, rng
                             )
@@ -486,7 +531,7 @@ def train_dagger(
                 t0 = time.perf_counter()
                 try:  # evaluation changes nothing: abandoned on Ctrl-C, run again on resume
                     with guard.abortable():
-                        summary = evaluate_student(student, env_cfg, cfg)
+                        summary = evaluate_student(student, env_cfg, cfg, response)
                 except KeyboardInterrupt:
                     break
                 entry = _round_entry(prog, summary, time.perf_counter() - t0, beta, len(demos))

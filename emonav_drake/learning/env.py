@@ -31,6 +31,41 @@ from emonav_drake.params import EmoNavConfig, load_config
 _BIT_GENERATORS = ("PCG64", "PCG64DXSM", "MT19937", "Philox", "SFC64")
 
 
+def map_key(grid_kind: str) -> str:
+    """The map observation's key: "lgm" for grid maps (LGM or OGM), "scan" for scans,
+    "image" for the DRL-VO* image."""
+    return {"scan": "scan", "drlvo": "image"}.get(grid_kind, "lgm")
+
+
+def navigation_spaces(config: EmoNavConfig, grid_kind: str) -> tuple[spaces.Dict, spaces.Box]:
+    """(observation space, action space) of the navigation task (module docstring); the
+    same for `EmoNavLIP-v0` and `EmoNavDigit-v0`."""
+    r, li = config.robot, config.lidar
+    n, m = li.num_frames, li.grid_size
+    if grid_kind == "drlvo":
+        map_space = spaces.Box(0, 255, shape=(1, 3, m, m), dtype=np.uint8)
+    elif grid_kind == "scan":
+        map_space = spaces.Box(0.0, li.max_range, shape=(n, li.num_beams), dtype=np.float32)
+    else:
+        map_space = spaces.Box(0, 255, shape=(n, m, m), dtype=np.uint8)
+    bounds = (
+        np.array([0.0, -r.max_heading_change], dtype=np.float32),
+        np.array([r.max_speed, r.max_heading_change], dtype=np.float32),
+    )
+    observation = spaces.Dict(
+        {
+            map_key(grid_kind): map_space,
+            "goal": spaces.Box(
+                np.array([0.0, -np.pi], dtype=np.float32),
+                np.array([1000.0, np.pi], dtype=np.float32),
+                dtype=np.float32,
+            ),
+            "last_action": spaces.Box(*bounds, dtype=np.float32),
+        }
+    )
+    return observation, spaces.Box(*bounds, dtype=np.float32)
+
+
 class EmoNavLIPEnv(gym.Env):
     """Emotion-aware social navigation with the LIP reduced-order robot.
 
@@ -58,36 +93,8 @@ class EmoNavLIPEnv(gym.Env):
         self.config = config.validate()
         self.grid_kind = grid_kind
         self.goal_radius = goal_radius
-        r, li = config.robot, config.lidar
-        n, m = li.num_frames, li.grid_size
-        # The map observation's key: "lgm" for grid maps (LGM or OGM), "scan" for scans.
-        self.map_key = {"scan": "scan", "drlvo": "image"}.get(grid_kind, "lgm")
-        if grid_kind == "drlvo":
-            map_space = spaces.Box(0, 255, shape=(1, 3, m, m), dtype=np.uint8)
-        elif grid_kind == "scan":
-            map_space = spaces.Box(0.0, li.max_range, shape=(n, li.num_beams), dtype=np.float32)
-        else:
-            map_space = spaces.Box(0, 255, shape=(n, m, m), dtype=np.uint8)
-        self.observation_space = spaces.Dict(
-            {
-                self.map_key: map_space,
-                "goal": spaces.Box(
-                    np.array([0.0, -np.pi], dtype=np.float32),
-                    np.array([1000.0, np.pi], dtype=np.float32),
-                    dtype=np.float32,
-                ),
-                "last_action": spaces.Box(
-                    np.array([0.0, -r.max_heading_change], dtype=np.float32),
-                    np.array([r.max_speed, r.max_heading_change], dtype=np.float32),
-                    dtype=np.float32,
-                ),
-            }
-        )
-        self.action_space = spaces.Box(
-            np.array([0.0, -r.max_heading_change], dtype=np.float32),
-            np.array([r.max_speed, r.max_heading_change], dtype=np.float32),
-            dtype=np.float32,
-        )
+        self.map_key = map_key(grid_kind)
+        self.observation_space, self.action_space = navigation_spaces(config, grid_kind)
         self.world: NavigationWorld | None = None
 
     def _observation(self) -> dict[str, np.ndarray]:

@@ -9,6 +9,8 @@ Input ports:
         (used by learned policies): uint8 (N, M, M) LGM/OGM stack, float32 (N, K) scan
         stack [m] or uint8 (1, 3, M, M) DRL-VO* image (`LidarGridMapBuilder`). May be
         left unconnected for planners that ignore it (DWA, MPC).
+    action (2, only when built without a planner): the command to store at the next
+        planner instant, (u_v [m/s], u_Δθ [rad]) — an external agent's action.
 Output port:
     command (2): (u_v [m/s], u_Δθ [rad]), the command of the walking step in progress: u_k
         during step k (t_k ≤ t < t_{k+1}); before the update at t_k it is still u_{k−1}.
@@ -90,12 +92,14 @@ class NavigationPlanner(LeafSystem):
 
     Args:
         planner: the planner (see `Planner`). The system keeps no planner memory outside
-            its Context, so one planner object may serve several contexts.
+            its Context, so one planner object may serve several contexts. None: the
+            system has an `action` input port (2) instead, whose value at t_k becomes u_k
+            (the Gymnasium env `EmoNavDigit-v0`).
         goal_xy: the robot's goal in the world frame [m].
         config: the step time T and the command bounds.
     """
 
-    def __init__(self, planner: Planner, goal_xy: np.ndarray, config: EmoNavConfig) -> None:
+    def __init__(self, planner: Planner | None, goal_xy: np.ndarray, config: EmoNavConfig) -> None:
         super().__init__()
         self.planner = planner
         self._goal = np.asarray(goal_xy, dtype=float)
@@ -106,9 +110,11 @@ class NavigationPlanner(LeafSystem):
         self._lgm = self.DeclareAbstractInputPort("lgm_stack", AbstractValue.Make(object()))
         self._command = self.DeclareDiscreteState(np.zeros(2))
         self._plan_log = self.DeclareDiscreteState(np.array([np.nan, 0.0, 0.0]))
-        self._memory = self.DeclareAbstractState(
-            AbstractValue.Make(copy.deepcopy(planner.initial_memory()))
-        )
+        memory = None if planner is None else planner.initial_memory()
+        self._memory = self.DeclareAbstractState(AbstractValue.Make(copy.deepcopy(memory)))
+        # Without a planner the command comes from outside (a Gymnasium agent): the
+        # `action` input, sampled at t_k exactly as a planner's answer would be stored.
+        self._action = None if planner is not None else self.DeclareVectorInputPort("action", 2)
         self.DeclareStateOutputPort("command", self._command)
         self.DeclarePeriodicUnrestrictedUpdateEvent(self.step_time, 0.0, self._plan)
 
@@ -136,8 +142,11 @@ class NavigationPlanner(LeafSystem):
 
     def _plan(self, context: Context, state: State) -> None:
         t = context.get_time()
-        obs = self.planner_input(context)
-        raw, memory = self.planner.plan_with_memory(obs, self.memory(context))
+        if self._action is not None:
+            raw, memory = self._action.Eval(context), None
+        else:
+            obs = self.planner_input(context)
+            raw, memory = self.planner.plan_with_memory(obs, self.memory(context))
         command, clipped = check_command(raw, self._robot_params, clip=True)
         _, plans, clips = self.plan_log(context)
         if clipped:

@@ -1,0 +1,79 @@
+"""`emonav calibrate`: Digit traces → the step-response model of the calibrated robot.
+
+emonav calibrate collect --planners dwa,sac --episodes 20 --first-seed 3000000
+                         [--explore 0.3] [--workers W] [--ray-address ADDR] --out TRACES
+emonav calibrate fit TRACES [TRACES …] [--held-out 0.25] --out MODEL.json
+
+See `emonav_drake/learning/calibration.py`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from emonav_drake.params import ConfigError
+
+
+def add_calibrate_parser(sub: argparse._SubParsersAction) -> None:
+    c = sub.add_parser(
+        "calibrate",
+        help="fit the Digit step-response model from traced Digit episodes",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    verbs = c.add_subparsers(dest="verb", required=True)
+    col = verbs.add_parser("collect", help="run traced, exploring Digit episodes (resumable)")
+    col.add_argument("--planners", default="dwa,sac", help="comma-separated planners")
+    col.add_argument("--episodes", type=int, default=20, help="episodes per planner (>= 1)")
+    col.add_argument(
+        "--first-seed",
+        type=int,
+        default=3_000_000,
+        help="episode i plays the scenario of seed first-seed + i (keep clear of the "
+        "evaluation seeds 0-499 and the training and selection seeds)",
+    )
+    col.add_argument(
+        "--explore", type=float, default=0.3, help="fraction of steps with a random command"
+    )
+    col.add_argument("--workers", type=int, default=1, help="parallel Ray workers (1: serial)")
+    col.add_argument("--ray-address", help="run on this Ray cluster")
+    col.add_argument("--out", type=Path, required=True, help="trace file (JSONL), extended")
+    col.set_defaults(func=cmd_collect)
+    fit = verbs.add_parser("fit", help="fit the model; report held-out errors")
+    fit.add_argument("traces", type=Path, nargs="+")
+    fit.add_argument("--held-out", type=float, default=0.25, help="fraction of episodes held out")
+    fit.add_argument("--out", type=Path, required=True, help="model + report (JSON)")
+    fit.set_defaults(func=cmd_fit)
+
+
+def cmd_collect(args: argparse.Namespace) -> int:
+    from emonav_drake.learning.calibration import collect_traces
+
+    if args.workers < 1:
+        raise ConfigError(f"--workers {args.workers}: must be >= 1")
+    summary = collect_traces(
+        args.out,
+        args.planners,
+        args.episodes,
+        args.first_seed,
+        explore=args.explore,
+        workers=args.workers,
+        ray_address=args.ray_address,
+    )
+    print(json.dumps(summary))
+    return 0
+
+
+def cmd_fit(args: argparse.Namespace) -> int:
+    from emonav_drake.atomic_io import check_output_file
+    from emonav_drake.learning.calibration import fit_response
+
+    for p in args.traces:
+        if not p.is_file():
+            raise ConfigError(f"{p}: no such trace file")
+    check_output_file(args.out, "--out")
+    report = fit_response(args.traces, args.held_out, args.out)
+    print(json.dumps({k: report[k] for k in ("fit", "held_out", "residual_std")}, indent=2))
+    return 0

@@ -1,0 +1,166 @@
+"""`EmoNavDigit-v0`: the navigation task on the full-order Digit as a Gymnasium environment.
+
+The Digit navigation diagram (`diagrams/navigation_digit.py`: Digit station, crowd, LiDAR
+grid maps, episode monitor) built for an external agent and driven through
+`pydrake.gym.DrakeGymEnv`: the agent's action enters the planner's `action` input and is
+stored at the next planner instant t_k exactly as a planner's command would be, the
+observation is the diagram's `observation` output (`systems.navigation_observation`).
+Observation and action spaces are `EmoNavLIP-v0`'s (`learning.env.navigation_spaces`),
+so a policy trained on one runs on the other; so are the reward (paper Eq. 6–9, the
+episode monitor's evaluation of the step), `terminated` (collision, goal, or a fall —
+the station's fall monitor) and `truncated` (time limit).
+
+One `step` advances the simulation by one walking step T = 0.4 s (about 400 plant steps
+of 1 ms and the 1 kHz controller). `reset(seed=s)` plays `sample_scenario(s)`, the
+scenario `emonav sim --plant digit --seed s` plays, from Digit standing at the start; a
+new diagram is built per episode (the crowd and the goal are part of it).
+`options={"scenario": Scenario}` plays a given one. An invalid action (NaN, out of the
+bounds of Eq. 2) raises `CommandError`, as in `EmoNavLIP-v0`; nothing is clipped.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from pydrake.common import RandomGenerator
+from pydrake.gym import DrakeGymEnv
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import Context
+
+from emonav_drake.core.navigation import check_command
+from emonav_drake.core.scenario import Scenario, sample_scenario
+from emonav_drake.learning.env import map_key, navigation_spaces
+from emonav_drake.params import EmoNavConfig, load_config
+
+
+class EmoNavDigitEnv(DrakeGymEnv):
+    """Emotion-aware social navigation with the full-order Digit (see the module).
+
+    Args:
+        config: an `EmoNavConfig`, a path to a YAML config, or None for the defaults.
+        grid_kind: the map observation, as `EmoNavLIPEnv` ("lgm", "ogm", "scan", "drlvo").
+        goal_radius: goal threshold [m]; default `config.episode.goal_radius`.
+    """
+
+    metadata = {"render_modes": []}
+
+    def __init__(
+        self,
+        config: EmoNavConfig | str | None = None,
+        grid_kind: str = "lgm",
+        goal_radius: float | None = None,
+    ) -> None:
+        if grid_kind not in ("lgm", "ogm", "scan", "drlvo"):
+            raise ValueError(f"grid_kind = {grid_kind!r}: must be 'lgm', 'ogm', 'scan' or 'drlvo'")
+        if config is None or isinstance(config, str):
+            config = load_config(config)
+        self.config = config.validate()
+        self.grid_kind = grid_kind
+        self.goal_radius = goal_radius
+        self.map_key = map_key(grid_kind)
+        observation_space, action_space = navigation_spaces(config, grid_kind)
+        self._scenario: Scenario | None = None
+        self._fallen = False
+        self.navigation = None  # the episode's `DigitNavigationDiagram`
+        super().__init__(
+            simulator=self._make_simulator,
+            time_step=config.robot.step_time,
+            action_space=action_space,
+            observation_space=observation_space,
+            reward=self._reward,
+            action_port_id="action",
+            observation_port_id="observation",
+            reset_handler=self._reset_handler,
+        )
+        self.render_mode = None
+
+    def _make_simulator(self, generator: RandomGenerator) -> Simulator:
+        from emonav_drake.diagrams.navigation_digit import build_digit_navigation_diagram
+
+        self.navigation = build_digit_navigation_diagram(
+            self._scenario, self.config, None, grid_kind=self.grid_kind,
+            goal_radius=self.goal_radius,
+        )  # fmt: skip
+        return Simulator(self.navigation.diagram)
+
+    def _reset_handler(self, simulator: Simulator, context: Context, seed: int | None) -> None:
+        # `DrakeGymEnv.reset` initialised, then set the default context (Digit standing at
+        # the start): initialise again from it, as a plain `Simulator` run does
+        simulator.Initialize()
+
+    def _status(self):
+        nd = self.navigation
+        ctx = self.simulator.get_context()
+        status = nd.monitor.GetOutputPort("status").Eval(nd.monitor.GetMyContextFromRoot(ctx))
+        fall = nd.station.GetOutputPort("fall").Eval(nd.station.GetMyContextFromRoot(ctx))
+        return status, fall
+
+    def _reward(self, system, context: Context) -> float:
+        status, _ = self._status()
+        return 0.0 if status.last_step is None else float(status.last_step.reward)
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict, dict]:
+        gym.Env.reset(self, seed=seed)  # seeds `np_random` (as `EmoNavLIP-v0` does)
+        scenario = (options or {}).get("scenario")
+        if scenario is None:
+            scenario_seed = seed if seed is not None else int(self.np_random.integers(2**31))
+            scenario = sample_scenario(scenario_seed, self.config)
+        elif not isinstance(scenario, Scenario):
+            raise TypeError(f"options['scenario'] must be a Scenario, got {type(scenario)}")
+        self._scenario = scenario.validate()
+        self._fallen = False
+        observation, info = super().reset(seed=seed)
+        return observation, {**info, "scenario_seed": scenario.seed}
+
+    def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
+        if self.navigation is None:
+            raise RuntimeError("call reset() before step()")
+        status, fall = self._status()
+        if status.done or fall.fallen or self._fallen:
+            raise RuntimeError("the episode has ended: call reset()")
+        command, _ = check_command(np.asarray(action, dtype=float), self.config.robot)
+        # `DrakeGymEnv.step` advances to t + T; summing T drifts off the planner's instants
+        # k·T in the last bits (and a 1 ms plant step with it): advance to k·T exactly
+        context = self.simulator.get_mutable_context()
+        T = self.config.robot.step_time
+        k = round(context.get_time() / T) + 1
+        self.action_port.FixValue(context, command)
+        try:
+            self.simulator.AdvanceTo(k * T)
+        except RuntimeError as e:  # the contact solver gives up only on a robot in a heap
+            return self._stopped(f"simulation stopped: {e}")
+        observation = self.observation_port.Eval(context)
+        reward = self._reward(self.simulator.get_system(), context)
+        status, fall = self._status()
+        record = status.record
+        outcome = "fall" if fall.fallen else (record.outcome if status.done else None)
+        info: dict[str, Any] = {"outcome": outcome}
+        if status.last_step is not None:
+            ev = status.last_step
+            info |= {
+                "collision": ev.collision,
+                "reached_goal": ev.reached_goal,
+                "in_discomfort": ev.in_discomfort,
+                "idt": ev.idt,
+            }
+        if outcome is not None:
+            rec = record.to_json()
+            if fall.fallen:
+                rec["outcome"], rec["fall_reason"] = "fall", fall.reason
+            info["episode_record"] = rec
+        terminated = outcome in ("success", "collision", "fall")
+        truncated = outcome == "timeout"
+        return observation, reward, terminated, truncated, info
+
+    def _stopped(self, reason: str) -> tuple[dict, float, bool, bool, dict]:
+        """The step after the simulation failed: a fall (an outcome, not a crash)."""
+        status, _ = self._status()
+        rec = status.record.to_json()
+        rec["outcome"], rec["fall_reason"] = "fall", reason
+        self._fallen = True
+        observation = self.observation_port.Eval(self.simulator.get_context())
+        return observation, 0.0, True, False, {"outcome": "fall", "episode_record": rec}
