@@ -125,6 +125,8 @@ class DwaParams:
     discomfort_weight: float = 3.0
     speed_weight: float = 0.1
     clearance_cap: float = 1.0  # clearance beyond this earns nothing more [m]
+    safety_margin: float = 0.05  # extra collision margin in the rollout [m]
+    hard_steps: int = 2  # predicted pedestrian contact within this many steps: rejected
 
 
 @dc.dataclass
@@ -363,6 +365,8 @@ _RANGES: dict[str, Any] = {
     "dwa.heading_samples": (2, 101),
     "dwa.horizon_steps": (1, 50),
     "dwa.clearance_cap": (0.01, 10.0),
+    "dwa.safety_margin": (0.0, 2.0),
+    "dwa.hard_steps": (1, 50),
     "walking.step_width": (0.1, 0.5),
     "walking.clearance": (0.01, 0.3),
     "walking.touchdown_speed": (0.0, 1.0),

@@ -32,7 +32,9 @@ def _tiny_run(root, name: str):
     cfg = load_typed_yaml(DaggerConfig, path=variant(name).config)
     cfg.expert_episodes, cfg.episodes_per_round, cfg.rounds = 2, 1, 1
     cfg.grad_steps_first, cfg.grad_steps_per_round, cfg.batch_size = 4, 2, 8
-    cfg.hidden, cfg.eval_episodes = 16, 1
+    cfg.eval_episodes = 1
+    if not cfg.init_policy:  # a warm start keeps the network of the policy it starts from
+        cfg.hidden = 16
     from emonav_drake.learning.dagger import train_dagger
 
     train_dagger(out, cfg.validate(), command=f"test {name}", variant=name)
@@ -71,7 +73,7 @@ def test_each_variant_trains_and_its_checkpoint_runs_on_both_plants(tiny_variant
 def test_variants_differ_from_the_shipped_route_by_observation_only():
     base = load_typed_yaml(DaggerConfig, path=variant("emobipednav").config)
     observation = {"grid_kind", "num_frames", "encoder"}
-    for name in VARIANTS:
+    for name in [n for n, v in VARIANTS.items() if v.route == "lip"]:
         cfg = load_typed_yaml(DaggerConfig, path=variant(name).config).validate()
         differ = {k for k, v in vars(cfg).items() if v != getattr(base, k) and k not in observation}
         assert not differ, f"{name} changes {differ}: not the same route"

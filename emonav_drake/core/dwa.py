@@ -8,8 +8,9 @@ stay put (privileged crowd state, as the baseline is model-based).
 
 Each candidate is checked at the middle and the end of every step:
 
-* it is rejected if it hits a static disc anywhere or a pedestrian within the first two
-  steps (the prediction is good that far); later predicted contacts cost a penalty;
+* it is rejected if it comes within `safety_margin` of a static disc anywhere or of a
+  pedestrian within the first `hard_steps` steps (the prediction is good that far);
+  later predicted contacts cost a penalty;
 * score = goal progress + clearance (capped) − discomfort intrusion + speed, weighted by
   `DwaParams`. Discomfort intrusion is how far the robot would enter the emotion-sized
   discomfort zones (pedestrian: d_emo; static: d_static) summed over the samples.
@@ -53,7 +54,6 @@ class ResponseMemory:
         return float((math.cos(th) * dx + math.sin(th) * dy) / step_time)
 
 
-_SAFETY = 0.05  # extra collision margin in the rollout [m]
 _LATE_COLLISION_PENALTY = 5.0
 
 
@@ -155,10 +155,11 @@ class DwaPlanner:
             np.linalg.norm(traj[:, :, None, :] - crowd.static_centers[None, None], axis=-1)
             - crowd.static_radii
         )
-        hit_static = (st_gap <= r_robot + _SAFETY).any(axis=(1, 2))
-        ped_hit = ped_gap <= r_robot + _SAFETY  # (C, S, P)
-        hit_early = ped_hit[:, :4].any(axis=(1, 2))  # first two steps
-        hit_late = ped_hit[:, 4:].any(axis=(1, 2))
+        margin, hard = r_robot + p.safety_margin, 2 * p.hard_steps
+        hit_static = (st_gap <= margin).any(axis=(1, 2))
+        ped_hit = ped_gap <= margin  # (C, S, P)
+        hit_early = ped_hit[:, :hard].any(axis=(1, 2))  # the first `hard_steps` steps
+        hit_late = ped_hit[:, hard:].any(axis=(1, 2))
         feasible = ~(hit_static | hit_early)
 
         all_gap = np.concatenate([ped_gap, st_gap], axis=2)

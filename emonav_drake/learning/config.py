@@ -49,6 +49,7 @@ class DaggerConfig:
     # Start the student from this policy checkpoint ("" = from scratch; "shipped" = the
     # shipped LGM policy); its network must be the one this configuration builds.
     init_policy: str = ""
+    expert_margin: float = 0.05  # the DWA expert's collision margin (`dwa.safety_margin`) [m]
     heading_noise_prob: float = 0.5  # fraction of training episodes starting off course
     heading_noise: float = 1.5  # their initial heading error, uniform in ± this [rad]
     device: str = "cpu"
@@ -162,6 +163,7 @@ _DAGGER_RANGES = {
     "heading_noise": (0.0, 3.1416),
     "threads": (1, 1024),
     "num_frames": (1, 64),
+    "expert_margin": (0.0, 2.0),
 }
 
 _SAC_RANGES = {

@@ -211,17 +211,25 @@ class Student:
         `ConfigError` if its network or command grid is not this student's."""
         path = DEFAULT_POLICY if policy == "shipped" else Path(policy)
         model, meta = load_policy(path)
-        if meta["kind"] != "categorical" or meta["encoder"] != self.encoder_spec:
+        ob = meta["observation"]
+        if meta["kind"] != "categorical" or (ob["grid_kind"], ob["num_frames"]) != (
+            self.grid_kind,
+            self.encoder_spec["frames"] // (3 if self.grid_kind == "drlvo" else 1),
+        ):
             raise ConfigError(
-                f"init_policy {path}: its network ({meta['kind']}, encoder {meta['encoder']}) "
-                f"is not this configuration's (categorical, encoder {self.encoder_spec})"
+                f"init_policy {path}: a {meta['kind']} policy on {ob['grid_kind']} x "
+                f"{ob['num_frames']} is not this configuration's student (categorical, "
+                f"{self.grid_kind})"
             )
         if not np.allclose(np.asarray(meta["commands"]), self.commands):
             raise ConfigError(f"init_policy {path}: its command grid is not the expert's")
         try:
             self.model.load_state_dict(model.state_dict())
-        except RuntimeError as e:
-            raise ConfigError(f"init_policy {path}: {str(e).splitlines()[0]}") from None
+        except RuntimeError as e:  # another network size (hidden, pool, filters)
+            raise ConfigError(
+                f"init_policy {path}: its network is not this configuration's: "
+                f"{str(e).splitlines()[0]}"
+            ) from None
 
     @torch.no_grad()
     def act(self, stack: np.ndarray, state: np.ndarray) -> int:
@@ -410,7 +418,9 @@ def train_dagger(
     torch.manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
     response = load_response(cfg.response)
-    expert = DwaPlanner(env_cfg, response=response)
+    expert_cfg = copy.deepcopy(env_cfg)
+    expert_cfg.dwa.safety_margin = cfg.expert_margin
+    expert = DwaPlanner(expert_cfg, response=response)
     commands = expert.candidates.copy()
     student = Student(cfg, env_cfg, commands)
     if cfg.init_policy and not resume:

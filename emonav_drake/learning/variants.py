@@ -16,6 +16,10 @@ planner name of `emonav sim|eval|benchmark` (`--planner NAME`, `--planners NAME,
 | `lidar_sac` | LiDAR-SAC | 9 raw scans, 1-D CNN |
 | `lndnl` | LNDNL | 9 raw scans, LSTM |
 | `drlvo` | DRL-VO* | scan OGM + pedestrian velocity maps (1 image) |
+| `emobipednav_digit` | EmoBipedNav, Digit/Digit | 9 LGMs; trained with Digit's dynamics |
+
+The last differs by its training world, not its observation: the shipped policy fine-tuned
+in the Digit-calibrated reduced world (`core/step_response.py`, `learning/calibration.py`).
 """
 
 from __future__ import annotations
@@ -39,12 +43,15 @@ class PolicyVariant:
         paper: the method's name in the paper's Table II.
         observation: what the policy sees, in words.
         checkpoint_file: the shipped policy file, relative to the package's `data/`.
+        route: "lip" (trained on the LIP world, the paper's LIP/·) or "digit" (trained
+            with Digit's dynamics through the calibrated world, Digit/Digit).
     """
 
     name: str
     paper: str
     observation: str
     checkpoint_file: str
+    route: str = "lip"  # the world it was trained in: "lip" or "digit" (calibrated)
 
     @property
     def config(self) -> Path:
@@ -71,6 +78,13 @@ VARIANTS: dict[str, PolicyVariant] = {
         PolicyVariant("lndnl", "LNDNL", "9 raw scans, LSTM", "policies/lndnl.pt"),
         PolicyVariant(
             "drlvo", "DRL-VO*", "scan OGM + pedestrian velocity maps", "policies/drlvo.pt"
+        ),
+        PolicyVariant(
+            "emobipednav_digit",
+            "EmoBipedNav (Digit/Digit)",
+            "9 LiDAR grid maps; trained with Digit's step response",
+            "policies/emobipednav_digit.pt",
+            route="digit",
         ),
     )
 }
