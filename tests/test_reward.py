@@ -3,7 +3,7 @@ import pytest
 
 from emonav_drake.core.crowd import CrowdSnapshot
 from emonav_drake.core.reward import evaluate_step
-from emonav_drake.params import HAPPY, NEGATIVE, RewardParams
+from emonav_drake.params import HAPPY, NEGATIVE, EmoNavConfig, RewardParams
 
 P = RewardParams()
 GOAL = np.array([4.0, 0.0])
@@ -63,3 +63,31 @@ def test_goal_reward_and_min_distance():
     ev = _eval([3.95, 0.0], _crowd(peds=[[0.0, 3.0]], emotions=[HAPPY]), prev=0.2)
     assert ev.reached_goal and ev.reward == pytest.approx(0.5)
     assert ev.min_ped_distance == pytest.approx(np.hypot(3.95, 3.0))
+
+
+def test_a_collision_names_what_was_hit():
+    import dataclasses as dc
+
+    from emonav_drake.core.metrics import EpisodeTracker
+
+    cfg = EmoNavConfig()
+    snap = CrowdSnapshot(
+        positions=np.array([[1.0, 0.0], [0.0, 3.0]]),
+        velocities=np.zeros((2, 2)),
+        radius=0.3,
+        emotions=np.array([2, 0]),
+        discomfort=np.array([0.5, 0.2]),
+        static_centers=np.array([[-2.0, 0.0]]),
+        static_radii=np.array([0.5]),
+        static_discomfort=0.2,
+    )
+    args = (np.array([8.0, 0.0]), 9.0, snap, cfg.robot.radius, 0.2, cfg.reward)
+    ev = evaluate_step(np.array([0.5, 0.0]), *args)  # 0.5 m from the negative pedestrian
+    assert ev.collision and ev.collided_with == "negative"
+    ev = evaluate_step(np.array([-1.3, 0.0]), *args)  # 0.2 m from the disc's edge
+    assert ev.collision and ev.collided_with == "static"
+    assert evaluate_step(np.array([0.0, -3.0]), *args).collided_with == ""
+    tracker = EpisodeTracker(10, 0.4)
+    tracker.add(dc.replace(ev), 0.1)
+    assert tracker.record.outcome == "collision"
+    assert tracker.record.to_json()["collided_with"] == "static"

@@ -35,12 +35,14 @@ class EpisodeRecord:
     total_reward: float = 0.0
     seed: int = -1
     fall_reason: str = ""  # why the full-order robot fell (outcome "fall" only)
+    collided_with: str = ""  # outcome "collision": "static" or the pedestrian's emotion
 
     def to_json(self) -> dict:
         d = dc.asdict(self)
         d["min_ped_distance"] = None if math.isinf(self.min_ped_distance) else self.min_ped_distance
-        if not self.fall_reason:
-            del d["fall_reason"]
+        for key in ("fall_reason", "collided_with"):
+            if not d[key]:
+                del d[key]
         return d
 
 
@@ -74,6 +76,7 @@ class EpisodeTracker:
         r.total_reward += ev.reward
         if ev.collision:
             r.outcome = COLLISION
+            r.collided_with = ev.collided_with
         elif ev.reached_goal:
             r.outcome = SUCCESS
         elif r.steps >= self.max_steps:

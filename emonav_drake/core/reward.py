@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.params import RewardParams
+from emonav_drake.params import EMOTION_NAMES, RewardParams
 
 # Indices of the IDT vector: [static; happy, neutral, negative].
 IDT_STATIC = 0
@@ -37,6 +37,7 @@ class StepEvaluation:
     idt: tuple[int, int, int, int]  # 1 where inside a zone of [static, happy, neutral, negative]
     min_ped_distance: float  # smallest robot–pedestrian centre distance [m] (inf if none)
     goal_distance: float  # [m]
+    collided_with: str = ""  # with a collision: "static", or the pedestrian's emotion
 
 
 def evaluate_step(
@@ -55,6 +56,12 @@ def evaluate_step(
     static_gap = np.linalg.norm(crowd.static_centers - robot_xy, axis=1) - crowd.static_radii
     all_gap = np.concatenate([ped_gap, static_gap])
     collision = bool(all_gap.size and all_gap.min() <= robot_radius)
+    collided_with = ""
+    if collision:
+        nearest = int(np.argmin(all_gap))
+        collided_with = (
+            EMOTION_NAMES[int(crowd.emotions[nearest])] if nearest < len(ped_gap) else "static"
+        )
     in_static = bool(static_gap.size and static_gap.min() < crowd.static_discomfort + robot_radius)
     in_ped = ped_gap < crowd.discomfort + robot_radius
     reached = goal_distance <= goal_radius
@@ -75,4 +82,5 @@ def evaluate_step(
         idt=(idt[0], idt[1], idt[2], idt[3]),
         min_ped_distance=float(ped_centre.min()) if ped_centre.size else math.inf,
         goal_distance=goal_distance,
+        collided_with=collided_with,
     )
