@@ -171,8 +171,35 @@ def add_benchmark_parser(subparsers: argparse._SubParsersAction) -> argparse.Arg
     b.add_argument("--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=cmd_benchmark)
 
+    d = subparsers.add_parser(
+        "diagnose",
+        help="why Digit trials failed: cause and tracking errors (re-simulates failures)",
+    )
+    d.add_argument("run", type=Path, help="a Digit benchmark run directory")
+    d.add_argument("--methods", help="comma-separated methods (default: all of the run)")
+    d.add_argument("--last", type=int, default=5, help="walking steps before the end (>= 1)")
+    d.add_argument(
+        "--reference", type=int, default=10, help="successful trials per method to compare"
+    )
+    d.add_argument("--out", type=Path, required=True, help="output directory")
+    d.set_defaults(func=cmd_diagnose)
+
     c = subparsers.add_parser("config", help="print the resolved configuration as YAML")
     c.add_argument("--show", action="store_true", help="print the configuration")
     _add_config_choice(c)
     c.set_defaults(func=cmd_config)
     return b
+
+
+def cmd_diagnose(args: argparse.Namespace) -> int:
+    from emonav_drake.evaluation.diagnosis import diagnose_run, diagnosis_table
+
+    if args.last < 1 or args.reference < 0:
+        raise ConfigError("--last must be >= 1 and --reference >= 0")
+    if not (args.run / "settings.json").is_file():
+        raise ConfigError(f"{args.run}: not a benchmark run directory (no settings.json)")
+    methods = args.methods.split(",") if args.methods else None
+    rows = diagnose_run(args.run, args.out, methods, args.last, args.reference)
+    print(diagnosis_table(rows))
+    print(f"written: {args.out}/diagnosis.json, diagnosis.md, diagnosis.png")
+    return 0

@@ -109,7 +109,7 @@ def transitions_from_trace(
     (forward CoM displacement over step k − 1) / T: the instantaneous sagittal speed of a
     walking robot swings within every step, and where the planner instant falls in that
     swing is not a state the navigation level can model. The first `skip` ≥ 1
-    transitions (standing start) and the last (the episode ends mid-step) are left out;
+    transitions (standing start) and the last (a fall ends an episode mid-step) are left out;
     the command before the first is zero (the robot stood).
     """
     if skip < 1:

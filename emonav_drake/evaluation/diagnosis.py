@@ -1,0 +1,213 @@
+"""Why trials fail on Digit: the cause of every failure and the tracking before it.
+
+    emonav diagnose benchmarks/results/digit_table2 [--methods sac] [--last 5]
+                    [--workers W] --out runs/diagnosis
+
+For every failed trial of a Digit benchmark run (outcome collision, timeout or fall), the
+trial is simulated again from its seed (the benchmark is deterministic: the same record,
+checked) with a trace of the robot and the held command at every planner instant. Each
+failure gets:
+
+* its cause: "collision: static" or "collision: <emotion>" (the pedestrian's emotion at
+  the collision), "fall: <reason>", "timeout";
+* the tracking over the last `last` walking steps before the end: per step, the distance
+  between where Digit's CoM went and where the planner's model (the LIP of Eq. 1, driven
+  by u_k) put it, and the heading error — the LIP/Digit discrepancy the planner did not
+  see — and the same for the calibrated model (`data/digit_response.json`);
+* the smallest pedestrian distance of the episode.
+
+Successful trials give the reference: the same errors over their last steps before the
+goal, from up to `reference` successful trials per method. `diagnosis.json` keeps every
+row; `diagnosis.md` the counts by cause and the error statistics; `diagnosis.png` the
+figure (causes by method, tracking errors before failures against successes).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+from emonav_drake.core import step_response as sr
+from emonav_drake.params import ConfigError, EmoNavConfig
+
+
+def failure_cause(record: dict) -> str:
+    """The cause of a trial's end in words (see the module)."""
+    outcome = record["outcome"]
+    if outcome == "collision":
+        return f"collision: {record.get('collided_with') or 'unknown'}"
+    if outcome == "fall":
+        return f"fall: {record.get('fall_reason') or 'unknown'}"
+    return outcome
+
+
+def tracking_errors(trace: list[dict], config: EmoNavConfig, last: int, model=None) -> dict:
+    """Per-step errors over the last `last` transitions of a trace: position [m] and
+    heading [rad] of the LIP driven by u_k (and of `model`, if given) against Digit."""
+    r = config.robot
+    data = sr.transitions_from_trace(trace, r.step_time, skip=1)
+    if len(data) == 0:
+        return {"steps": 0}
+    tail = data.select(np.arange(len(data)) >= len(data) - last)
+    lip = sr.lip_errors(tail, r.omega, r.step_time, 0)
+    out = {
+        "steps": len(tail),
+        "lip_position": np.hypot(lip[:, 0], lip[:, 1]).tolist(),
+        "lip_heading": np.abs(lip[:, 2]).tolist(),
+    }
+    if model is not None:
+        fit = sr.evaluate(model, tail)
+        out["model_position"] = np.hypot(fit[:, 0], fit[:, 1]).tolist()
+        out["model_heading"] = np.abs(fit[:, 2]).tolist()
+    return out
+
+
+def diagnose_trial(runner, method: str, seed: int, last: int, model) -> dict:
+    """Simulate one Digit trial again with a trace; its cause and tracking errors."""
+    from emonav_drake.core.scenario import sample_scenario
+    from emonav_drake.diagrams.navigation_digit import run_digit_episode
+
+    planner, cfg, grid_kind = runner.planner(method)
+    trace: list[dict] = []
+    record = run_digit_episode(
+        sample_scenario(seed, runner.config),
+        cfg,
+        planner,
+        grid_kind=grid_kind,
+        goal_radius=cfg.episode.eval_goal_radius,
+        trace=trace,
+    ).to_json()
+    return {
+        "method": method,
+        "seed": seed,
+        "outcome": record["outcome"],
+        "cause": failure_cause(record),
+        "steps": record["steps"],
+        "min_ped_distance": record.get("min_ped_distance"),
+        "tracking": tracking_errors(trace, cfg, last, model),
+        "record": record,
+    }
+
+
+def diagnose_run(
+    run_dir: str | Path,
+    out: str | Path,
+    methods: list[str] | None = None,
+    last: int = 5,
+    reference: int = 10,
+    progress: bool = True,
+) -> list[dict]:
+    """Diagnose every failure of a Digit benchmark run (module docstring)."""
+    from tqdm import tqdm
+
+    from emonav_drake.atomic_io import write_json, write_text_atomic
+    from emonav_drake.evaluation.benchmark import TrialRunner, load_run, spec_from_settings
+    from emonav_drake.learning.calibration import load_response
+
+    settings, trials = load_run(run_dir)
+    if settings["plant"] != "digit":
+        raise ConfigError(f"{run_dir} is a {settings['plant']} run: diagnose reads Digit runs")
+    methods = methods or list(settings["planners"])
+    unknown = set(methods) - set(settings["planners"])
+    if unknown:
+        raise ConfigError(f"--methods: {sorted(unknown)} not in the run ({settings['planners']})")
+    runner = TrialRunner(spec_from_settings(settings))
+    model = load_response("digit")
+    todo = []
+    for m in methods:
+        mine = sorted((t for t in trials if t["method"] == m), key=lambda t: t["seed"])
+        todo += [t for t in mine if t["record"]["outcome"] != "success"]
+        todo += [t for t in mine if t["record"]["outcome"] == "success"][:reference]
+    rows = []
+    for t in tqdm(todo, desc="re-simulating", unit="trial", disable=not progress):
+        row = diagnose_trial(runner, t["method"], t["seed"], last, model)
+        row["reproduced"] = row["record"]["outcome"] == t["record"]["outcome"] and (
+            row["record"]["steps"] == t["record"]["steps"]
+        )
+        rows.append(row)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(out / "diagnosis.json", rows)
+    write_text_atomic(out / "diagnosis.md", diagnosis_table(rows))
+    fig = plot_diagnosis(rows)
+    fig.savefig(out / "diagnosis.png", dpi=110)
+    return rows
+
+
+def diagnosis_table(rows: list[dict]) -> str:
+    """Markdown: failures by cause per method; tracking errors before failures and
+    before successes (median and 90th percentile over the last steps)."""
+    methods = sorted({r["method"] for r in rows})
+    lines = ["| method | failures | causes |", "|---|---|---|"]
+    for m in methods:
+        fails = [r for r in rows if r["method"] == m and r["outcome"] != "success"]
+        causes = Counter(r["cause"] for r in fails)
+        text = ", ".join(f"{c} {n}" for c, n in sorted(causes.items(), key=lambda x: -x[1]))
+        lines.append(f"| {m} | {len(fails)} | {text or '—'} |")
+    lines += [
+        "",
+        "| method | trials | LIP position error [cm] p50 / p90 | LIP heading error [mrad] "
+        "p50 / p90 | model position [cm] p50 / p90 | model heading [mrad] p50 / p90 |",
+        "|---|---|---|---|---|---|",
+    ]
+    for m in methods:
+        for label, ok in (("failures", False), ("successes", True)):
+            sel = [r for r in rows if r["method"] == m and (r["outcome"] == "success") == ok]
+            if not sel:
+                continue
+            cells = []
+            for key, scale in (
+                ("lip_position", 100),
+                ("lip_heading", 1000),
+                ("model_position", 100),
+                ("model_heading", 1000),
+            ):
+                v = np.concatenate([r["tracking"].get(key, []) for r in sel] or [[]]) * scale
+                cells.append(
+                    f"{np.percentile(v, 50):.1f} / {np.percentile(v, 90):.1f}" if v.size else "—"
+                )
+            lines.append(f"| {m} ({label}) | {len(sel)} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def plot_diagnosis(rows: list[dict]):
+    """Causes of failure per method; heading and position errors of the LIP prediction
+    over the last steps, before failures and before successes."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    methods = sorted({r["method"] for r in rows})
+    causes = sorted({r["cause"] for r in rows if r["outcome"] != "success"})
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4), constrained_layout=True)
+    ax = axes[0]
+    bottom = np.zeros(len(methods))
+    for c in causes:
+        n = np.array(
+            [sum(r["cause"] == c for r in rows if r["method"] == m) for m in methods], float
+        )
+        ax.bar(methods, n, bottom=bottom, label=c)
+        bottom += n
+    ax.set(ylabel="failed trials", title="causes of failure")
+    ax.legend(fontsize=8)
+    for ax, key, scale, unit in (
+        (axes[1], "lip_heading", 1000, "mrad"),
+        (axes[2], "lip_position", 100, "cm"),
+    ):
+        data, labels = [], []
+        for m in methods:
+            for label, ok in (("fail", False), ("success", True)):
+                sel = [r for r in rows if r["method"] == m and (r["outcome"] == "success") == ok]
+                v = np.concatenate([r["tracking"].get(key, []) for r in sel] or [[]]) * scale
+                data.append(v)
+                labels.append(f"{m}\n{label}")
+        ax.boxplot(data, tick_labels=labels, showfliers=False)
+        name = "heading" if "heading" in key else "position"
+        ax.set(
+            ylabel=f"{name} error per step [{unit}]",
+            title=f"LIP prediction vs Digit, last steps: {name}",
+        )
+    return fig
