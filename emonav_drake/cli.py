@@ -425,7 +425,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_benchmark_parser(sub)
     from emonav_drake.learning.cli_calibrate import add_calibrate_parser
 
-    add_calibrate_parser(sub)
+    add_calibrate_parser(sub)  # also `emonav digit-rounds`
     for name, parser in sub.choices.items():
         if name not in ("sim", "eval", "lgm"):
             parser.add_argument(

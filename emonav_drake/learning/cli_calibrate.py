@@ -3,6 +3,7 @@
 emonav calibrate collect --planners dwa,sac --episodes 20 --first-seed 3000000
                          [--explore 0.3] [--workers W] [--ray-address ADDR] --out TRACES
 emonav calibrate fit TRACES [TRACES …] [--held-out 0.25] --out MODEL.json
+emonav digit-rounds --from RUN --rounds 2 --episodes 60 [--workers W] --out DIR [--resume]
 
 See `emonav_drake/learning/calibration.py`.
 """
@@ -47,6 +48,28 @@ def add_calibrate_parser(sub: argparse._SubParsersAction) -> None:
     fit.add_argument("--out", type=Path, required=True, help="model + report (JSON)")
     fit.set_defaults(func=cmd_fit)
 
+    r = sub.add_parser(
+        "digit-rounds",
+        help="DAgger rounds on the full-order Digit after the calibrated route (Ray)",
+    )
+    r.add_argument(
+        "--from",
+        dest="source",
+        type=Path,
+        required=True,
+        help="the calibrated DAgger run (its dagger_state.pt and policy.pt)",
+    )
+    r.add_argument("--rounds", type=int, default=2)
+    r.add_argument("--episodes", type=int, default=60, help="Digit episodes per round")
+    r.add_argument("--first-seed", type=int, default=4_000_000)
+    r.add_argument("--beta", type=float, default=0.25, help="expert-acting probability, round 0")
+    r.add_argument("--grad-steps", type=int, default=1500)
+    r.add_argument("--workers", type=int, default=1)
+    r.add_argument("--ray-address")
+    r.add_argument("--out", type=Path, required=True)
+    r.add_argument("--resume", action="store_true", help="continue the rounds in --out")
+    r.set_defaults(func=cmd_digit_rounds)
+
 
 def cmd_collect(args: argparse.Namespace) -> int:
     from emonav_drake.learning.calibration import collect_traces
@@ -76,4 +99,25 @@ def cmd_fit(args: argparse.Namespace) -> int:
     check_output_file(args.out, "--out")
     report = fit_response(args.traces, args.held_out, args.out)
     print(json.dumps({k: report[k] for k in ("fit", "held_out", "residual_std")}, indent=2))
+    return 0
+
+
+def cmd_digit_rounds(args: argparse.Namespace) -> int:
+    from emonav_drake.learning.digit_dagger import DigitRoundsConfig, run_digit_rounds
+
+    if min(args.rounds, args.episodes, args.grad_steps, args.workers) < 1:
+        raise ConfigError("--rounds, --episodes, --grad-steps and --workers must be >= 1")
+    if not (args.source / "dagger_state.pt").is_file():
+        raise ConfigError(f"--from {args.source}: no DAgger run there (dagger_state.pt)")
+    cfg = DigitRoundsConfig(
+        rounds=args.rounds,
+        episodes=args.episodes,
+        first_seed=args.first_seed,
+        beta=args.beta,
+        grad_steps=args.grad_steps,
+    )
+    policy = run_digit_rounds(
+        args.out, args.source, cfg, args.workers, args.ray_address, resume=args.resume
+    )
+    print(f"policy written to {policy}")
     return 0

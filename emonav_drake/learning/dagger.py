@@ -247,7 +247,16 @@ class Student:
         mirror: np.ndarray | None = None,
     ) -> torch.Tensor:
         """Cross-entropy on a batch; rows where `mirror` is True are mirrored left↔right."""
-        stacks = frames[windows]
+        return self.loss_on_stacks(frames[windows], states, labels, mirror)
+
+    def loss_on_stacks(
+        self,
+        stacks: np.ndarray,
+        states: np.ndarray,
+        labels: np.ndarray,
+        mirror: np.ndarray | None = None,
+    ) -> torch.Tensor:
+        """`loss` on gathered observation stacks (B, …)."""
         if mirror is not None and mirror.any():
             stacks, states, labels = stacks.copy(), states.copy(), labels.copy()
             stacks[mirror] = mirror_observation(stacks[mirror], self.grid_kind)

@@ -1,0 +1,325 @@
+"""DAgger rounds on the full-order Digit: the student acts in the Digit diagram, the expert
+that plans with Digit's step response labels every planner instant.
+
+    emonav digit-rounds --from runs/emobipednav_digit --rounds 2 --episodes 60 \\
+        --first-seed 4000000 --workers 2 --out runs/digit_rounds [--resume]
+
+The calibrated route (`configs/variants/emobipednav_digit.yaml`) learns in a reduced world
+fitted to Digit; these rounds close what the fit misses. Each round:
+
+1. **collect** `episodes` Digit navigation episodes (the whole diagram: station, crowd,
+   LiDAR grid maps) on seeds `first_seed + round·episodes + i`, one per Ray task. The
+   planner is `LabellingPlanner`: at every t_k it asks the model-aware DWA expert
+   (`DwaPlanner(response=digit model)`, margin `expert_margin`) for its command, records
+   the newest observation frame, the vector state and the expert's label, and sends the
+   student's command (the expert's with probability β, drawn per (seed, step));
+2. **aggregate** the new samples with the calibrated run's demonstrations (its
+   `dagger_state.pt`) and the earlier Digit rounds';
+3. **train** the student, from the previous round's weights, for `grad_steps` minibatch
+   steps in which a fraction `digit_fraction` of every batch comes from Digit samples;
+4. **save** `policy_round<r>.pt` (with provenance) and `digit_rounds.pt` (the Digit
+   samples, the student and its optimiser, the round: `--resume` continues from it).
+
+Each round's policy is evaluated on Digit by `emonav benchmark` (the learning curve);
+nothing here looks at evaluation seeds.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses as dc
+import time
+from pathlib import Path
+
+import numpy as np
+
+from emonav_drake.core.dwa import DwaPlanner
+from emonav_drake.learning.policy import vector_state
+from emonav_drake.params import ConfigError
+
+DIGIT_ROUNDS_FORMAT = "emonav-digit-dagger/1"
+STATE_FILE = "digit_rounds.pt"
+ACT_SALT = 0xDA6
+
+
+class LabellingPlanner:
+    """The student acting on Digit while the expert labels (see the module).
+
+    Records, as a side effect, one sample per planner instant (the diagram calls
+    `plan_with_memory` exactly once per instant, in order): `frames` (the newest frame of
+    the observation stack), `states` (the vector state) and `labels` (the expert's
+    command index). Its memory is the expert's.
+    """
+
+    name = "labelling"
+
+    def __init__(self, student, expert: DwaPlanner, beta: float, seed: int) -> None:
+        self.student, self.expert, self.beta, self.seed = student, expert, beta, seed
+        self.commands = student.commands
+        self.grid_kind = student.grid_kind
+        self.expected_shape = student.expected_shape
+        self.expected_dtype = student.expected_dtype
+        self.frames: list[np.ndarray] = []
+        self.states: list[np.ndarray] = []
+        self.labels: list[int] = []
+
+    def initial_memory(self):
+        return self.expert.initial_memory()
+
+    def plan_with_memory(self, obs, memory):
+        from emonav_drake.learning.dagger import command_index
+
+        expert_cmd, memory = self.expert.plan_with_memory(obs, memory)
+        label = command_index(self.commands, expert_cmd)
+        self.frames.append(np.array(obs.lgm_stack[-1]))
+        self.states.append(vector_state(obs.goal_state(), obs.last_command, self.student.bounds))
+        self.labels.append(label)
+        rng = np.random.default_rng([ACT_SALT, self.seed, obs.step])
+        if rng.random() < self.beta:
+            return self.commands[label].copy(), memory
+        return self.student.plan(obs), memory
+
+
+class _RoundWorker:
+    """Ray actor (and the serial runner): one labelled Digit episode per task."""
+
+    beta = 0.0
+    expert_margin = 0.1
+
+    def __init__(self, spec, blobs) -> None:
+        import logging
+
+        import torch
+
+        from emonav_drake.evaluation.benchmark import TrialRunner
+
+        torch.set_num_threads(1)
+        logging.getLogger("drake").setLevel(logging.WARNING)
+        self.runner = TrialRunner(spec, blobs)
+
+    def identity(self) -> dict:
+        from emonav_drake.evaluation.benchmark import package_identity
+
+        return package_identity(with_commit=False)
+
+    def run(self, method: str, seed: int) -> dict:
+        from emonav_drake.core.scenario import sample_scenario
+        from emonav_drake.diagrams.navigation_digit import run_digit_episode
+        from emonav_drake.learning.calibration import load_response
+
+        student, cfg, grid_kind = self.runner.planner(method)
+        expert_cfg = copy.deepcopy(cfg)
+        expert_cfg.dwa.safety_margin = self.expert_margin
+        expert = DwaPlanner(expert_cfg, response=load_response("digit"))
+        planner = LabellingPlanner(student, expert, self.beta, seed)
+        t0 = time.perf_counter()
+        record = run_digit_episode(
+            sample_scenario(seed, self.runner.config), cfg, planner, grid_kind=grid_kind
+        )
+        return {
+            "method": method,
+            "seed": seed,
+            "outcome": record.outcome,
+            "wall_seconds": time.perf_counter() - t0,
+            "frames": np.asarray(planner.frames),
+            "states": np.asarray(planner.states, np.float32).reshape(-1, 4),
+            "labels": np.asarray(planner.labels, np.int64),
+        }
+
+
+@dc.dataclass
+class DigitRoundsConfig:
+    """Settings of the Digit rounds (the command line's)."""
+
+    rounds: int = 2
+    episodes: int = 60  # Digit episodes per round
+    first_seed: int = 4_000_000
+    beta: float = 0.25  # the expert acts with this probability (halved every round)
+    grad_steps: int = 1500
+    batch_size: int = 64
+    digit_fraction: float = 0.5  # of every batch from Digit samples
+    expert_margin: float = 0.1
+    seed: int = 0
+
+
+def collect_round(
+    policy: Path,
+    cfg: DigitRoundsConfig,
+    rnd: int,
+    workers: int,
+    ray_address: str | None,
+    env_config=None,
+) -> list[dict]:
+    """The labelled Digit episodes of round `rnd`, sorted by seed (serial = parallel)."""
+    from emonav_drake.evaluation.benchmark import BenchmarkSpec, MethodSpec, run_on_ray, sha256_file
+    from emonav_drake.params import EmoNavConfig, dump_config
+
+    spec = BenchmarkSpec(
+        [MethodSpec("student", "sac", str(policy), sha256_file(policy))],
+        "digit",
+        dump_config(env_config or EmoNavConfig()),
+    )
+    beta = cfg.beta * 0.5**rnd
+    worker_cls = type(
+        "_Worker", (_RoundWorker,), {"beta": beta, "expert_margin": cfg.expert_margin}
+    )
+    first = cfg.first_seed + rnd * cfg.episodes
+    tasks = [("student", first + i) for i in range(cfg.episodes)]
+    results: list[dict] = []
+    if workers <= 1 and ray_address is None:
+        w = worker_cls(spec, {})
+        results = [w.run(m, s) for m, s in tasks]
+    else:
+        run_on_ray(spec, tasks, results.append, workers, ray_address, worker_cls=worker_cls)
+    return sorted(results, key=lambda r: r["seed"])
+
+
+def episodes_to_demos(episodes: list[dict], demos, num_frames: int) -> None:
+    """Append labelled episodes to `Demonstrations` (windows as the LIP route builds them)."""
+    for ep in episodes:
+        ids = [demos.store.add(f) for f in ep["frames"]]
+        for k in range(len(ids)):
+            window = [ids[max(0, k - num_frames + 1 + j)] for j in range(num_frames)]
+            demos.windows.append(np.asarray(window, np.int64))
+            demos.states.append(ep["states"][k])
+            demos.labels.append(int(ep["labels"][k]))
+
+
+def run_digit_rounds(
+    out: str | Path,
+    source: str | Path,
+    cfg: DigitRoundsConfig,
+    workers: int = 1,
+    ray_address: str | None = None,
+    resume: bool = False,
+    env_config=None,
+) -> Path:
+    """Digit rounds after the calibrated run in `source` (module docstring); returns the
+    last round's policy. `env_config`: the episodes' navigation configuration (default:
+    the defaults)."""
+    import torch
+
+    from emonav_drake.learning.config import DaggerConfig
+    from emonav_drake.learning.dagger import STATE_FILE as SOURCE_STATE
+    from emonav_drake.learning.dagger import Demonstrations, FrameStore, Student
+    from emonav_drake.learning.policy import save_policy
+    from emonav_drake.learning.run_state import (
+        DAGGER_FORMAT,
+        read_run_state,
+        write_run_state,
+    )
+    from emonav_drake.params import EmoNavConfig
+
+    out, source = Path(out), Path(source)
+    saved, _ = read_run_state(source / SOURCE_STATE, DAGGER_FORMAT)
+    dcfg = DaggerConfig(**saved["config"])
+    env_cfg = EmoNavConfig()
+    env_cfg.lidar.num_frames = dcfg.num_frames
+    n = dcfg.num_frames
+    shape = saved["demos"]["frames"].shape[1:]
+    calibrated = Demonstrations(FrameStore(shape))
+    calibrated.load_plain(saved["demos"], n)
+    digit = Demonstrations(FrameStore(shape))
+    commands = DwaPlanner(env_cfg).candidates.copy()
+    student = Student(dcfg, env_cfg, commands)
+    start_policy = source / "policy.pt"
+    student.load_weights(str(start_policy))
+    rnd, history = 0, []
+    if resume:
+        state, tensors = read_run_state(out / STATE_FILE, DIGIT_ROUNDS_FORMAT)
+        digit.load_plain(state["demos"], n)
+        student.model.load_state_dict(tensors["model"])
+        student.optim.load_state_dict(tensors["optim"])
+        rnd, history = int(state["round"]), list(state["history"])
+    out.mkdir(parents=True, exist_ok=True)
+    torch.manual_seed(cfg.seed + rnd)
+    rng = np.random.default_rng([cfg.seed, rnd])
+    policy = out / f"policy_round{rnd - 1}.pt" if rnd else start_policy
+    while rnd < cfg.rounds:
+        t0 = time.perf_counter()
+        episodes = collect_round(policy, cfg, rnd, workers, ray_address, env_config)
+        collect_s = time.perf_counter() - t0
+        episodes_to_demos(episodes, digit, n)
+        t0 = time.perf_counter()
+        losses = _train_mixed(student, calibrated, digit, cfg, rng)
+        train_s = time.perf_counter() - t0
+        outcomes = [e["outcome"] for e in episodes]
+        entry = {
+            "round": rnd,
+            "beta": cfg.beta * 0.5**rnd,
+            "episodes": len(episodes),
+            "seeds": [episodes[0]["seed"], episodes[-1]["seed"]],
+            "rollout_success": outcomes.count("success") / len(outcomes),
+            "digit_samples": len(digit),
+            "loss": float(np.mean(losses[-100:])),
+            "collect_s": round(collect_s, 1),
+            "train_s": round(train_s, 1),
+            "digit_steps_per_second_per_worker": round(
+                sum(len(e["labels"]) for e in episodes)
+                / max(1e-9, sum(e["wall_seconds"] for e in episodes)),
+                3,
+            ),
+        }
+        history.append(entry)
+        print(
+            f"Digit round {rnd}: {len(episodes)} episodes (student SR with β = "
+            f"{entry['beta']:.3f}: {entry['rollout_success']:.2f}), {len(digit)} Digit samples, "
+            f"loss {entry['loss']:.3f} [{collect_s:.0f}+{train_s:.0f} s]",
+            flush=True,
+        )
+        meta = _policy_meta(start_policy)
+        meta["provenance"] = {
+            "route": "dagger+digit",
+            "source": str(source),
+            "round": rnd,
+            "config": dc.asdict(cfg),
+            "history": history,
+        }
+        policy = out / f"policy_round{rnd}.pt"
+        save_policy(policy, student.model, meta)
+        rnd += 1
+        write_run_state(
+            out / STATE_FILE,
+            DIGIT_ROUNDS_FORMAT,
+            {
+                "round": rnd,
+                "history": history,
+                "demos": digit.to_plain(n),
+                "config": dc.asdict(cfg),
+            },
+            {"model": student.model.state_dict(), "optim": student.optim.state_dict()},
+        )
+    return policy
+
+
+def _policy_meta(path: Path) -> dict:
+    """The metadata of the policy the rounds start from (network, observation, commands)."""
+    from emonav_drake.learning.policy import load_policy
+
+    _, meta = load_policy(path)
+    return {k: v for k, v in meta.items() if k not in ("state_dict", "format", "provenance")}
+
+
+def _train_mixed(student, calibrated, digit, cfg: DigitRoundsConfig, rng) -> list[float]:
+    """`grad_steps` updates; each batch: `digit_fraction` Digit samples, the rest calibrated."""
+    if len(digit) == 0:
+        raise ConfigError("no Digit samples collected")
+    cw, cs, cl = calibrated.arrays()
+    dw, ds, dl = digit.arrays()
+    n_digit = max(1, round(cfg.digit_fraction * cfg.batch_size))
+    n_cal = cfg.batch_size - n_digit
+    losses = []
+    student.model.train()
+    for _ in range(cfg.grad_steps):
+        i = rng.integers(0, len(dl), n_digit)
+        j = rng.integers(0, len(cl), n_cal)
+        stacks = np.concatenate([digit.store.frames[dw[i]], calibrated.store.frames[cw[j]]])
+        states = np.concatenate([ds[i], cs[j]])
+        labels = np.concatenate([dl[i], cl[j]])
+        mirror = rng.random(len(labels)) < 0.5 if student.mirror_augment else None
+        loss = student.loss_on_stacks(stacks, states, labels, mirror)
+        student.optim.zero_grad(set_to_none=True)
+        loss.backward()
+        student.optim.step()
+        losses.append(loss.item())
+    return losses
