@@ -266,8 +266,10 @@ class TrialRunner:
         }
 
 
-class _RayWorker:
-    """The Ray actor: one `TrialRunner` per worker process (planners built once)."""
+class RayTrialWorker:
+    """The Ray actor: one `TrialRunner` per worker process (planners built once). Other
+    per-episode jobs on Digit subclass it and override `run` (`learning/calibration.py`,
+    `learning/digit_dagger.py`)."""
 
     def __init__(self, spec: BenchmarkSpec, blobs: dict[str, bytes]) -> None:
         import torch
@@ -755,7 +757,7 @@ def run_on_ray(
     order they finish. `worker_cls(spec, blobs)` (default: the benchmark's trial worker)
     must offer `identity()` and `run(method, seed) -> dict`; the checkpoints of learned
     methods reach workers on other machines as bytes."""
-    worker_cls = worker_cls or _RayWorker
+    worker_cls = worker_cls or RayTrialWorker
     ray = _ray_init(workers or 1, address)
     try:
         if workers is None:  # a cluster: one worker per CPU it has

@@ -114,29 +114,15 @@ def _trace_episode(runner, method: str, seed: int, explore: float) -> dict:
     }
 
 
-class _TraceWorker:
-    """Ray actor: planners built once per worker, one traced episode per task."""
+def _trace_worker(explore: float) -> type:
+    """The Ray actor class of `collect_traces`: one traced episode per task."""
+    from emonav_drake.evaluation.benchmark import RayTrialWorker
 
-    explore = 0.0
+    class TraceWorker(RayTrialWorker):
+        def run(self, method: str, seed: int) -> dict:
+            return _trace_episode(self.runner, method, seed, explore)
 
-    def __init__(self, spec, blobs) -> None:
-        import logging
-
-        import torch
-
-        from emonav_drake.evaluation.benchmark import TrialRunner
-
-        torch.set_num_threads(1)
-        logging.getLogger("drake").setLevel(logging.WARNING)
-        self.runner = TrialRunner(spec, blobs)
-
-    def identity(self) -> dict:
-        from emonav_drake.evaluation.benchmark import package_identity
-
-        return package_identity(with_commit=False)
-
-    def run(self, method: str, seed: int) -> dict:
-        return _trace_episode(self.runner, method, seed, self.explore)
+    return TraceWorker
 
 
 def collect_traces(
@@ -203,8 +189,7 @@ def collect_traces(
         for method, seed in tasks:
             keep(_trace_episode(runner, method, seed, explore))
     elif tasks:
-        worker_cls = type("_Worker", (_TraceWorker,), {"explore": explore})
-        run_on_ray(spec, tasks, keep, workers, ray_address, worker_cls=worker_cls)
+        run_on_ray(spec, tasks, keep, workers, ray_address, worker_cls=_trace_worker(explore))
     bar.close()
     wall = time.perf_counter() - t0
     steps = sum(h["steps"] for h in new)

@@ -291,7 +291,10 @@ class Student:
         windows, states, labels = demos.arrays()
         frames = demos.store.frames
         self.model.train()
-        for _ in tqdm(range(done, steps), desc=desc, unit="upd", leave=False, initial=done):
+        bar = tqdm(
+            range(done, steps), desc=desc, unit="upd", leave=False, initial=done, total=steps
+        )
+        for _ in bar:
             idx = rng.integers(0, len(labels), batch)
             mirror = rng.random(batch) < 0.5 if self.mirror_augment else None
             loss = self.loss(frames, windows[idx], states[idx], labels[idx], mirror)

@@ -80,51 +80,41 @@ class LabellingPlanner:
         return self.student.plan(obs), memory
 
 
-class _RoundWorker:
-    """Ray actor (and the serial runner): one labelled Digit episode per task."""
+def _round_worker(beta: float, expert_margin: float) -> type:
+    """The Ray actor class of `collect_round`: one labelled Digit episode per task."""
+    from emonav_drake.evaluation.benchmark import RayTrialWorker
 
-    beta = 0.0
-    expert_margin = 0.1
+    class RoundWorker(RayTrialWorker):
+        def run(self, method: str, seed: int) -> dict:
+            return _labelled_episode(self.runner, method, seed, beta, expert_margin)
 
-    def __init__(self, spec, blobs) -> None:
-        import logging
+    return RoundWorker
 
-        import torch
 
-        from emonav_drake.evaluation.benchmark import TrialRunner
+def _labelled_episode(runner, method: str, seed: int, beta: float, margin: float) -> dict:
+    """One Digit episode of the student (`runner`'s method) labelled by the expert."""
+    from emonav_drake.core.scenario import sample_scenario
+    from emonav_drake.diagrams.navigation_digit import run_digit_episode
+    from emonav_drake.learning.calibration import load_response
 
-        torch.set_num_threads(1)
-        logging.getLogger("drake").setLevel(logging.WARNING)
-        self.runner = TrialRunner(spec, blobs)
-
-    def identity(self) -> dict:
-        from emonav_drake.evaluation.benchmark import package_identity
-
-        return package_identity(with_commit=False)
-
-    def run(self, method: str, seed: int) -> dict:
-        from emonav_drake.core.scenario import sample_scenario
-        from emonav_drake.diagrams.navigation_digit import run_digit_episode
-        from emonav_drake.learning.calibration import load_response
-
-        student, cfg, grid_kind = self.runner.planner(method)
-        expert_cfg = copy.deepcopy(cfg)
-        expert_cfg.dwa.safety_margin = self.expert_margin
-        expert = DwaPlanner(expert_cfg, response=load_response("digit"))
-        planner = LabellingPlanner(student, expert, self.beta, seed)
-        t0 = time.perf_counter()
-        record = run_digit_episode(
-            sample_scenario(seed, self.runner.config), cfg, planner, grid_kind=grid_kind
-        )
-        return {
-            "method": method,
-            "seed": seed,
-            "outcome": record.outcome,
-            "wall_seconds": time.perf_counter() - t0,
-            "frames": np.asarray(planner.frames),
-            "states": np.asarray(planner.states, np.float32).reshape(-1, 4),
-            "labels": np.asarray(planner.labels, np.int64),
-        }
+    student, cfg, grid_kind = runner.planner(method)
+    expert_cfg = copy.deepcopy(cfg)
+    expert_cfg.dwa.safety_margin = margin
+    expert = DwaPlanner(expert_cfg, response=load_response("digit"))
+    planner = LabellingPlanner(student, expert, beta, seed)
+    t0 = time.perf_counter()
+    record = run_digit_episode(
+        sample_scenario(seed, runner.config), cfg, planner, grid_kind=grid_kind
+    )
+    return {
+        "method": method,
+        "seed": seed,
+        "outcome": record.outcome,
+        "wall_seconds": time.perf_counter() - t0,
+        "frames": np.asarray(planner.frames),
+        "states": np.asarray(planner.states, np.float32).reshape(-1, 4),
+        "labels": np.asarray(planner.labels, np.int64),
+    }
 
 
 @dc.dataclass
@@ -151,7 +141,13 @@ def collect_round(
     env_config=None,
 ) -> list[dict]:
     """The labelled Digit episodes of round `rnd`, sorted by seed (serial = parallel)."""
-    from emonav_drake.evaluation.benchmark import BenchmarkSpec, MethodSpec, run_on_ray, sha256_file
+    from emonav_drake.evaluation.benchmark import (
+        BenchmarkSpec,
+        MethodSpec,
+        TrialRunner,
+        run_on_ray,
+        sha256_file,
+    )
     from emonav_drake.params import EmoNavConfig, dump_config
 
     spec = BenchmarkSpec(
@@ -160,15 +156,13 @@ def collect_round(
         dump_config(env_config or EmoNavConfig()),
     )
     beta = cfg.beta * 0.5**rnd
-    worker_cls = type(
-        "_Worker", (_RoundWorker,), {"beta": beta, "expert_margin": cfg.expert_margin}
-    )
+    worker_cls = _round_worker(beta, cfg.expert_margin)
     first = cfg.first_seed + rnd * cfg.episodes
     tasks = [("student", first + i) for i in range(cfg.episodes)]
     results: list[dict] = []
     if workers <= 1 and ray_address is None:
-        w = worker_cls(spec, {})
-        results = [w.run(m, s) for m, s in tasks]
+        runner = TrialRunner(spec)
+        results = [_labelled_episode(runner, m, s, beta, cfg.expert_margin) for m, s in tasks]
     else:
         run_on_ray(spec, tasks, results.append, workers, ray_address, worker_cls=worker_cls)
     return sorted(results, key=lambda r: r["seed"])
