@@ -31,8 +31,8 @@ from pydrake.systems.framework import Context
 
 from emonav_drake.core.navigation import check_command
 from emonav_drake.core.scenario import Scenario, sample_scenario
-from emonav_drake.learning.env import map_key, navigation_spaces
-from emonav_drake.params import EmoNavConfig, load_config
+from emonav_drake.learning.env import set_task
+from emonav_drake.params import EmoNavConfig
 
 
 class EmoNavDigitEnv(DrakeGymEnv):
@@ -52,21 +52,14 @@ class EmoNavDigitEnv(DrakeGymEnv):
         grid_kind: str = "lgm",
         goal_radius: float | None = None,
     ) -> None:
-        if grid_kind not in ("lgm", "ogm", "scan", "drlvo"):
-            raise ValueError(f"grid_kind = {grid_kind!r}: must be 'lgm', 'ogm', 'scan' or 'drlvo'")
-        if config is None or isinstance(config, str):
-            config = load_config(config)
-        self.config = config.validate()
-        self.grid_kind = grid_kind
-        self.goal_radius = goal_radius
-        self.map_key = map_key(grid_kind)
-        observation_space, action_space = navigation_spaces(config, grid_kind)
+        set_task(self, config, grid_kind, goal_radius)
+        observation_space, action_space = self.observation_space, self.action_space
         self._scenario: Scenario | None = None
         self._fallen = False
         self.navigation = None  # the episode's `DigitNavigationDiagram`
         super().__init__(
             simulator=self._make_simulator,
-            time_step=config.robot.step_time,
+            time_step=self.config.robot.step_time,
             action_space=action_space,
             observation_space=observation_space,
             reward=self._reward,

@@ -66,6 +66,19 @@ def navigation_spaces(config: EmoNavConfig, grid_kind: str) -> tuple[spaces.Dict
     return observation, spaces.Box(*bounds, dtype=np.float32)
 
 
+def set_task(env: gym.Env, config, grid_kind: str, goal_radius: float | None) -> None:
+    """The attributes both navigation envs share: `config` (an `EmoNavConfig`, a YAML path
+    or None for the defaults; validated), `grid_kind`, `goal_radius`, `map_key` and the
+    spaces of `navigation_spaces`. `ValueError` for an unknown grid kind."""
+    if grid_kind not in ("lgm", "ogm", "scan", "drlvo"):
+        raise ValueError(f"grid_kind = {grid_kind!r}: must be 'lgm', 'ogm', 'scan' or 'drlvo'")
+    if config is None or isinstance(config, str):
+        config = load_config(config)
+    env.config = config.validate()
+    env.grid_kind, env.goal_radius, env.map_key = grid_kind, goal_radius, map_key(grid_kind)
+    env.observation_space, env.action_space = navigation_spaces(env.config, grid_kind)
+
+
 class EmoNavLIPEnv(gym.Env):
     """Emotion-aware social navigation with the LIP reduced-order robot.
 
@@ -86,15 +99,7 @@ class EmoNavLIPEnv(gym.Env):
         grid_kind: str = "lgm",
         goal_radius: float | None = None,
     ) -> None:
-        if grid_kind not in ("lgm", "ogm", "scan", "drlvo"):
-            raise ValueError(f"grid_kind = {grid_kind!r}: must be 'lgm', 'ogm', 'scan' or 'drlvo'")
-        if config is None or isinstance(config, str):
-            config = load_config(config)
-        self.config = config.validate()
-        self.grid_kind = grid_kind
-        self.goal_radius = goal_radius
-        self.map_key = map_key(grid_kind)
-        self.observation_space, self.action_space = navigation_spaces(config, grid_kind)
+        set_task(self, config, grid_kind, goal_radius)
         self.world: NavigationWorld | None = None
 
     def _observation(self) -> dict[str, np.ndarray]:
