@@ -114,11 +114,13 @@ def _check_planner_flags(args: argparse.Namespace) -> None:
     if not is_learned(args.planner):
         if args.checkpoint is not None:
             raise ConfigError(
-                f"--checkpoint applies to learned planners (sac, variants), not {args.planner}"
+                f"--checkpoint applies to a learned planner (--planner sac or a variant), "
+                f"not {args.planner}"
             )
         if args.device != "cpu":
             raise ConfigError(
-                f"--device applies to learned planners (sac, variants), not {args.planner}"
+                f"--device applies to a learned planner (--planner sac or a variant), "
+                f"not {args.planner}"
             )
         return
     from emonav_drake.learning.policy import resolve_device

@@ -300,7 +300,7 @@ class NavigationWorld:
         self.crowd_state: CrowdState = self.crowd.initial_state()
         self.last_command = np.zeros(2)
         self.command_before = np.zeros(2)  # u_{k−2}: the calibrated robot still feels it
-        self.response_rng = np.random.default_rng([RESPONSE_SEED_SALT, s.seed])
+        self.response_rng = np.random.default_rng([RESPONSE_SEED_SALT, s.seed % 2**64])
         self.step_count = 0
         self.goal_distance = float(goal_state(self.robot, self.goal_xy)[0])
         self.tracker = EpisodeTracker(
