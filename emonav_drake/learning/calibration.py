@@ -175,11 +175,11 @@ def collect_traces(
     new: list[dict] = []
     bar = tqdm(total=len(tasks), desc="Digit episodes", unit="ep", disable=not progress)
 
-    def keep(line: dict) -> None:
+    def keep(line: dict) -> None:  # appended as it finishes; sorted once at the end
         new.append(line)
         bar.update(1)
-        lines = sorted(have + new, key=lambda h: (h["method"], h["seed"]))
-        write_text_atomic(out, "".join(json.dumps(h) + "\n" for h in lines))
+        with out.open("a") as f:
+            f.write(json.dumps(line) + "\n")
 
     import time
 
@@ -191,6 +191,8 @@ def collect_traces(
     elif tasks:
         run_on_ray(spec, tasks, keep, workers, ray_address, worker_cls=_trace_worker(explore))
     bar.close()
+    lines = sorted(have + new, key=lambda h: (h["method"], h["seed"]))
+    write_text_atomic(out, "".join(json.dumps(h) + "\n" for h in lines))
     wall = time.perf_counter() - t0
     steps = sum(h["steps"] for h in new)
     sim = sum(h["wall_seconds"] for h in new)

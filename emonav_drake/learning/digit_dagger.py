@@ -229,6 +229,7 @@ def run_digit_rounds(
     torch.manual_seed(cfg.seed + rnd)
     rng = np.random.default_rng([cfg.seed, rnd])
     policy = out / f"policy_round{rnd - 1}.pt" if rnd else start_policy
+    base_meta = _policy_meta(start_policy)  # network, observation, commands: read once
     while rnd < cfg.rounds:
         t0 = time.perf_counter()
         episodes = collect_round(policy, cfg, rnd, workers, ray_address, env_config)
@@ -261,7 +262,7 @@ def run_digit_rounds(
             f"loss {entry['loss']:.3f} [{collect_s:.0f}+{train_s:.0f} s]",
             flush=True,
         )
-        meta = _policy_meta(start_policy)
+        meta = dict(base_meta)
         meta["provenance"] = {
             "route": "dagger+digit",
             "source": str(source),
