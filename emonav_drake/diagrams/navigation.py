@@ -49,6 +49,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
+from emonav_drake.meshcat_viewing import ReplayCaption, write_replay_html
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.systems.crowd_system import CrowdSystem
@@ -177,7 +178,9 @@ def build_navigation_diagram(
     if meshcat is not None:
         vis = b.AddNamedSystem(
             "visualizer",
-            NavigationMeshcatVisualizer(meshcat, scenario, config, show_rays=show_rays),
+            NavigationMeshcatVisualizer(
+                meshcat, scenario, config, show_rays=show_rays, goal_radius=goal_radius
+            ),
         )
         b.Connect(state, vis.GetInputPort("robot_state"))
         b.Connect(crowd.GetOutputPort("crowd"), vis.GetInputPort("crowd"))
@@ -193,6 +196,7 @@ class StepLog:
 
     robot: list[np.ndarray] = dc.field(default_factory=list)  # (x, y, θ, v)
     pedestrians: list[np.ndarray] = dc.field(default_factory=list)  # (P, 2)
+    emotions: list[np.ndarray] = dc.field(default_factory=list)  # (P,) true codes in force
     commands: list[np.ndarray] = dc.field(default_factory=list)  # u_k, k = 0 … steps − 1
     rewards: list[float] = dc.field(default_factory=list)  # reward of the step ending at t_k
 
@@ -229,7 +233,9 @@ def run_episode(
     ctx = sim.get_mutable_context()
     sim.set_monitor(episode_monitor_callback(nav.diagram, nav.monitor))
     if record_html is not None:
-        meshcat.StartRecording(set_visualizations_while_recording=False)
+        # a browser already watching sees the episode while it is recorded
+        live = meshcat.GetNumActiveConnections() > 0
+        meshcat.StartRecording(set_visualizations_while_recording=live)
     sim.Initialize()
     T = config.robot.step_time
     log_ = StepLog()
@@ -243,9 +249,9 @@ def run_episode(
         u_{k−1}: the command of the step that just ended)."""
         rc = nav.robot.GetMyContextFromRoot(ctx)
         log_.robot.append(robot_port.Eval(rc).copy())
-        log_.pedestrians.append(
-            crowd_port.Eval(nav.crowd.GetMyContextFromRoot(ctx)).positions.copy()
-        )
+        crowd = crowd_port.Eval(nav.crowd.GetMyContextFromRoot(ctx))
+        log_.pedestrians.append(crowd.positions.copy())
+        log_.emotions.append(crowd.emotions.copy())
         status = status_port.Eval(nav.monitor.GetMyContextFromRoot(ctx))
         if k > 0:
             log_.commands.append(cmd_port.Eval(nav.planner.GetMyContextFromRoot(ctx)).copy())
@@ -269,6 +275,6 @@ def run_episode(
     if record_html is not None:
         meshcat.StopRecording()
         meshcat.PublishRecording()
-        Path(record_html).write_text(meshcat.StaticHtml())
-        log.info("wrote Meshcat replay %s", record_html)
+        caption = ReplayCaption.for_episode(planner, "LIP", scenario, record, show_rays)
+        write_replay_html(meshcat, record_html, caption)
     return record, log_

@@ -41,6 +41,7 @@ from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
 from emonav_drake.diagrams.navigation import AddNavigationStack
 from emonav_drake.evaluation.rates import RateMeasurement
+from emonav_drake.meshcat_viewing import ReplayCaption, write_replay_html
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.episode_monitor import EpisodeMonitor
@@ -112,10 +113,13 @@ def build_digit_navigation_diagram(
         )
         vis = b.AddNamedSystem(
             "navigation_visualizer",
-            NavigationMeshcatVisualizer(meshcat, scenario, config, draw_robot=False),
+            NavigationMeshcatVisualizer(
+                meshcat, scenario, config, draw_robot=False, goal_radius=goal_radius
+            ),
         )
         b.Connect(robot_state, vis.GetInputPort("robot_state"))
         b.Connect(crowd.GetOutputPort("crowd"), vis.GetInputPort("crowd"))
+        b.Connect(station.GetOutputPort("targets"), vis.GetInputPort("footstep_targets"))
     diagram = b.Build()
     diagram.set_name("emonav_navigation_digit")
     return DigitNavigationDiagram(diagram, station, crowd, nav, monitor)
@@ -146,7 +150,9 @@ def run_digit_episode(
     sim = Simulator(nd.diagram)
     sim.set_target_realtime_rate(realtime_rate)
     if record_html is not None:
-        meshcat.StartRecording(set_visualizations_while_recording=False)
+        # a browser already watching sees the episode while it is recorded
+        live = meshcat.GetNumActiveConnections() > 0
+        meshcat.StartRecording(set_visualizations_while_recording=live)
     if rates is not None:
         record = rates.run(sim, nd.diagram, lambda: simulate_digit_episode(sim, nd, config, trace))
     else:
@@ -154,7 +160,8 @@ def run_digit_episode(
     if record_html is not None:
         meshcat.StopRecording()
         meshcat.PublishRecording()
-        Path(record_html).write_text(meshcat.StaticHtml())
+        caption = ReplayCaption.for_episode(planner, "Digit", scenario, record)
+        write_replay_html(meshcat, record_html, caption)
     return record
 
 
@@ -170,23 +177,29 @@ def simulate_digit_episode(
     With `trace`, one entry per planner instant t_k = kT is appended, taken before the
     updates at t_k (what the planner sees): {"k", "t" [s], "robot": [x, y, θ, v] (CoM
     [m], torso yaw [rad], sagittal CoM speed [m/s], world frame W), "held": the command
-    held since t_{k−1}, u_{k−1} = [u_v, u_Δθ]}; the last entry is the episode's end."""
+    held since t_{k−1}, u_{k−1} = [u_v, u_Δθ], "pedestrians": [[x, y], ...] (world [m]),
+    "emotions": [code, ...] (true emotion codes in force)}; the last entry is the
+    episode's end."""
     ctx = sim.get_mutable_context()
     status_port = nd.monitor.GetOutputPort("status")
     fall_port = nd.station.GetOutputPort("fall")
     robot_port = nd.station.GetOutputPort("robot_state")
     command_port = nd.planner.GetOutputPort("command")
+    crowd_port = nd.crowd.GetOutputPort("crowd")
     T = config.robot.step_time
     sim.Initialize()
     k = round(ctx.get_time() / T)
     while True:
         if trace is not None:
+            crowd = crowd_port.Eval(nd.crowd.GetMyContextFromRoot(ctx))
             trace.append(
                 {
                     "k": k,
                     "t": ctx.get_time(),
                     "robot": robot_port.Eval(nd.station.GetMyContextFromRoot(ctx)).tolist(),
                     "held": command_port.Eval(nd.planner.GetMyContextFromRoot(ctx)).tolist(),
+                    "pedestrians": crowd.positions.tolist(),
+                    "emotions": [int(e) for e in crowd.emotions],
                 }
             )
         status = status_port.Eval(nd.monitor.GetMyContextFromRoot(ctx))

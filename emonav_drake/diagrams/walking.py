@@ -27,7 +27,10 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 
-from emonav_drake.core.lip import LipState, lip_step, wrap_angle
+from emonav_drake.core.lip import wrap_angle
+from emonav_drake.core.tracking import COLUMNS as TRACKING_COLUMNS
+from emonav_drake.core.tracking import column as tracking_column
+from emonav_drake.core.tracking import step_tracking
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
 from emonav_drake.params import EmoNavConfig, load_config
 from emonav_drake.systems.alip_footstep_planner import (
@@ -143,6 +146,12 @@ class WalkResult:
         """ "fall" or "walked"."""
         return FALL if self.fell else "walked"
 
+    def tracking(self, config: EmoNavConfig) -> np.ndarray:
+        """The per-step tracking table of this walk (`walk_tracking`, `core.tracking.COLUMNS`)
+        with this robot's ω = √(g/H) [1/s] and T [s] of `config.robot`."""
+        omega = math.sqrt(config.robot.gravity / self.com_height)
+        return walk_tracking(self.steps, omega, config.robot.step_time)
+
     def to_json(self) -> dict:
         return {
             "outcome": self.outcome,
@@ -170,19 +179,40 @@ class WalkResult:
         }
 
 
+def walk_tracking(steps: list[StepRecord], omega: float, step_time: float) -> np.ndarray:
+    """The per-step tracking table of a walk (`core.tracking.COLUMNS`), one row per step
+    between consecutive foot switches k → k + 1.
+
+    Desired = the LIP step of paper Eq. 1 from the measured CoM position and sagittal speed
+    at switch k, walked along the accumulated commanded heading with step k's command
+    (so heading errors do not reset each step); achieved = the measured CoM and the
+    (unwrapped) torso yaw at switch k + 1. ω [1/s] is the walking robot's √(g/H)."""
+    if len(steps) < 2:
+        return np.empty((0, len(TRACKING_COLUMNS)))
+    a, b = steps[:-1], steps[1:]
+    commands = np.array([[s.u_speed, s.u_heading] for s in a])
+    return step_tracking(
+        [[s.x, s.y, s.heading_target - s.u_heading, s.speed] for s in a],
+        commands,
+        [[s.x, s.y, s.heading] for s in b],
+        omega,
+        step_time,
+        t_start=[s.time for s in a],
+        t=[s.time for s in b],
+        previous=np.vstack([np.zeros((1, 2)), commands[:-1]]),
+    )
+
+
 def tracking_table(steps: list[StepRecord], omega: float, step_time: float) -> np.ndarray:
     """Per step k ≥ 1: desired vs actual state at switch k. Columns: t, x_d, y_d, θ_d, x, y, θ.
 
     Desired = the LIP step of paper Eq. 1 from the measured CoM position and sagittal speed
     at switch k−1, walked along the commanded heading with that step's command; θ_d is the
-    accumulated commanded heading (so heading errors do not reset each step)."""
-    rows = []
-    for a, b in zip(steps[:-1], steps[1:], strict=False):
-        # the step from a to b walks along the new heading a.heading_target
-        start = LipState(a.x, a.y, a.heading_target - a.u_heading, a.speed)
-        d = lip_step(start, a.u_speed, a.u_heading, omega, step_time)
-        rows.append([b.time, d.x, d.y, d.heading, b.x, b.y, b.heading])
-    return np.array(rows).reshape(-1, 7)
+    accumulated commanded heading (so heading errors do not reset each step; not
+    wrapped). The full per-step table is `walk_tracking`."""
+    names = ("t", "x_des", "y_des", "heading_des", "x", "y", "heading")
+    table = walk_tracking(steps, omega, step_time)
+    return np.column_stack([tracking_column(table, n) for n in names]).reshape(-1, 7)
 
 
 def tracking_rms(table: np.ndarray) -> dict:
@@ -253,7 +283,9 @@ def run_walk(
         plant.SetVelocities(plant_ctx, v)
     sim.set_target_realtime_rate(realtime_rate)
     if meshcat is not None and record_html is not None:
-        meshcat.StartRecording(set_visualizations_while_recording=False)
+        # a browser already watching sees the walk while it is recorded
+        live = meshcat.GetNumActiveConnections() > 0
+        meshcat.StartRecording(set_visualizations_while_recording=live)
     reason = ""
     t0 = time.perf_counter()
     try:

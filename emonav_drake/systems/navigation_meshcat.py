@@ -1,24 +1,47 @@
 """`NavigationMeshcatVisualizer`: the navigation world drawn in Drake's Meshcat.
 
 Input ports:
-    robot_state (4): (x, y, θ, v) of the robot CoM, world frame [m, rad, m/s].
-    crowd (abstract `CrowdSnapshot`).
+    robot_state (4): (x, y, θ, v) of the robot CoM, world frame W [m, rad, m/s].
+    crowd (abstract `CrowdSnapshot`): pedestrians (positions [m], emotion codes).
     scan (K): LiDAR ranges [m] (drawn as rays when `show_rays`; leave unconnected
         otherwise).
+    footstep_targets (abstract `core.walking_targets.WalkingTargets`): the full-order
+        Digit's footstep planner output (swing-foot landing target and yaw, W); leave
+        unconnected for the LIP robot.
 
-Draws, at `publish_period` (default 0.1 s): the robot (blue column with a heading
-marker), pedestrians coloured by emotion (happy green, neutral amber, negative red) with
-their discomfort rings, static discs (grey) with their d_static rings, the goal (green
-pad) and optionally every 10th LiDAR ray. When the Meshcat is recording
-(`Meshcat.StartRecording`), poses and emotion changes are recorded at the simulation
-time, so `PublishRecording` + `StaticHtml` replay the run (rays are live only).
+What is drawn (all under `/emonav`, world frame W, z up):
+    * every `publish_period` (default 0.1 s): the robot (blue column with a heading
+      marker; off when the full-order Digit is drawn by Drake's `MeshcatVisualizer`),
+      the pedestrians and their discomfort rings, coloured by their emotion now (happy
+      green, neutral amber, negative red). Each pedestrian has one body and one ring per
+      emotion and only the current emotion's pair is visible: an emotion change is a
+      change of the "visible" property, which a Meshcat recording animates (a recorded
+      "color" property is not: three.js finds no `color` on the object and ignores it);
+    * once per walking step t_k = kT: the robot's trail (one segment from its position
+      at t_{k−1} to t_k, bright for `TRAIL_RECENT_STEPS` steps, then pale) and, with
+      `show_rays`, the LiDAR rays of t_k (every `RAY_STRIDE`-th beam, one line-segment
+      object per step, visible from t_k to t_{k+1});
+    * with `footstep_targets` connected: a foot-sized marker at each planned footstep
+      (left cyan, right violet), following the target while the planner re-plans it and
+      pale once `FOOTSTEPS_RECENT` newer steps have started;
+    * static: the static discs (grey) with their d_static rings and the goal (a green
+      pad of the goal radius and a 2 m pole topped by a sphere, seen above the rays).
+
+Recording. Every dynamic call passes the simulation time, so with
+`Meshcat.StartRecording` the episode is recorded frame by frame and
+`PublishRecording` + `StaticHtml` replay it: poses, emotions (visibility), trail, rays and
+footsteps. Objects created during the episode are hidden at frame 0 and shown from the
+frame they appear in. Meshcat objects persist in the server, so this visualizer draws
+one episode: build a new one (or call `Meshcat.Delete`) for the next.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.geometry import Cylinder, Meshcat, Rgba, Sphere
+from pydrake.geometry import Box, Cylinder, Meshcat, Rgba, Sphere
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import Context, EventStatus, LeafSystem
 
@@ -30,19 +53,39 @@ EMOTION_RGBA = (
     Rgba(0.95, 0.70, 0.15, 1.0),
     Rgba(0.85, 0.15, 0.15, 1.0),
 )
-_PREFIX = "/emonav"
+STATIC_RGBA = Rgba(0.5, 0.5, 0.5, 1.0)
+ROBOT_RGBA = Rgba(0.25, 0.45, 0.85, 1.0)
+GOAL_RGBA = Rgba(0.10, 0.80, 0.20, 1.0)
+RAY_RGBA = Rgba(0.90, 0.20, 0.20, 0.45)
+FOOT_RGBA = (Rgba(0.10, 0.75, 0.85, 0.9), Rgba(0.55, 0.35, 0.90, 0.9))  # left, right
+PREFIX = "/emonav"
+TRAIL_RECENT_STEPS = 10  # trail segments drawn bright for this many walking steps
+FOOTSTEPS_RECENT = 6  # footstep markers drawn bright until this many newer steps
+RAY_STRIDE = 15  # draw every RAY_STRIDE-th LiDAR beam
+OVERVIEW_FOV = 45.0  # vertical field of view of the overview camera [deg]
+# the arena fits a horizontal field of view of this much [deg]; a replay widens the
+# vertical one in windows narrower than that (`meshcat_viewing.replay_html`)
+OVERVIEW_MIN_HFOV = 50.0
+_GOAL_POLE = 2.0  # [m]
+
+
+def _faded(rgba: Rgba, alpha: float) -> Rgba:
+    return Rgba(rgba.r(), rgba.g(), rgba.b(), alpha)
 
 
 class NavigationMeshcatVisualizer(LeafSystem):
-    """Draws robot, crowd, obstacles, goal and LiDAR rays in Meshcat.
+    """Draws robot, crowd, obstacles, goal, trail, LiDAR rays and footsteps in Meshcat
+    (see the module docstring).
 
     Args:
         meshcat: the Meshcat instance to draw in.
-        scenario: the episode (static discs, goal, number of pedestrians).
-        config: radii and discomfort distances.
+        scenario: the episode (static discs, goal, robot start, number of pedestrians).
+        config: radii, discomfort distances, step time T and goal radius.
         show_rays: draw the LiDAR rays (needs the `scan` input connected).
-        publish_period: drawing period [s].
+        publish_period: period of the pose and emotion updates [s].
         draw_robot: draw the LIP robot's column (off when the full-order Digit is drawn).
+        goal_radius: radius of the goal pad [m]; default `config.episode.eval_goal_radius`.
+        draw_trail: draw the robot's trail, one segment per walking step.
     """
 
     def __init__(
@@ -53,105 +96,234 @@ class NavigationMeshcatVisualizer(LeafSystem):
         show_rays: bool = False,
         publish_period: float = 0.1,
         draw_robot: bool = True,
+        goal_radius: float | None = None,
+        draw_trail: bool = True,
     ) -> None:
         super().__init__()
         self._meshcat = meshcat
         self._config = config
         self._show_rays = show_rays
         self._draw_robot = draw_robot
+        self._draw_trail = draw_trail
+        self._goal_radius = (
+            config.episode.eval_goal_radius if goal_radius is None else float(goal_radius)
+        )
         self._num_peds = len(scenario.pedestrians)
+        self._start = np.asarray(scenario.robot_start, dtype=float)
         self._robot = self.DeclareVectorInputPort("robot_state", 4)
         self._crowd = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
         self._scan = self.DeclareVectorInputPort("scan", config.lidar.num_beams)
+        self._footsteps = self.DeclareAbstractInputPort(
+            "footstep_targets", AbstractValue.Make(object())
+        )
+        self._step_time = config.robot.step_time
+        self._reset_drawing()
         self._draw_static_scene(scenario)
+        self.DeclareInitializationPublishEvent(self._initialize)
         self.DeclarePeriodicPublishEvent(publish_period, 0.0, self._publish)
+        self.DeclarePeriodicPublishEvent(self._step_time, 0.0, self._publish_step)
         self.DeclareForcedPublishEvent(self._publish)
+
+    # What has been sent to Meshcat (the server's scene, not simulation state: nothing
+    # the diagram computes depends on it). Reset when a simulation is initialized.
+    def _reset_drawing(self) -> None:
+        self._emotions: list[int] | None = None
+        self._last_step = -1
+        self._trail_point: np.ndarray | None = None
+        self._trail_count = 0
+        self._last_rays: str | None = None
+        self._step_start: float | None = None
+        self._footstep_count = 0
 
     def _draw_static_scene(self, scenario: Scenario) -> None:
         m, c = self._meshcat, self._config
-        m.Delete(_PREFIX)
+        m.Delete(PREFIX)
         if self._draw_robot:
-            m.SetObject(
-                f"{_PREFIX}/robot/body", Cylinder(c.robot.radius, 1.0), Rgba(0.25, 0.45, 0.85, 1.0)
-            )
-            m.SetTransform(f"{_PREFIX}/robot/body", RigidTransform([0, 0, 0.5]))
-            m.SetObject(f"{_PREFIX}/robot/nose", Sphere(0.08), Rgba(0.1, 0.1, 0.1, 1.0))
-            m.SetTransform(f"{_PREFIX}/robot/nose", RigidTransform([c.robot.radius, 0, 0.9]))
+            m.SetObject(f"{PREFIX}/robot/body", Cylinder(c.robot.radius, 1.0), ROBOT_RGBA)
+            m.SetTransform(f"{PREFIX}/robot/body", RigidTransform([0, 0, 0.5]))
+            m.SetObject(f"{PREFIX}/robot/nose", Sphere(0.08), Rgba(0.1, 0.1, 0.1, 1.0))
+            m.SetTransform(f"{PREFIX}/robot/nose", RigidTransform([c.robot.radius, 0, 0.9]))
             x0, y0 = scenario.robot_start
             m.SetTransform(
-                f"{_PREFIX}/robot",
+                f"{PREFIX}/robot",
                 RigidTransform(RotationMatrix.MakeZRotation(scenario.robot_heading), [x0, y0, 0.0]),
             )
         goal = scenario.robot_goal
-        m.SetObject(f"{_PREFIX}/goal", Cylinder(0.2, 0.01), Rgba(0.1, 0.8, 0.2, 0.6))
-        m.SetTransform(f"{_PREFIX}/goal", RigidTransform([goal[0], goal[1], 0.005]))
+        m.SetObject(f"{PREFIX}/goal/pad", Cylinder(self._goal_radius, 0.02), _faded(GOAL_RGBA, 0.7))
+        m.SetTransform(f"{PREFIX}/goal/pad", RigidTransform([0, 0, 0.01]))
+        m.SetObject(f"{PREFIX}/goal/pole", Cylinder(0.03, _GOAL_POLE), GOAL_RGBA)
+        m.SetTransform(f"{PREFIX}/goal/pole", RigidTransform([0, 0, _GOAL_POLE / 2]))
+        m.SetObject(f"{PREFIX}/goal/top", Sphere(0.15), GOAL_RGBA)
+        m.SetTransform(f"{PREFIX}/goal/top", RigidTransform([0, 0, _GOAL_POLE]))
+        m.SetTransform(f"{PREFIX}/goal", RigidTransform([goal[0], goal[1], 0.0]))
         for i, o in enumerate(scenario.obstacles):
-            path = f"{_PREFIX}/static/{i}"
-            m.SetObject(f"{path}/disc", Cylinder(o.radius, 0.8), Rgba(0.5, 0.5, 0.5, 1.0))
+            path = f"{PREFIX}/static/{i}"
+            m.SetObject(f"{path}/disc", Cylinder(o.radius, 0.8), STATIC_RGBA)
             m.SetTransform(f"{path}/disc", RigidTransform([0, 0, 0.4]))
             m.SetObject(
                 f"{path}/ring",
                 Cylinder(o.radius + c.reward.static_discomfort, 0.01),
-                Rgba(0.5, 0.5, 0.5, 0.25),
+                _faded(STATIC_RGBA, 0.25),
             )
+            m.SetTransform(f"{path}/ring", RigidTransform([0, 0, 0.005]))
             m.SetTransform(path, RigidTransform([o.center[0], o.center[1], 0.0]))
         dist = c.reward.emotion_distances()
+        radius = c.crowd.pedestrian_radius
         for i, ped in enumerate(scenario.pedestrians):
-            path = f"{_PREFIX}/pedestrians/{i}"
-            # The scene as it starts (what a replay shows before it plays): the initial
-            # emotion's colour and only its discomfort ring; `_publish` animates changes.
+            path = f"{PREFIX}/pedestrians/{i}"
+            # The scene as it starts (what a replay shows before it plays): only the
+            # initial emotion's body and ring are visible; `_publish` animates changes.
             first = EMOTION_NAMES.index(ped.emotion)
-            m.SetObject(
-                f"{path}/body", Cylinder(c.crowd.pedestrian_radius, 1.7), EMOTION_RGBA[first]
-            )
-            m.SetTransform(f"{path}/body", RigidTransform([0, 0, 0.85]))
-            m.SetTransform(path, RigidTransform([ped.start[0], ped.start[1], 0.0]))
             for e in range(3):
-                rgba = EMOTION_RGBA[e]
+                m.SetObject(f"{path}/body{e}", Cylinder(radius, 1.7), EMOTION_RGBA[e])
+                m.SetTransform(f"{path}/body{e}", RigidTransform([0, 0, 0.85]))
                 m.SetObject(
                     f"{path}/ring{e}",
-                    Cylinder(c.crowd.pedestrian_radius + dist[e], 0.01),
-                    Rgba(rgba.r(), rgba.g(), rgba.b(), 0.3),
+                    Cylinder(radius + dist[e], 0.01),
+                    _faded(EMOTION_RGBA[e], 0.3),
                 )
+                m.SetTransform(f"{path}/ring{e}", RigidTransform([0, 0, 0.005]))
+                m.SetProperty(f"{path}/body{e}", "visible", e == first)
                 m.SetProperty(f"{path}/ring{e}", "visible", e == first)
+            m.SetTransform(path, RigidTransform([ped.start[0], ped.start[1], 0.0]))
+
+    def _initialize(self, context: Context) -> EventStatus:
+        self._reset_drawing()
+        return EventStatus.Succeeded()
+
+    def _appear(self, path: str, t: float) -> None:
+        """`path` (just created) hidden until t in a recording, shown from t."""
+        self._meshcat.SetProperty(path, "visible", False, 0.0)
+        self._meshcat.SetProperty(path, "visible", True, t)
+
+    def _add_fading(self, path: str, shape, rgba: Rgba, pale_alpha: float, t: float) -> None:
+        """A bright `path`/new and a pale `path`/old version of one item; `_fade` swaps."""
+        m = self._meshcat
+        m.SetObject(f"{path}/new", shape, rgba)
+        m.SetObject(f"{path}/old", shape, _faded(rgba, pale_alpha))
+        m.SetProperty(f"{path}/new", "visible", True, 0.0)
+        m.SetProperty(f"{path}/old", "visible", False, 0.0)
+        self._appear(path, t)
+
+    def _fade(self, path: str, t: float) -> None:
+        self._meshcat.SetProperty(f"{path}/new", "visible", False, t)
+        self._meshcat.SetProperty(f"{path}/old", "visible", True, t)
 
     def _publish(self, context: Context) -> EventStatus:
         m, t = self._meshcat, context.get_time()
         x, y, th, _ = self._robot.Eval(context)
         if self._draw_robot:
             m.SetTransform(
-                f"{_PREFIX}/robot", RigidTransform(RotationMatrix.MakeZRotation(th), [x, y, 0.0]), t
+                f"{PREFIX}/robot", RigidTransform(RotationMatrix.MakeZRotation(th), [x, y, 0.0]), t
             )
         crowd = self._crowd.Eval(context)
+        emotions = [int(e) for e in crowd.emotions[: self._num_peds]]
         for i in range(self._num_peds):
-            path = f"{_PREFIX}/pedestrians/{i}"
+            path = f"{PREFIX}/pedestrians/{i}"
             px, py = crowd.positions[i]
             m.SetTransform(path, RigidTransform([px, py, 0.0]), t)
-            e = int(crowd.emotions[i])
-            m.SetProperty(f"{path}/body", "color", list(EMOTION_RGBA[e].rgba), t)
-            for k in range(3):
-                m.SetProperty(f"{path}/ring{k}", "visible", k == e, t)
-        if self._show_rays and self._scan.HasValue(context):
-            ranges = self._scan.Eval(context)[::10]
-            k = len(self._scan.Eval(context))
-            ang = th + (np.arange(0, k, 10) - (k - 1) / 2) * (2 * np.pi / k)
-            start = np.tile(np.array([[x], [y], [0.3]]), (1, len(ranges)))
-            end = np.vstack(
-                [x + ranges * np.cos(ang), y + ranges * np.sin(ang), np.full(len(ranges), 0.3)]
-            )
-            m.SetLineSegments(f"{_PREFIX}/rays", start, end, 1.0, Rgba(0.9, 0.2, 0.2, 0.5))
+            if self._emotions is None or self._emotions[i] != emotions[i]:
+                for e in range(3):
+                    m.SetProperty(f"{path}/body{e}", "visible", e == emotions[i], t)
+                    m.SetProperty(f"{path}/ring{e}", "visible", e == emotions[i], t)
+        self._emotions = emotions
+        if self._footsteps.HasValue(context):
+            self._draw_footstep(self._footsteps.Eval(context), t)
         return EventStatus.Succeeded()
+
+    def _draw_footstep(self, targets, t: float) -> None:
+        """The marker of the step being planned; a new step gets a new marker."""
+        if targets.standing:
+            return
+        m = self._meshcat
+        if targets.start_time != self._step_start:
+            self._step_start = targets.start_time
+            n = self._footstep_count
+            self._footstep_count += 1
+            self._add_fading(
+                f"{PREFIX}/footsteps/{n}",
+                Box(0.26, 0.11, 0.006),
+                FOOT_RGBA[targets.swing_leg],
+                0.3,
+                t,
+            )
+            if n >= FOOTSTEPS_RECENT:
+                self._fade(f"{PREFIX}/footsteps/{n - FOOTSTEPS_RECENT}", t)
+        yaw = float(targets.swing_yaw_target)
+        sx, sy = targets.swing_target[0], targets.swing_target[1]
+        # the sole's centre is 2 cm ahead of the ankle (the model's foot box)
+        centre = [sx + 0.02 * math.cos(yaw), sy + 0.02 * math.sin(yaw), 0.004]
+        m.SetTransform(
+            f"{PREFIX}/footsteps/{self._footstep_count - 1}",
+            RigidTransform(RotationMatrix.MakeZRotation(yaw), centre),
+            t,
+        )
+
+    def _publish_step(self, context: Context) -> EventStatus:
+        t = context.get_time()
+        k = round(t / self._step_time)
+        if k <= self._last_step:
+            return EventStatus.Succeeded()
+        self._last_step = k
+        x, y, th, _ = self._robot.Eval(context)
+        point = np.array([x, y])
+        if self._draw_trail:
+            self._draw_trail_segment(point, t)
+        if self._show_rays and self._scan.HasValue(context):
+            self._draw_rays(k, self._scan.Eval(context), x, y, th, t)
+        return EventStatus.Succeeded()
+
+    def _draw_trail_segment(self, point: np.ndarray, t: float) -> None:
+        start = self._start if self._trail_point is None else self._trail_point
+        self._trail_point = point
+        d = point - start
+        length = float(np.hypot(*d))
+        if length < 1e-3:
+            return
+        n = self._trail_count
+        self._trail_count += 1
+        path = f"{PREFIX}/trail/{n}"
+        self._add_fading(path, Box(length, 0.08, 0.004), ROBOT_RGBA, 0.35, t)
+        mid = 0.5 * (start + point)
+        self._meshcat.SetTransform(
+            path,
+            RigidTransform(
+                RotationMatrix.MakeZRotation(math.atan2(d[1], d[0])), [mid[0], mid[1], 0.015]
+            ),
+        )
+        if n >= TRAIL_RECENT_STEPS:
+            self._fade(f"{PREFIX}/trail/{n - TRAIL_RECENT_STEPS}", t)
+
+    def _draw_rays(self, k: int, scan: np.ndarray, x: float, y: float, th: float, t: float) -> None:
+        num = len(scan)
+        beams = np.arange(0, num, RAY_STRIDE)
+        ranges = scan[beams]
+        ang = th + (beams - (num - 1) / 2) * (2 * np.pi / num)
+        start = np.tile(np.array([[x], [y], [0.3]]), (1, len(beams)))
+        end = np.vstack(
+            [x + ranges * np.cos(ang), y + ranges * np.sin(ang), np.full(len(beams), 0.3)]
+        )
+        path = f"{PREFIX}/rays/{k}"
+        self._meshcat.SetLineSegments(path, start, end, 1.0, RAY_RGBA)
+        self._appear(path, t)
+        if self._last_rays is not None:
+            self._meshcat.SetProperty(self._last_rays, "visible", False, t)
+        self._last_rays = path
 
 
 def set_overview_camera(meshcat: Meshcat, config: EmoNavConfig) -> None:
-    """Frame the whole arena from above at an angle (start, goal and the crowd's circle),
-    instead of Meshcat's default camera that sits inside the arena. Set before a
-    recording, a replay's HTML opens with this view."""
+    """Frame the whole arena from above at an angle: start, goal and the crowd's circle,
+    seen from the −y side at about 50° elevation through an `OVERVIEW_FOV` (vertical)
+    field of view, instead of Meshcat's default camera that sits inside the arena. The
+    arena needs `OVERVIEW_MIN_HFOV` horizontally: any landscape or square window. Set
+    before a recording, a replay's HTML opens with this view; a browser that connects
+    later gets it too."""
     start = np.asarray(config.robot.start, dtype=float)
     goal = np.asarray(config.robot.goal, dtype=float)
     centre = 0.5 * (start + goal)
     span = max(float(np.linalg.norm(goal - start)), 2.0 * config.crowd.circle_radius_max)
+    meshcat.SetCamera(Meshcat.PerspectiveCamera(fov=OVERVIEW_FOV, near=0.05, far=200.0))
     meshcat.SetCameraPose(
-        [centre[0] - 0.05 * span, centre[1] - 0.85 * span, 0.6 * span],
-        [centre[0], centre[1], 0.0],
+        [centre[0], centre[1] - 1.0 * span, 1.2 * span],
+        [centre[0], centre[1] - 0.05 * span, 0.0],
     )

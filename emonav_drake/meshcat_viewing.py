@@ -1,0 +1,250 @@
+"""Watching an episode in Meshcat: the server, waiting for a browser, captions, replays.
+
+* `make_meshcat(live)`: a Meshcat server; a record-only one (live False) does not log
+  Drake's "Meshcat listening for connections at http://..." line.
+* `wait_for_browser(meshcat, timeout)`: block until a browser (any websocket client) is
+  connected.
+* `serve_until_interrupted(meshcat)`: keep the server (and so the scene) alive until
+  Ctrl-C, for the user to look at the end of a live episode.
+* `ReplayCaption`: what the run was (planner, plant, seed) and how it ended; it is
+  written into the HTML replay as an overlay (`replay_html`, `write_replay_html`) with
+  the colour legend, and shown live as labels in Meshcat's control panel
+  (`show_caption_controls`): Meshcat has no text primitive.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import html
+import logging
+import time
+from pathlib import Path
+
+from pydrake.geometry import Meshcat
+
+from emonav_drake.systems import navigation_meshcat as nm
+
+log = logging.getLogger(__name__)
+
+
+def _css(rgba) -> str:
+    """A Drake `Rgba` as a CSS colour (opaque)."""
+    return "#" + "".join(f"{round(255 * v):02x}" for v in (rgba.r(), rgba.g(), rgba.b()))
+
+
+# (label, CSS colour) of the legend: the colours `NavigationMeshcatVisualizer` draws with
+LEGEND = (
+    ("happy pedestrian", _css(nm.EMOTION_RGBA[0])),
+    ("neutral pedestrian", _css(nm.EMOTION_RGBA[1])),
+    ("negative pedestrian", _css(nm.EMOTION_RGBA[2])),
+    ("static disc", _css(nm.STATIC_RGBA)),
+    ("robot and its trail", _css(nm.ROBOT_RGBA)),
+    ("goal", _css(nm.GOAL_RGBA)),
+)
+RAYS_LEGEND = ("LiDAR rays (per walking step)", _css(nm.RAY_RGBA))
+FOOTSTEP_LEGEND = (
+    ("footstep target, left", _css(nm.FOOT_RGBA[0])),
+    ("footstep target, right", _css(nm.FOOT_RGBA[1])),
+)
+# the legend in words, for Meshcat's control panel (no colours there; ~44 characters fit)
+LIVE_LEGEND = (
+    "happy green, neutral amber, negative red",
+    "static discs grey, robot blue, goal green",
+)
+
+
+def make_meshcat(live: bool) -> Meshcat:
+    """A Meshcat server. `live` False (recording only): Drake's log line announcing the
+    URL is suppressed, since nobody is meant to connect."""
+    if live:
+        return Meshcat()
+    drake_log = logging.getLogger("drake")
+    level = drake_log.level
+    drake_log.setLevel(logging.WARNING)
+    try:
+        return Meshcat()
+    finally:
+        drake_log.setLevel(level)
+
+
+def wait_for_browser(meshcat: Meshcat, timeout: float | None = None, poll: float = 0.05) -> bool:
+    """Block until at least one client is connected to `meshcat`'s websocket.
+
+    Args:
+        timeout: give up after this many seconds (None: wait forever; Ctrl-C stops it).
+        poll: polling period [s].
+    Returns True when a client is connected, False on timeout."""
+    deadline = None if timeout is None else time.monotonic() + timeout
+    while meshcat.GetNumActiveConnections() == 0:
+        if deadline is not None and time.monotonic() >= deadline:
+            return False
+        time.sleep(poll)
+    return True
+
+
+def serve_until_interrupted(meshcat: Meshcat, poll: float = 0.5) -> None:
+    """Keep `meshcat` (the caller's reference keeps the server alive) serving its scene
+    until Ctrl-C; returns then, quietly."""
+    try:
+        while True:
+            time.sleep(poll)
+    except KeyboardInterrupt:
+        pass
+
+
+@dc.dataclass
+class ReplayCaption:
+    """What a replay shows: planner, plant and seed; outcome once the episode has ended.
+
+    Attributes:
+        planner: planner name ("dwa", "mpc", "policy", ...).
+        plant: "LIP" or "Digit".
+        seed: the scenario's seed (None for a hand-made scenario without one).
+        outcome: "success", "collision", "timeout", "fall" (None while running).
+        steps: walking steps taken; nav_time: simulated time [s].
+        rays: the replay draws LiDAR rays; footsteps: it draws footstep targets.
+    """
+
+    planner: str
+    plant: str
+    seed: int | None = None
+    outcome: str | None = None
+    steps: int | None = None
+    nav_time: float | None = None
+    rays: bool = False
+    footsteps: bool = False
+
+    @classmethod
+    def for_episode(
+        cls, planner, plant: str, scenario, record=None, rays: bool = False
+    ) -> ReplayCaption:
+        """The caption of an episode: `planner` a `Planner` (its `name`), `scenario` a
+        `Scenario` (its `seed`), `record` its `EpisodeRecord` once it has ended."""
+        name = getattr(planner, "name", type(planner).__name__)
+        path = getattr(planner, "path", None)  # a learned policy: its checkpoint file
+        cap = cls(
+            planner=name if path is None else f"{name} ({Path(path).name})",
+            plant=plant,
+            seed=getattr(scenario, "seed", None),
+            rays=rays,
+            footsteps=plant.lower() == "digit",
+        )
+        if record is not None:
+            cap.set_outcome(record)
+        return cap
+
+    def set_outcome(self, record) -> None:
+        """Take outcome, steps and simulated time from an `EpisodeRecord`."""
+        self.outcome, self.steps, self.nav_time = record.outcome, record.steps, record.nav_time
+
+    def title(self) -> str:
+        seed = "" if self.seed is None else f", seed {self.seed}"
+        return f"emonav: {self.planner} on {self.plant}{seed}"
+
+    def outcome_line(self) -> str:
+        if self.outcome is None:
+            return "outcome: running"
+        return f"outcome: {self.outcome} after {self.steps} steps ({self.nav_time:.1f} s)"
+
+    def legend(self) -> list[tuple[str, str]]:
+        items = list(LEGEND)
+        if self.rays:
+            items.append(RAYS_LEGEND)
+        if self.footsteps:
+            items.extend(FOOTSTEP_LEGEND)
+        return items
+
+
+def caption_overlay(caption: ReplayCaption) -> str:
+    """The caption and colour legend as an HTML `<div>` (fixed, top left)."""
+    rows = "".join(
+        f'<div><span style="display:inline-block;width:0.9em;height:0.9em;'
+        f'border-radius:50%;background:{colour};margin-right:0.4em;vertical-align:-0.1em">'
+        f"</span>{html.escape(label)}</div>"
+        for label, colour in caption.legend()
+    )
+    return (
+        '<div id="emonav-caption" style="position:fixed;top:8px;left:8px;z-index:10;'
+        "background:rgba(255,255,255,0.85);padding:8px 12px;border-radius:6px;"
+        'font:13px/1.45 sans-serif;color:#222;pointer-events:none">'
+        f'<div style="font-weight:bold">{html.escape(caption.title())}</div>'
+        f"<div>{html.escape(caption.outcome_line())}</div>"
+        f'<div style="margin-top:4px">{rows}</div>'
+        '<div style="margin-top:4px;color:#666">play / pause / time: Open Controls, '
+        "Animations</div></div>"
+    )
+
+
+# Three.js keeps the vertical field of view when the window's shape changes, so a narrow
+# (portrait) window would cut the arena's sides: widen the vertical view (never narrow
+# it) until the horizontal one is at least the overview's. Meshcat's viewer is the
+# page's global `viewer`; its camera may be replaced when the scene loads, hence a poll.
+_FIT_VIEW_SCRIPT = """<script>
+(function () {
+  function fit() {
+    const cam = window.viewer && window.viewer.camera;
+    if (!cam || !cam.isPerspectiveCamera) return;
+    if (cam.userData.emonavFov === undefined) cam.userData.emonavFov = cam.fov;
+    const half = Math.tan(MIN_HFOV * Math.PI / 360) / cam.aspect;
+    const fov = Math.max(cam.userData.emonavFov, 360 / Math.PI * Math.atan(half));
+    if (Math.abs(cam.fov - fov) > 1e-6) { cam.fov = fov; window.viewer.set_dirty(); }
+  }
+  setInterval(fit, 250);
+})();
+</script>"""
+
+
+def replay_html(meshcat: Meshcat, caption: ReplayCaption) -> str:
+    """`meshcat.StaticHtml()` with the caption overlay, and the script that keeps the
+    arena in view in narrow windows, inserted before `</body>`."""
+    page = meshcat.StaticHtml()
+    at = page.rfind("</body>")
+    if at < 0:  # not the page layout we know: leave the replay as Drake wrote it
+        log.warning("Meshcat's StaticHtml has no </body>: replay written without caption")
+        return page
+    script = _FIT_VIEW_SCRIPT.replace("MIN_HFOV", f"{nm.OVERVIEW_MIN_HFOV:g}")
+    return page[:at] + caption_overlay(caption) + "\n" + script + "\n" + page[at:]
+
+
+def write_replay_html(meshcat: Meshcat, path: str | Path, caption: ReplayCaption) -> None:
+    """Write the self-contained HTML replay of `meshcat`'s published recording."""
+    Path(path).write_text(replay_html(meshcat, caption))
+    log.info("wrote Meshcat replay %s", path)
+
+
+def show_caption_controls(meshcat: Meshcat, caption: ReplayCaption) -> None:
+    """Show the caption live, as labels (inert buttons) in Meshcat's control panel; call
+    again with the outcome to update it."""
+    for name in meshcat.GetButtonNames():
+        if name.startswith(("emonav:", "outcome:")) or name in LIVE_LEGEND:
+            meshcat.DeleteButton(name, strict=False)
+    for label in (caption.title(), caption.outcome_line(), *LIVE_LEGEND):
+        meshcat.AddButton(label)
+
+
+def start_live_view(meshcat: Meshcat, wait: bool, caption: ReplayCaption | None = None) -> None:
+    """Print the URL, show the caption (if any) in the control panel and, with `wait`,
+    block until a browser is connected (Ctrl-C stops the wait)."""
+    print(f"Meshcat: {meshcat.web_url()}", flush=True)
+    if caption is not None:
+        show_caption_controls(meshcat, caption)
+    if wait and meshcat.GetNumActiveConnections() == 0:
+        print(
+            f"waiting for a browser at {meshcat.web_url()} (open it; --no-wait to start "
+            "at once, Ctrl-C to quit)",
+            flush=True,
+        )
+        wait_for_browser(meshcat)
+        print("browser connected: starting", flush=True)
+
+
+def finish_live_view(
+    meshcat: Meshcat, keep_serving: bool, caption: ReplayCaption | None = None
+) -> None:
+    """Show the caption (with its outcome) in the control panel and, with
+    `keep_serving`, keep the scene served until Ctrl-C."""
+    if caption is not None:
+        show_caption_controls(meshcat, caption)
+    if keep_serving:
+        print(f"Meshcat still serving at {meshcat.web_url()} (Ctrl-C to exit)", flush=True)
+        serve_until_interrupted(meshcat)
