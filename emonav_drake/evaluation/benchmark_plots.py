@@ -15,10 +15,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from emonav_drake.core.palette import EMOTION_RGB
 from emonav_drake.evaluation import tables
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 
-EMOTION_COLORS = {"happy": "tab:green", "neutral": "tab:blue", "negative": "tab:red"}
+EMOTION_COLORS = dict(zip(EMOTION_NAMES, EMOTION_RGB, strict=True))  # the shared palette
 IDT_LABELS = ("static", "happy", "neutral", "negative")
 
 

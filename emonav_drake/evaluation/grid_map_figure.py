@@ -1,5 +1,15 @@
 """The paper's Fig. 3 for one scene: the LiDAR scan, its LGM and its OGM, written as a PNG.
 
+Panel (a) is the scene from above in the world frame, in the shared palette
+(`core/palette.py`): the robot blue with a black heading arrow, pedestrians green / amber /
+red by emotion (happy / neutral / negative) with their discomfort zones dashed in the same
+colour, static discs grey with their dashed d_static rings, the LiDAR's hit points black,
+its range dotted, the goal a purple star — or, when the goal lies beyond the panel, a
+purple arrow at the panel's edge pointing to it, labelled with its distance. Panels (b)
+and (c) colour the grid values: 0 free (white), 127 discomfort zone (light blue: the hit
+of the scan of the discs inflated by their discomfort margins), 255 collision area (dark
+navy: the hit of the real scan). Each panel has its legend under it.
+
 Uses matplotlib's object API with the Agg canvas (no screen, no global backend change).
 """
 
@@ -12,16 +22,29 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
-from matplotlib.patches import Circle
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, Patch
 
-from emonav_drake.core.grid_maps import lgm_frame
+from emonav_drake.core.grid_maps import COLLISION_VALUE, DISCOMFORT_VALUE, lgm_frame
 from emonav_drake.core.lidar import as_discs, as_point, beam_angles, scan_discs
+from emonav_drake.core.palette import (
+    EMOTION_RGB,
+    GOAL_RGB,
+    GRID_COLLISION_RGB,
+    GRID_DISCOMFORT_RGB,
+    GRID_FREE_RGB,
+    LIDAR_HIT_RGB,
+    ROBOT_RGB,
+    STATIC_RGB,
+)
+from emonav_drake.params import EMOTION_NAMES
 
 STATIC, PEDESTRIAN = 0, 1
 
-# 0 free (white), 127 discomfort (blue), 255 collision (red), as in the paper's figures.
-_GRID_CMAP = ListedColormap(["white", "tab:blue", "tab:red"])
+# 0 free, 127 discomfort zone, 255 collision area (palette: white, light blue, dark navy).
+_GRID_CMAP = ListedColormap([GRID_FREE_RGB, GRID_DISCOMFORT_RGB, GRID_COLLISION_RGB])
 _GRID_NORM = BoundaryNorm([0, 64, 192, 256], _GRID_CMAP.N)
+_UNKNOWN_PEDESTRIAN_RGB = (0.30, 0.30, 0.30)  # a pedestrian drawn without its emotion
 
 
 def render_grid_map_figure(
@@ -40,6 +63,7 @@ def render_grid_map_figure(
     robot_radius: float = 0.3,
     title: str | None = None,
     dpi: int = 120,
+    emotions: object | None = None,
 ) -> Path:
     """Write a three-panel PNG: (a) the scene, (b) its LGM, (c) its OGM.
 
@@ -51,20 +75,23 @@ def render_grid_map_figure(
         radii: disc radii (n,) [m].
         margins: discomfort margins (n,) [m] (pedestrian: emotion distance; static: 0.2).
         kinds: (n,) 0 for a static disc, 1 for a pedestrian.
-        goal_xy: optional goal (2,) in the world frame [m].
+        goal_xy: optional goal (2,) in the world frame [m]; drawn as an arrow at the edge
+            of panel (a) when it lies beyond it.
         grid_size, num_beams, max_range, min_range: map and LiDAR settings (M, K, L).
         robot_radius: drawn robot radius [m] (the maps ignore it).
         title: optional figure title.
         dpi: PNG resolution.
+        emotions: optional (n,) emotion codes (0 happy, 1 neutral, 2 negative; ignored for
+            static discs) colouring the pedestrians; without them pedestrians are dark grey.
 
     Returns:
         The written path.
 
-    Panel (a) is top-down in the world frame: LiDAR hits of the real scan (red dots),
-    pedestrians (blue rings), static discs (solid cyan), discomfort margins (dashed), the
-    robot (red, arrow = heading) and the goal (green). Panel (b) is the LGM with the
-    rotational (sector) index on x and the radial (ring) index on y; panel (c) the OGM
-    with forward up and the robot's left on the left.
+    Panel (a) is top-down in the world frame (module docstring for the colours); panel (b)
+    is the LGM with the rotational (sector) index on x — labelled with the beam direction
+    relative to the heading — and the radial (ring) index on y (range in metres on the
+    right); panel (c) the OGM with forward up and the robot's left on the left (metres
+    from the robot on the top and right axes), the robot at the centre.
     """
     origin = np.array(as_point(origin_xy))
     heading = float(heading)
@@ -75,6 +102,10 @@ def render_grid_map_figure(
         raise ValueError(
             f"margins and kinds must have shape {r.shape}, got {mg.shape} and {kd.shape}"
         )
+    if emotions is not None:
+        emo = np.asarray(emotions).reshape(-1)
+        if emo.shape != r.shape:
+            raise ValueError(f"emotions must have shape {r.shape}, got {emo.shape}")
     settings = dict(
         num_beams=num_beams, grid_size=grid_size, max_range=max_range, min_range=min_range
     )
@@ -82,25 +113,34 @@ def render_grid_map_figure(
     ogm = lgm_frame(origin, heading, c, r, mg, kind="ogm", **settings)
     ranges = scan_discs(origin, heading, c, r, num_beams, max_range, min_range)
 
-    fig = Figure(figsize=(15, 5), layout="constrained")
+    fig = Figure(figsize=(16, 6.8), layout="constrained")
     FigureCanvasAgg(fig)
-    ax_scene, ax_lgm, ax_ogm = fig.subplots(1, 3)
+    grid = fig.add_gridspec(2, 3, height_ratios=[1.0, 0.13])
+    ax_scene, ax_lgm, ax_ogm = (fig.add_subplot(grid[0, j]) for j in range(3))
+    key_scene, key_grid = fig.add_subplot(grid[1, 0]), fig.add_subplot(grid[1, 1:])
+    key_scene.axis("off")
+    key_grid.axis("off")
 
     # (a) scene, world frame
     seen = ranges < max_range
     world_angles = beam_angles(num_beams)[seen] + heading
     hits = origin + ranges[seen, None] * np.c_[np.cos(world_angles), np.sin(world_angles)]
     ax_scene.add_patch(Circle(origin, max_range, fill=False, ls=":", color="0.6", lw=0.8))
-    for center, radius, margin, kind in zip(c, r, mg, kd, strict=True):
+    shown_emotions: set[int] = set()
+    for i, (center, radius, margin, kind) in enumerate(zip(c, r, mg, kd, strict=True)):
         if int(kind) == PEDESTRIAN:
-            ax_scene.add_patch(Circle(center, radius, fill=False, color="tab:blue", lw=1.5))
-            edge = "tab:blue"
+            if emotions is None:
+                rgb = _UNKNOWN_PEDESTRIAN_RGB
+            else:
+                shown_emotions.add(int(emo[i]))
+                rgb = EMOTION_RGB[int(emo[i])]
+            ax_scene.add_patch(Circle(center, radius, fc=(*rgb, 0.45), ec=rgb, lw=1.5))
         else:
-            ax_scene.add_patch(Circle(center, radius, color="c"))
-            edge = "c"
-        ax_scene.add_patch(Circle(center, radius + margin, fill=False, ls="--", color=edge))
-    ax_scene.plot(hits[:, 0], hits[:, 1], ".", color="tab:red", ms=1.5, label="LiDAR hits")
-    ax_scene.add_patch(Circle(origin, robot_radius, color="tab:red", alpha=0.9))
+            rgb = STATIC_RGB
+            ax_scene.add_patch(Circle(center, radius, color=rgb))
+        ax_scene.add_patch(Circle(center, radius + margin, fill=False, ls="--", ec=rgb, lw=1.2))
+    ax_scene.plot(hits[:, 0], hits[:, 1], ".", color=LIDAR_HIT_RGB, ms=1.5, zorder=5)
+    ax_scene.add_patch(Circle(origin, robot_radius, fc=ROBOT_RGB, ec="k", lw=0.8, zorder=6))
     arrow = 2.0 * robot_radius
     ax_scene.arrow(
         origin[0],
@@ -110,18 +150,40 @@ def render_grid_map_figure(
         width=0.03,
         color="k",
         length_includes_head=True,
+        zorder=7,
     )
+    half = max_range + 0.3  # the panel's half width [m]
+    ax_scene.set_xlim(origin[0] - half, origin[0] + half)
+    ax_scene.set_ylim(origin[1] - half, origin[1] + half)
+    goal_handle = None
     if goal_xy is not None:
         goal = np.array(as_point(goal_xy, "goal_xy"))
-        ax_scene.add_patch(Circle(goal, 0.15, color="tab:green"))
-    ax_scene.set_xlim(origin[0] - max_range, origin[0] + max_range)
-    ax_scene.set_ylim(origin[1] - max_range, origin[1] + max_range)
+        goal_handle = _draw_goal(ax_scene, origin, goal, half)
     ax_scene.set_aspect("equal")
     ax_scene.set_xlabel("x [m] (world)")
     ax_scene.set_ylabel("y [m] (world)")
-    ax_scene.set_title("(a) LiDAR scan")
+    ax_scene.set_title("(a) LiDAR scan (world frame)")
+    handles = [
+        Line2D([], [], ls="none", marker="o", ms=10, mfc=ROBOT_RGB, mec="k", label="robot"),
+        Line2D([], [], color="k", lw=1.5, marker=">", ms=5, label="heading"),
+        Line2D([], [], ls="none", marker=".", color=LIDAR_HIT_RGB, ms=6, label="LiDAR hits"),
+        Line2D([], [], ls=":", color="0.6", label=f"LiDAR range ({max_range:g} m)"),
+    ]
+    if emotions is None:
+        handles.append(_disc_handle(_UNKNOWN_PEDESTRIAN_RGB, "pedestrian"))
+    for e in sorted(shown_emotions) if emotions is not None else []:
+        handles.append(_disc_handle(EMOTION_RGB[e], f"{EMOTION_NAMES[e]} pedestrian"))
+    if np.any(kd != PEDESTRIAN):
+        handles.append(
+            Line2D([], [], ls="none", marker="o", ms=10, color=STATIC_RGB, label="static disc")
+        )
+    handles.append(Line2D([], [], ls="--", color="0.35", label="discomfort zone (radius + margin)"))
+    if goal_handle is not None:
+        handles.append(goal_handle)
+    key_scene.legend(handles=handles, loc="upper center", ncol=3, fontsize=8, frameon=False)
 
     # (b) LGM: array rows are sectors, columns rings -> transpose for x = sector
+    m = lgm.shape[0]
     ax_lgm.imshow(
         lgm.T,
         origin="lower",
@@ -130,7 +192,25 @@ def render_grid_map_figure(
         interpolation="nearest",
         aspect="auto",
     )
-    ax_lgm.set_xlabel("rotational index (sector; 0 = behind right, CCW)")
+    # sector s covers beam angles [−180° + s·360°/M, …): ticks at the sector edges
+    edges = np.array([0, m / 4, m / 2, 3 * m / 4, m]) - 0.5
+    ax_lgm.set_xticks(
+        edges,
+        [
+            "0\n−180° behind",
+            f"{m // 4}\n−90° right",
+            f"{m // 2}\n0° ahead",
+            f"{3 * m // 4}\n+90° left",
+            f"{m}\n180° behind",
+        ],
+        fontsize=8,
+    )
+    ax_lgm.axvline(m / 2 - 0.5, color=ROBOT_RGB, ls=":", lw=1.0)
+    ring = max_range / m
+    ax_lgm.secondary_yaxis(
+        "right", functions=(lambda j: (j + 0.5) * ring, lambda d: d / ring - 0.5)
+    ).set_ylabel("range [m]")
+    ax_lgm.set_xlabel("rotational index (sector; beam direction from the heading, CCW)")
     ax_lgm.set_ylabel("radial index (ring; 0 = at the robot)")
     ax_lgm.set_title("(b) LiDAR grid map (LGM)")
 
@@ -142,9 +222,47 @@ def render_grid_map_figure(
         norm=_GRID_NORM,
         interpolation="nearest",
     )
+    cell = 2.0 * max_range / m
+    centre = m / 2 - 0.5  # the robot sits on the corner between the four middle cells
+    ax_ogm.plot(centre, centre, "^", ms=9, mfc=ROBOT_RGB, mec="k", zorder=5)
+    ax_ogm.secondary_xaxis(
+        "top",
+        functions=(lambda j: (centre - j) * cell, lambda y: centre - y / cell),
+    ).set_xlabel("left of the robot [m]")
+    ax_ogm.secondary_yaxis(
+        "right",
+        functions=(lambda i: (i - centre) * cell, lambda x: centre + x / cell),
+    ).set_ylabel("ahead of the robot [m]")
     ax_ogm.set_xlabel("X pixel (column; robot's right →)")
     ax_ogm.set_ylabel("Y pixel (row; forward ↑)")
-    ax_ogm.set_title("(c) occupancy grid map (OGM)")
+    ax_ogm.set_title("(c) occupancy grid map (OGM, robot frame)")
+
+    grid_handles = [
+        Patch(fc=GRID_FREE_RGB, ec="0.5", label="0: free"),
+        Patch(
+            fc=GRID_DISCOMFORT_RGB,
+            ec="0.5",
+            label=f"{DISCOMFORT_VALUE}: discomfort zone (hit of the inflated scan)",
+        ),
+        Patch(
+            fc=GRID_COLLISION_RGB,
+            ec="0.5",
+            label=f"{COLLISION_VALUE}: collision area (hit of the real scan)",
+        ),
+    ]
+    key_grid.legend(
+        handles=grid_handles
+        + [
+            Line2D([], [], color=ROBOT_RGB, ls=":", label="(b) straight ahead"),
+            Line2D([], [], ls="none", marker="^", ms=8, mfc=ROBOT_RGB, mec="k", label="(c) robot"),
+        ],
+        loc="upper center",
+        ncol=3,
+        fontsize=8,
+        frameon=False,
+        title="grid values (b, c)",
+        title_fontsize=8,
+    )
 
     if title:
         fig.suptitle(title)
@@ -152,3 +270,39 @@ def render_grid_map_figure(
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=dpi, format="png")
     return out
+
+
+def _disc_handle(rgb: tuple[float, float, float], label: str) -> Line2D:
+    return Line2D([], [], ls="none", marker="o", ms=10, mfc=(*rgb, 0.45), mec=rgb, label=label)
+
+
+def _draw_goal(ax, origin: np.ndarray, goal: np.ndarray, half: float) -> Line2D:
+    """The goal as a star, or, beyond the panel (half width `half` [m] about `origin`), an
+    arrow at the panel's edge pointing to it, labelled with its distance; the legend entry."""
+    offset = goal - origin
+    if np.all(np.abs(offset) <= half - 0.2):
+        ax.plot(*goal, "*", ms=16, color=GOAL_RGB, mec="k", mew=0.6, zorder=8)
+        return Line2D([], [], ls="none", marker="*", ms=12, color=GOAL_RGB, mec="k", label="goal")
+    distance = float(np.hypot(*offset))
+    u = offset / distance
+    tip = origin + u * ((half - 0.25) / np.max(np.abs(u)))  # on the edge, 0.25 m inside
+    tail = tip - 1.1 * u
+    ax.annotate(
+        "",
+        xy=tip,
+        xytext=tail,
+        arrowprops=dict(arrowstyle="-|>,head_width=0.4,head_length=0.8", color=GOAL_RGB, lw=2.5),
+        zorder=8,
+    )
+    ax.annotate(
+        f"goal\n{distance:.1f} m",
+        tail - 0.35 * u,
+        ha="center",
+        va="center",
+        fontsize=8,
+        color=GOAL_RGB,
+        fontweight="bold",
+        bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.85),
+        zorder=8,
+    )
+    return Line2D([], [], color=GOAL_RGB, lw=2.5, marker=">", ms=6, label="goal (beyond the panel)")

@@ -1,0 +1,417 @@
+"""Top-view pictures of one episode (`emonav plot`): a PNG of the whole run and an animation.
+
+Both read a `Trajectory` (`evaluation/trajectory.py`, the `"trajectory"` section of
+`emonav sim --json`) and draw in the world frame (x towards the goal, y left, metres),
+with the shared palette (`core/palette.py`): the robot blue, pedestrians green / amber /
+red for happy / neutral / negative, static discs grey, the goal purple.
+
+* `render_trajectory_figure`: the robot's path coloured by time (dots at every walking
+  step t_k), every pedestrian's path coloured by the emotion in force along it (a
+  time-varying emotion changes colour, a diamond marks each change), the robot and the
+  pedestrians with their discomfort zones at chosen times, the static discs with their
+  discomfort rings, start, goal, and where the robot collided (or fell).
+* `render_trajectory_animation`: the episode step by step (one frame per t_k) as a GIF
+  (Pillow) or, when ffmpeg is on the PATH, an MP4.
+
+matplotlib's object API with the Agg canvas: no screen, no pyplot state.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import LineCollection
+from matplotlib.colors import LinearSegmentedColormap, Normalize
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle
+
+from emonav_drake.core.palette import EMOTION_RGB, GOAL_RGB, ROBOT_RGB, STATIC_RGB
+from emonav_drake.evaluation.trajectory import Trajectory
+from emonav_drake.params import EMOTION_NAMES
+
+# The robot's path: light → dark blue with time (no green or yellow: those are emotions).
+ROBOT_TIME_CMAP = LinearSegmentedColormap.from_list(
+    "robot_time", [(0.70, 0.82, 0.97), ROBOT_RGB, (0.05, 0.12, 0.40)]
+)
+_OUTCOME_TEXT = {
+    "success": "reached the goal",
+    "collision": "collision",
+    "timeout": "timeout",
+    "fall": "fall",
+}
+
+
+def default_times(traj: Trajectory, count: int = 4) -> list[float]:
+    """`count` evenly spaced instants t_k from the start to the end of the episode [s]."""
+    rows = np.unique(np.round(np.linspace(0, traj.steps, count)).astype(int))
+    return [float(traj.t[k]) for k in rows]
+
+
+def _rows(traj: Trajectory, times: Sequence[float] | None) -> list[int]:
+    times = default_times(traj) if times is None else times
+    return sorted({traj.index_at(float(t)) for t in times})
+
+
+def _fmt_time(t: float) -> str:
+    return f"{t:.1f}".rstrip("0").rstrip(".") + " s"
+
+
+def _bounds(traj: Trajectory, pad: float = 0.6) -> tuple[float, float, float, float]:
+    """x and y limits [m] that hold the paths, the discs with their rings, start and goal."""
+    pts = [traj.robot[:, :2], traj.start[None], traj.goal[None]]
+    reach = traj.pedestrian_radius + max(traj.discomfort.get(n, 0.0) for n in EMOTION_NAMES)
+    if traj.pedestrians.size:
+        flat = traj.pedestrians.reshape(-1, 2)
+        pts += [flat - reach, flat + reach]
+    if len(traj.obstacle_radii):
+        ring = (traj.obstacle_radii + traj.discomfort.get("static", 0.0))[:, None]
+        pts += [traj.obstacle_centers - ring, traj.obstacle_centers + ring]
+    allp = np.vstack(pts)
+    lo, hi = allp.min(axis=0) - pad, allp.max(axis=0) + pad
+    return float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])
+
+
+def _draw_static(ax, traj: Trajectory) -> None:
+    ring = traj.discomfort.get("static", 0.0)
+    for c, r in zip(traj.obstacle_centers, traj.obstacle_radii, strict=True):
+        ax.add_patch(Circle(c, r, color=STATIC_RGB, zorder=2))
+        ax.add_patch(Circle(c, r + ring, fill=False, ls="--", ec=STATIC_RGB, lw=1.0, zorder=2))
+    ax.plot(*traj.start, "s", color=ROBOT_RGB, mec="k", ms=8, zorder=7)
+    ax.add_patch(
+        Circle(traj.goal, traj.goal_radius, fill=False, ls=":", ec=GOAL_RGB, lw=1.2, zorder=6)
+    )
+    ax.plot(*traj.goal, "*", color=GOAL_RGB, mec="k", mew=0.6, ms=16, zorder=7)
+
+
+def _pedestrian_segments(traj: Trajectory, i: int, upto: int | None = None):
+    """Segments k → k + 1 of pedestrian i's path, each with the emotion in force at t_k."""
+    end = traj.steps if upto is None else upto
+    path = traj.pedestrians[: end + 1, i]
+    segments = np.stack([path[:-1], path[1:]], axis=1)
+    colors = [EMOTION_RGB[int(e)] for e in traj.emotions[:end, i]]
+    return segments, colors
+
+
+def _label(ax, xy, text: str, above: bool, color, z: int) -> None:
+    """A small time label inside a disc: in its upper half, or its lower half (so that two
+    snapshots of the same body at one place keep readable labels)."""
+    x, y = xy
+    ax.text(
+        x,
+        y + (0.03 if above else -0.03),
+        text,
+        ha="center",
+        va="bottom" if above else "top",
+        fontsize=6.5,
+        color=color,
+        zorder=z,
+    )
+
+
+def _draw_person(ax, xy, radius: float, margin: float, rgb, label: str | None, above: bool):
+    """A pedestrian's body and discomfort zone (margin beyond the body [m])."""
+    ax.add_patch(Circle(xy, radius, fc=(*rgb, 0.45), ec=rgb, lw=1.4, zorder=4))
+    ax.add_patch(Circle(xy, radius + margin, fill=False, ls="--", ec=rgb, lw=1.1, zorder=4))
+    if label:
+        _label(ax, xy, label, above, "0.1", 9)
+
+
+def _draw_robot(ax, traj: Trajectory, k: int, label: str | None):
+    """The robot at t_k with a heading tick and a time label."""
+    x, y, th = traj.robot[k, :3]
+    r = traj.robot_radius
+    ax.add_patch(Circle((x, y), r, fc=(*ROBOT_RGB, 0.30), ec=ROBOT_RGB, lw=1.6, zorder=5))
+    ax.plot([x, x + r * math.cos(th)], [y, y + r * math.sin(th)], color="k", lw=1.2, zorder=5)
+    if label:
+        _label(ax, (x, y), label, False, (0.05, 0.12, 0.40), 9)
+
+
+def _mark_end(ax, traj: Trajectory) -> str | None:
+    """The collision point or the fall; returns a note for the title, if any."""
+    if traj.outcome == "collision" and traj.collision:
+        px, py = traj.collision["point"]
+        ax.plot(px, py, "X", color="k", mec="w", mew=1.2, ms=14, zorder=9)
+        with_ = traj.collision.get("with") or ""
+        what = {"static": "a static disc", "": "an object"}.get(with_, f"a {with_} pedestrian")
+        return f"collided with {what} at t = {_fmt_time(float(traj.collision['t']))}"
+    if traj.outcome == "fall":
+        x, y = traj.robot[-1, :2]
+        ax.plot(x, y, "v", color="k", mec="w", mew=1.2, ms=13, zorder=9)
+        return f"fell at t = {_fmt_time(float(traj.t[-1]))}"
+    return None
+
+
+def title_of(traj: Trajectory) -> str:
+    """'<outcome> after <t> s (<K> steps) — planner …, plant …, seed …'."""
+    what = _OUTCOME_TEXT.get(traj.outcome, traj.outcome)
+    return (
+        f"{what} after {_fmt_time(traj.duration)} ({traj.steps} steps) — planner "
+        f"{traj.planner}, plant {traj.plant}, seed {traj.seed}"
+    )
+
+
+def _legend_handles(traj: Trajectory, snapshot_note: str, still: bool = True) -> list[Line2D]:
+    """The legend: `still` for the PNG (step dots, emotion-change diamonds)."""
+    path = "robot path (dots: steps)" if still else "robot path"
+    h = [
+        Line2D([], [], color=ROBOT_RGB, lw=2.5, marker="." if still else None, label=path),
+        Line2D(
+            [],
+            [],
+            ls="none",
+            marker="o",
+            ms=9,
+            mfc=(*ROBOT_RGB, 0.3),
+            mec=ROBOT_RGB,
+            label=f"robot {snapshot_note}",
+        ),
+        Line2D([], [], ls="none", marker="s", color=ROBOT_RGB, mec="k", ms=7, label="start"),
+        Line2D([], [], ls="none", marker="*", color=GOAL_RGB, mec="k", ms=12, label="goal"),
+    ]
+    for name, rgb in zip(EMOTION_NAMES, EMOTION_RGB, strict=True):
+        h.append(
+            Line2D(
+                [],
+                [],
+                color=rgb,
+                lw=1.8,
+                marker="o",
+                ms=7,
+                mfc=(*rgb, 0.45),
+                label=f"{name} pedestrian (zone {traj.discomfort.get(name, 0):g} m)",
+            )
+        )
+    h.append(Line2D([], [], color="0.3", ls="--", lw=1.1, label="discomfort zone edge"))
+    if still and np.any(np.diff(traj.emotions, axis=0) != 0):
+        h.append(
+            Line2D([], [], ls="none", marker="D", ms=6, mfc="w", mec="0.2", label="emotion change")
+        )
+    if len(traj.obstacle_radii):
+        h.append(
+            Line2D(
+                [],
+                [],
+                ls="none",
+                marker="o",
+                ms=9,
+                color=STATIC_RGB,
+                label=f"static disc (zone {traj.discomfort.get('static', 0):g} m)",
+            )
+        )
+    if traj.outcome == "collision":
+        h.append(
+            Line2D([], [], ls="none", marker="X", color="k", mec="w", ms=11, label="collision")
+        )
+    if traj.outcome == "fall":
+        h.append(Line2D([], [], ls="none", marker="v", color="k", mec="w", ms=10, label="fall"))
+    return h
+
+
+def plot_trajectory(ax, traj: Trajectory, times: Sequence[float] | None = None):
+    """Draw one episode on a matplotlib axes (module docstring); returns the robot path's
+    `LineCollection` (its colours map time [s], for a colour bar).
+
+    Args:
+        ax: the axes (world frame, equal aspect is set).
+        traj: the episode.
+        times: instants [s] at which the robot and the pedestrians are drawn with their
+            discomfort zones (each moved to the nearest walking instant t_k); default
+            `default_times(traj)`.
+    """
+    rows = _rows(traj, times)
+    _draw_static(ax, traj)
+    for i in range(traj.pedestrians.shape[1]):
+        segments, colors = _pedestrian_segments(traj, i)
+        ax.add_collection(LineCollection(segments, colors=colors, lw=1.6, alpha=0.9, zorder=3))
+        first = traj.pedestrians[0, i]
+        ax.plot(*first, "o", ms=3.5, color=EMOTION_RGB[int(traj.emotions[0, i])], zorder=3)
+        changes = np.flatnonzero(np.diff(traj.emotions[:, i]) != 0) + 1
+        for k in changes:
+            ax.plot(
+                *traj.pedestrians[k, i],
+                "D",
+                ms=5.5,
+                mfc="w",
+                mew=1.4,
+                mec=EMOTION_RGB[int(traj.emotions[k, i])],
+                zorder=6,
+            )
+    for j, k in enumerate(rows):
+        label = _fmt_time(float(traj.t[k]))
+        for i in range(traj.pedestrians.shape[1]):
+            e = int(traj.emotions[k, i])
+            margin = traj.discomfort.get(EMOTION_NAMES[e], 0.0)
+            rgb = EMOTION_RGB[e]
+            _draw_person(
+                ax, traj.pedestrians[k, i], traj.pedestrian_radius, margin, rgb, label, j % 2 == 0
+            )
+        _draw_robot(ax, traj, k, label)
+    xy = traj.robot[:, :2]
+    norm = Normalize(float(traj.t[0]), max(float(traj.t[-1]), float(traj.t[0]) + 1e-9))
+    path = LineCollection(
+        np.stack([xy[:-1], xy[1:]], axis=1), cmap=ROBOT_TIME_CMAP, norm=norm, lw=2.6, zorder=8
+    )
+    path.set_array(0.5 * (traj.t[:-1] + traj.t[1:]))
+    ax.add_collection(path)
+    ax.scatter(xy[:, 0], xy[:, 1], c=traj.t, cmap=ROBOT_TIME_CMAP, norm=norm, s=7, zorder=8)
+    x0, x1, y0, y1 = _bounds(traj)
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m] (world)")
+    ax.set_ylabel("y [m] (world)")
+    ax.grid(alpha=0.25)
+    return path
+
+
+def render_trajectory_figure(
+    path: str | Path,
+    traj: Trajectory,
+    times: Sequence[float] | None = None,
+    dpi: int = 110,
+) -> Path:
+    """Write the episode's top view (`plot_trajectory`) with title, colour bar and legend
+    as a PNG; returns `path` (parent directories are created)."""
+    rows = _rows(traj, times)
+    x0, x1, y0, y1 = _bounds(traj)
+    width = 7.5  # of the axes [in]; its height follows the data's aspect
+    height = min(max(width * (y1 - y0) / (x1 - x0), 4.0), 9.0)
+    fig = Figure(figsize=(width + 4.3, height + 1.4), layout="constrained")
+    FigureCanvasAgg(fig)
+    grid = fig.add_gridspec(1, 2, width_ratios=[width + 1.1, 3.0])
+    ax, key = fig.add_subplot(grid[0]), fig.add_subplot(grid[1])
+    key.axis("off")
+    line = plot_trajectory(ax, traj, [float(traj.t[k]) for k in rows])
+    # in the axes' own coordinates: as tall as the equal-aspect plot, not its layout cell
+    fig.colorbar(line, cax=ax.inset_axes((1.015, 0.0, 0.025, 1.0)), label="robot: time [s]")
+    when = ", ".join(_fmt_time(float(traj.t[k])) for k in rows)
+    note = _mark_end(ax, traj)
+    ax.set_title(
+        title_of(traj) + ("\n" + note if note else "") + f"\nrobot and pedestrians at t = {when}",
+        fontsize=10,
+    )
+    key.legend(
+        handles=_legend_handles(traj, "at the times shown (label: t)"),
+        loc="upper left",
+        fontsize=8,
+        frameon=False,
+    )
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=dpi, format="png")
+    return out
+
+
+def animation_writer(path: str | Path, fps: float):
+    """The matplotlib writer for `path`'s suffix: .gif (Pillow) or .mp4 (ffmpeg, which must
+    be on the PATH); `ValueError` otherwise."""
+    from matplotlib.animation import FFMpegWriter, PillowWriter
+
+    suffix = Path(path).suffix.lower()
+    if suffix == ".gif":
+        return PillowWriter(fps=fps)
+    if suffix == ".mp4":
+        if shutil.which("ffmpeg") is None:
+            raise ValueError(f"{path}: an .mp4 needs ffmpeg on the PATH; write a .gif instead")
+        return FFMpegWriter(fps=fps)
+    raise ValueError(f"{path}: the animation must end in .gif or .mp4")
+
+
+def render_trajectory_animation(
+    path: str | Path,
+    traj: Trajectory,
+    fps: float | None = None,
+    dpi: int = 80,
+) -> Path:
+    """Write the episode frame by frame (one frame per walking instant t_k, plus a still
+    second at the end) as a GIF or MP4 (`animation_writer`).
+
+    Args:
+        path: output file, .gif or .mp4.
+        traj: the episode.
+        fps: frames per second; default 1/T (real time).
+        dpi: resolution.
+    """
+    fps = 1.0 / traj.step_time if fps is None else float(fps)
+    if not (fps > 0 and math.isfinite(fps)):
+        raise ValueError(f"fps {fps}: must be > 0")
+    writer = animation_writer(path, fps)
+    x0, x1, y0, y1 = _bounds(traj)
+    width = 6.0  # of the axes [in]; its height follows the data's aspect
+    height = min(max(width * (y1 - y0) / (x1 - x0), 3.5), 7.0)
+    fig = Figure(figsize=(width + 2.9, height + 1.0), layout="constrained")
+    FigureCanvasAgg(fig)
+    grid = fig.add_gridspec(1, 2, width_ratios=[width, 2.8])
+    ax, key = fig.add_subplot(grid[0]), fig.add_subplot(grid[1])
+    key.axis("off")
+    _draw_static(ax, traj)
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m] (world)")
+    ax.set_ylabel("y [m] (world)")
+    ax.grid(alpha=0.25)
+    key.legend(
+        handles=_legend_handles(traj, "now", still=False),
+        loc="upper left",
+        fontsize=7,
+        frameon=False,
+    )
+    title = ax.set_title("", fontsize=9)
+
+    p = traj.pedestrians.shape[1]
+    rp, rr = traj.pedestrian_radius, traj.robot_radius
+    trails = [ax.add_collection(LineCollection([], lw=1.4, zorder=3)) for _ in range(p)]
+    bodies = [ax.add_patch(Circle((0, 0), rp, lw=1.4, zorder=4)) for _ in range(p)]
+    rings = [
+        ax.add_patch(Circle((0, 0), rp, fill=False, ls="--", lw=1.1, zorder=4)) for _ in range(p)
+    ]
+    (robot_trail,) = ax.plot([], [], color=ROBOT_RGB, lw=2.2, zorder=8)
+    robot = ax.add_patch(Circle((0, 0), rr, fc=(*ROBOT_RGB, 0.35), ec=ROBOT_RGB, lw=1.6, zorder=8))
+    (nose,) = ax.plot([], [], color="k", lw=1.4, zorder=8)
+    end_marks: list = []
+    head = title_of(traj)
+
+    def frame(k: int):
+        for i in range(p):
+            segments, colors = _pedestrian_segments(traj, i, k)
+            trails[i].set_segments(segments)
+            trails[i].set_colors(colors)
+            e = int(traj.emotions[k, i])
+            rgb = EMOTION_RGB[e]
+            centre = traj.pedestrians[k, i]
+            bodies[i].set_center(centre)
+            bodies[i].set_facecolor((*rgb, 0.45))
+            bodies[i].set_edgecolor(rgb)
+            rings[i].set_center(centre)
+            rings[i].set_radius(rp + traj.discomfort.get(EMOTION_NAMES[e], 0.0))
+            rings[i].set_edgecolor(rgb)
+        x, y, th, v = traj.robot[k]
+        robot_trail.set_data(traj.robot[: k + 1, 0], traj.robot[: k + 1, 1])
+        robot.set_center((x, y))
+        nose.set_data([x, x + rr * math.cos(th)], [y, y + rr * math.sin(th)])
+        status = f"t = {float(traj.t[k]):.1f} s, step {k}/{traj.steps}, v = {v:.2f} m/s"
+        if k == traj.steps:
+            if not end_marks:  # drawn once, kept on the still frames
+                end_marks.append(_mark_end(ax, traj))
+            if end_marks[0]:
+                status += f" — {end_marks[0]}"
+        title.set_text(f"{head}\n{status}")
+
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    frame(0)
+    fig.canvas.draw()  # lay the figure out once, then keep it: one draw per frame
+    fig.set_layout_engine("none")
+    hold = max(1, round(fps))  # one still second on the last frame
+    with writer.saving(fig, str(out), dpi):
+        for k in [*range(traj.steps + 1), *[traj.steps] * hold]:
+            frame(k)
+            writer.grab_frame()
+    return out
