@@ -1,18 +1,38 @@
 """`emonav walk`: the full-order Digit walking under navigation commands.
 
 emonav walk --seconds S --seed K [--command random|straight|turn|stand] [--speed V]
-            [--config F.yaml] [--meshcat] [--record out.html] [--json out.json]
+            [--config F.yaml] [--meshcat [--no-wait]] [--record out.html] [--json out.json]
+            [--steps-out steps.csv]
+
+`write_steps_csv` also writes `emonav sim --steps-out` (one row per planner step).
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import csv
+import io
 import math
+from collections.abc import Sequence
 from pathlib import Path
 
-from emonav_drake.atomic_io import atomic_output, check_distinct, check_output_file, write_json
-from emonav_drake.params import ConfigError
+import numpy as np
+
+from emonav_drake.atomic_io import (
+    atomic_output,
+    check_distinct,
+    check_output_file,
+    write_json,
+    write_text_atomic,
+)
+from emonav_drake.core.tracking import COLUMNS
+from emonav_drake.params import ConfigError, EmoNavConfig
+
+STEPS_OUT_HELP = (
+    "write one CSV row per walking step: its command, the desired LIP step (paper Eq. 1), "
+    "the achieved CoM and heading and the errors (columns: docs/walking.md)"
+)
 
 
 def _validate_walk_args(args: argparse.Namespace, max_speed: float) -> None:
@@ -31,10 +51,46 @@ def _validate_walk_args(args: argparse.Namespace, max_speed: float) -> None:
             raise ConfigError(
                 f"--speed {args.speed}: must be in [0, {max_speed}] m/s (robot.max_speed)"
             )
-    for flag in ("json", "record"):
+    for flag in ("json", "record", "steps_out"):
         if getattr(args, flag) is not None:
-            check_output_file(getattr(args, flag), f"--{flag}")
-    check_distinct({"--json": args.json, "--record": args.record})
+            check_output_file(getattr(args, flag), f"--{flag.replace('_', '-')}")
+    check_distinct({"--json": args.json, "--record": args.record, "--steps-out": args.steps_out})
+
+
+def write_steps_csv(path: str | Path, table: np.ndarray) -> int:
+    """Write a tracking table (`core.tracking.COLUMNS`, one row per step) as CSV, atomically.
+
+    The header is the column names; `step` is an integer, every other value a float in
+    SI units (m, rad, s, m/s: `core.tracking.UNITS`) with full precision (NaN as "nan").
+    Returns the number of rows written."""
+    rows = np.asarray(table, float).reshape(-1, len(COLUMNS))
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(COLUMNS)
+    for r in rows:
+        writer.writerow([int(r[0]), *(repr(float(v)) for v in r[1:])])
+    write_text_atomic(path, buf.getvalue())
+    return len(rows)
+
+
+def episode_steps_table(
+    config: EmoNavConfig,
+    trace: Sequence[dict] | None = None,
+    robot: Sequence[np.ndarray] | None = None,
+    commands: Sequence[np.ndarray] | None = None,
+) -> np.ndarray:
+    """The tracking table of a navigation episode against the planner's LIP (ω = √(g/H) of
+    `config.robot`): from a Digit episode's `trace` (`run_digit_episode(trace=...)`), or
+    from the LIP diagram's `StepLog` lists `robot` (t_k = kT) and `commands`."""
+    from emonav_drake.core.tracking import sequence_tracking, trace_tracking
+
+    r = config.robot
+    if trace is not None:
+        return trace_tracking(trace, r.omega, r.step_time)
+    states = np.asarray(robot, float).reshape(-1, 4)
+    u = np.asarray(commands, float).reshape(-1, 2)[: max(len(states) - 1, 0)]
+    n = len(u) + 1
+    return sequence_tracking(np.arange(n) * r.step_time, states[:n], u, r.omega, r.step_time)
 
 
 def _fmt(value: float, digits: int) -> str:
@@ -51,11 +107,11 @@ def cmd_walk(args: argparse.Namespace) -> int:
 
     meshcat = None
     if args.meshcat or args.record:
-        from pydrake.geometry import Meshcat
+        from emonav_drake.meshcat_viewing import make_meshcat, start_live_view
 
-        meshcat = Meshcat()
+        meshcat = make_meshcat(live=args.meshcat)  # record only: no "listening at" line
         if args.meshcat:
-            print(f"Meshcat: {meshcat.web_url()}")
+            start_live_view(meshcat, wait=not args.no_wait)
     with contextlib.ExitStack() as stack:
         # the replay goes to a temporary sibling, renamed when complete
         record = stack.enter_context(atomic_output(args.record)) if args.record else None
@@ -83,6 +139,13 @@ def cmd_walk(args: argparse.Namespace) -> int:
         print(f"replay written to {args.record}")
     if args.json:
         write_json(args.json, out)  # NaN (too short a walk to measure) becomes null
+    if args.steps_out:
+        n = write_steps_csv(args.steps_out, result.tracking(cfg))
+        print(f"{n} steps written to {args.steps_out}")
+    if args.meshcat:  # the last pose stays on screen until Ctrl-C
+        from emonav_drake.meshcat_viewing import finish_live_view
+
+        finish_live_view(meshcat, keep_serving=not args.no_wait)
     return 0
 
 
@@ -104,8 +167,19 @@ def add_walk_parser(subparsers: argparse._SubParsersAction) -> argparse.Argument
         help="u_v for --command straight [m/s], in [0, robot.max_speed] (default the maximum)",
     )
     w.add_argument("--config", type=Path, help="YAML configuration overriding the defaults")
-    w.add_argument("--meshcat", action="store_true", help="draw live in Meshcat (real time)")
+    w.add_argument(
+        "--meshcat",
+        action="store_true",
+        help="draw live in Meshcat (real time): waits for a browser to connect, keeps "
+        "serving after the walk until Ctrl-C",
+    )
+    w.add_argument(
+        "--no-wait",
+        action="store_true",
+        help="with --meshcat: neither wait for a browser nor keep serving afterwards",
+    )
     w.add_argument("--record", type=Path, help="write a self-contained HTML replay")
     w.add_argument("--json", type=Path, help="write the result as JSON (NaN written as null)")
+    w.add_argument("--steps-out", type=Path, metavar="FILE.csv", help=STEPS_OUT_HELP)
     w.set_defaults(func=cmd_walk)
     return w

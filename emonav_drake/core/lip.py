@@ -92,3 +92,20 @@ def lip_in_step(
 def lip_velocity(state: LipState) -> np.ndarray:
     """World-frame CoM velocity (2,) [m/s]: the sagittal speed along the heading."""
     return np.array([state.speed * math.cos(state.heading), state.speed * math.sin(state.heading)])
+
+
+def lip_steps(
+    states: np.ndarray, commands: np.ndarray, omega: float, step_time: float
+) -> np.ndarray:
+    """`lip_step` row by row: the states (n, 4) = (x, y, θ, v) at the next switch of
+    starting states (n, 4) under commands (n, 2) = (u_v [m/s], u_Δθ [rad]); world frame,
+    headings wrapped to (−π, π]."""
+    s = np.asarray(states, float).reshape(-1, 4)
+    u = np.asarray(commands, float).reshape(-1, 2)
+    if len(s) != len(u):
+        raise ValueError(f"{len(s)} states but {len(u)} commands")
+    out = [
+        tuple(lip_step(LipState(*map(float, a)), float(c[0]), float(c[1]), omega, step_time))
+        for a, c in zip(s, u, strict=True)
+    ]
+    return np.array(out, float).reshape(-1, 4)

@@ -33,7 +33,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
-from emonav_drake.core.lip import LipState, wrap_angle
+from emonav_drake.core.lip import LipState, lip_steps, wrap_angle
 
 FEATURES = (
     "u_v[k-2]",  # commanded speed of step k − 2 [m/s]
@@ -219,15 +219,7 @@ class StepResponseModel:
 def lip_errors(data: Transitions, omega: float, step_time: float, delay: int) -> np.ndarray:
     """Per-transition errors y − ŷ (n, 4) of the LIP step map (Eq. 1) driven by u_k
     (`delay` 0, the paper's model), u_{k−1} (1) or u_{k−2} (2)."""
-    from emonav_drake.core.lip import lip_step
-
-    cmd = data.commands[:, LAGS - 1 - delay]
-    pred = np.array(
-        [
-            tuple(lip_step(LipState(*s), float(c[0]), float(c[1]), omega, step_time))
-            for s, c in zip(data.states, cmd, strict=True)
-        ]
-    ).reshape(-1, 4)
+    pred = lip_steps(data.states, data.commands[:, LAGS - 1 - delay], omega, step_time)
     return outcome(data.states, data.next_states) - outcome(data.states, pred)
 
 
