@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml
 	@touch $(STAMP)
 
 demo: $(STAMP)  ## the shipped learned policy walks the full-order Digit through a crowd (seed 0)
-	$(VENV)/bin/emonav sim --planner sac --plant digit --seed 0 --record demo_replay.html --json demo_result.json
+	$(VENV)/bin/emonav sim --planner policy --plant digit --seed 0 --record demo_replay.html --json demo_result.json
 
 test: $(STAMP)  ## lint + the whole test suite
 	$(VENV)/bin/ruff check .

@@ -1,9 +1,10 @@
 """The `emonav` command line.
 
 emonav sim  --planner dwa --plant lip --seed S [--scenario F.yaml] [--config F.yaml]
-            [--meshcat] [--record out.html] [--json out.json] [--rays]
+            [--meshcat [--no-wait]] [--record out.html] [--json out.json] [--rays]
 emonav eval --planner dwa --plant lip --episodes 100 --first-seed 0 [--json out.json]
-emonav lgm  --seed S --png out.png [--steps K]
+emonav lgm  --seed S --png out.png [--steps K] [--time-varying]
+emonav plot RUN.json --png out.png [--times 0,5,10] [--gif out.gif]   (cli_plot.py)
 
 Errors: a bad flag, file or field is one line `emonav: error: ...` naming it, exit code 2
 (`--debug` shows the traceback instead). Ctrl-C: one line, exit code 130; `eval` keeps
@@ -34,7 +35,7 @@ from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.variants import VARIANTS, is_learned
 from emonav_drake.params import ConfigError, EmoNavConfig, load_config
 
-PLANNER_CHOICES = ["dwa", "mpc", "sac", *VARIANTS]
+PLANNER_CHOICES = ["dwa", "mpc", "policy", "sac", *VARIANTS]
 
 # Exit codes.
 EXIT_USAGE = 2  # a user error: bad flag, file, field or output path
@@ -81,7 +82,9 @@ def _scenario(args: argparse.Namespace, cfg: EmoNavConfig):
     from emonav_drake.core.scenario import add_time_varying_emotion, load_scenario
 
     if getattr(args, "scenario", None):
-        sc = load_scenario(args.scenario, cfg)
+        from emonav_drake.scenarios import scenario_path
+
+        sc = load_scenario(scenario_path(args.scenario), cfg)
         sc.seed = args.seed if sc.seed < 0 else sc.seed
         if getattr(args, "time_varying", False):
             add_time_varying_emotion(sc, sc.seed, cfg)
@@ -114,12 +117,12 @@ def _check_planner_flags(args: argparse.Namespace) -> None:
     if not is_learned(args.planner):
         if args.checkpoint is not None:
             raise ConfigError(
-                f"--checkpoint applies to a learned planner (--planner sac or a variant), "
+                f"--checkpoint applies to a learned planner (--planner policy, sac or a variant), "
                 f"not {args.planner}"
             )
         if args.device != "cpu":
             raise ConfigError(
-                f"--device applies to a learned planner (--planner sac or a variant), "
+                f"--device applies to a learned planner (--planner policy, sac or a variant), "
                 f"not {args.planner}"
             )
         return
@@ -145,7 +148,7 @@ def _check_outputs(args: argparse.Namespace, *flags: str) -> None:
 
 def cmd_sim(args: argparse.Namespace) -> int:
     _check_seed(args.seed, "--seed")
-    _check_outputs(args, "--json", "--record")
+    _check_outputs(args, "--json", "--record", "--steps-out")
     if args.plant == "digit" and (args.emotion_estimate or args.rays):
         raise ConfigError(
             "--plant digit: --rays and --emotion-estimate are available "
@@ -161,21 +164,25 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
     grid_kind = configure_for(planner, cfg)
-    meshcat = None
+    if hasattr(planner, "describe"):
+        print(f"planner {args.planner}: {planner.describe()}")
+    meshcat = caption = None
     if args.meshcat or args.record:
-        from pydrake.geometry import Meshcat
-
+        from emonav_drake.meshcat_viewing import ReplayCaption, make_meshcat, start_live_view
         from emonav_drake.systems.navigation_meshcat import set_overview_camera
 
-        meshcat = Meshcat()
+        meshcat = make_meshcat(live=args.meshcat)  # record only: no "listening at" line
         set_overview_camera(meshcat, cfg)
         if args.meshcat:
-            print(f"Meshcat: {meshcat.web_url()}")
+            plant = "Digit" if args.plant == "digit" else "LIP"
+            caption = ReplayCaption(args.planner, plant, scenario.seed, rays=args.rays)
+            start_live_view(meshcat, wait=not args.no_wait, caption=caption)
     rates = None
     if args.rates:
         from emonav_drake.evaluation.rates import RateMeasurement
 
         rates = RateMeasurement()
+    trace: list[dict] = []  # Digit's per-step log: the trajectory of --json
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:
         # the replay goes to a temporary sibling, renamed when complete
@@ -191,9 +198,10 @@ def cmd_sim(args: argparse.Namespace) -> int:
                 realtime_rate=1.0 if args.meshcat else 0.0,
                 record_html=record_html,
                 rates=rates,
+                trace=trace if args.json or args.steps_out else None,
             )
         else:
-            record, _ = run_episode(
+            record, step_log = run_episode(
                 scenario,
                 cfg,
                 planner,
@@ -221,8 +229,31 @@ def cmd_sim(args: argparse.Namespace) -> int:
     )
     if args.record:
         print(f"replay written to {Path(args.record).resolve()} (open it in a browser)")
-    if args.json:
+    if args.json:  # the episode step by step, drawn by `emonav plot`
+        from emonav_drake.evaluation import trajectory as tj
+
+        goal_r = cfg.episode.eval_goal_radius
+        out["trajectory"] = (
+            tj.trajectory_from_digit_trace(scenario, cfg, record, trace, args.planner, goal_r)
+            if args.plant == "digit"
+            else tj.trajectory_from_step_log(scenario, cfg, record, step_log, args.planner, goal_r)
+        ).to_json()
         write_json(args.json, out)
+    if args.steps_out:  # per planner step: the planner's LIP step vs the robot
+        from emonav_drake.cli_walk import episode_steps_table, write_steps_csv
+
+        table = (
+            episode_steps_table(cfg, trace=trace)
+            if args.plant == "digit"
+            else episode_steps_table(cfg, robot=step_log.robot, commands=step_log.commands)
+        )
+        n = write_steps_csv(args.steps_out, table)
+        print(f"{n} steps written to {args.steps_out}")
+    if caption is not None:  # live: the outcome in Meshcat, served until Ctrl-C
+        from emonav_drake.meshcat_viewing import finish_live_view
+
+        caption.set_outcome(record)
+        finish_live_view(meshcat, keep_serving=not args.no_wait, caption=caption)
     return 0
 
 
@@ -266,6 +297,8 @@ def cmd_eval(args: argparse.Namespace) -> int:
     scenarios = [_sample(args, seed, cfg) for seed in seeds]
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
     grid_kind = configure_for(planner, cfg)
+    if hasattr(planner, "describe"):
+        print(f"planner {args.planner}: {planner.describe()}")
     records = []
     interrupted = False
     with tqdm(total=len(seeds), desc=f"{args.planner}/{args.plant}", unit="ep") as bar:
@@ -308,11 +341,6 @@ def cmd_lgm(args: argparse.Namespace) -> int:
     if args.steps < 0:
         raise ConfigError(f"--steps {args.steps}: must be >= 0")
     _check_outputs(args, "--png")
-    for flag in ("checkpoint", "emotion_estimate"):
-        if getattr(args, flag) is not None:
-            raise ConfigError(f"--{flag.replace('_', '-')} is not used by lgm")
-    if args.device != "cpu":
-        raise ConfigError("--device is not used by lgm")
     import numpy as np
 
     from emonav_drake.core.crowd import obstacle_discs
@@ -332,6 +360,7 @@ def cmd_lgm(args: argparse.Namespace) -> int:
     kinds = np.concatenate(
         [np.ones(len(obs.crowd.positions), int), np.zeros(len(obs.crowd.static_radii), int)]
     )
+    emotions = np.concatenate([obs.crowd.emotions, np.full(len(obs.crowd.static_radii), -1)])
     with atomic_output(args.png) as tmp:
         render_grid_map_figure(
             tmp,
@@ -343,6 +372,13 @@ def cmd_lgm(args: argparse.Namespace) -> int:
             kinds,
             goal_xy=obs.goal_xy,
             grid_size=cfg.lidar.grid_size,
+            num_beams=cfg.lidar.num_beams,
+            max_range=cfg.lidar.max_range,
+            min_range=cfg.lidar.min_range,
+            robot_radius=cfg.robot.radius,
+            title=f"seed {world.scenario.seed}: t = {world.step_count * cfg.robot.step_time:.1f} s "
+            f"(after {world.step_count} DWA steps)",
+            emotions=emotions,
         )
     print(f"wrote {args.png} (seed {args.seed}, after {world.step_count} steps)")
     return 0
@@ -372,11 +408,40 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--planner", default="dwa", choices=PLANNER_CHOICES)
     s.add_argument("--plant", default="lip", choices=["lip", "digit"])
     s.add_argument("--seed", type=int, default=0, help="scenario seed (>= 0)")
-    s.add_argument("--scenario", type=Path, help="YAML scenario instead of a sampled one")
-    s.add_argument("--meshcat", action="store_true", help="draw live in Meshcat (real time)")
+    s.add_argument(
+        "--scenario",
+        help="YAML scenario file instead of a sampled one, or the name of a shipped "
+        "example (head_on, crossing, mood_swing; `emonav config --list`)",
+    )
+    s.add_argument(
+        "--meshcat",
+        action="store_true",
+        help="draw live in Meshcat (real time): prints the URL, waits for a browser to "
+        "connect, and keeps serving after the episode until Ctrl-C",
+    )
+    s.add_argument(
+        "--no-wait",
+        action="store_true",
+        help="with --meshcat: start without waiting for a browser and exit when the "
+        "episode ends (scripts, tests)",
+    )
     s.add_argument("--record", type=Path, help="write a self-contained HTML replay")
-    s.add_argument("--rays", action="store_true", help="draw the LiDAR rays in Meshcat")
-    s.add_argument("--json", type=Path, help="write the outcome as JSON")
+    s.add_argument(
+        "--rays", action="store_true", help="draw the LiDAR rays (per walking step) in Meshcat"
+    )
+    s.add_argument(
+        "--json",
+        type=Path,
+        help="write the outcome and the trajectory as JSON (drawn by `emonav plot`)",
+    )
+    s.add_argument(
+        "--steps-out",
+        type=Path,
+        metavar="FILE.csv",
+        help="write one CSV row per planner step: the command held, the planner's LIP step "
+        "(paper Eq. 1) from the robot at t_k vs the robot at t_k+1, the errors "
+        "(docs/walking.md; with --plant lip the errors are zero up to rounding)",
+    )
     s.add_argument(
         "--rates",
         action="store_true",
@@ -405,11 +470,19 @@ def build_parser() -> argparse.ArgumentParser:
     g = sub.add_parser(
         "lgm", parents=[debug], help="render a scenario's LiDAR grid map and OGM as a PNG"
     )
-    g.add_argument("--seed", type=int, default=0)
-    g.add_argument("--scenario", type=Path)
+    g.add_argument("--seed", type=int, default=0, help="scenario seed (>= 0)")
+    g.add_argument(
+        "--scenario",
+        help="YAML scenario file instead of a sampled one, or the name of a shipped example",
+    )
     g.add_argument("--steps", type=int, default=8, help="DWA steps to walk before the snapshot")
     g.add_argument("--png", type=Path, required=True)
-    _add_common(g)
+    g.add_argument("--config", type=Path, help="YAML configuration overriding the defaults")
+    g.add_argument(
+        "--time-varying",
+        action="store_true",
+        help="one pedestrian's emotion changes every 2 s (as in `sim --time-varying`)",
+    )
     g.set_defaults(func=cmd_lgm)
 
     from emonav_drake.learning.cli_train import add_export_parser, add_train_parser
@@ -422,6 +495,9 @@ def build_parser() -> argparse.ArgumentParser:
     from emonav_drake.cli_walk import add_walk_parser
 
     add_walk_parser(sub)
+    from emonav_drake.cli_plot import add_plot_parser
+
+    add_plot_parser(sub)
     from emonav_drake.cli_benchmark import add_benchmark_parser
 
     add_benchmark_parser(sub)

@@ -1,9 +1,10 @@
 """`emonav benchmark` (methods × seeded trials, resumable, on Ray) and `emonav config`.
 
-emonav benchmark --planners sac,mpc,dwa --plant lip --trials 500 --first-seed 0
+emonav benchmark --planners policy,mpc,dwa --plant lip --trials 500 --first-seed 0
                  [--workers W] [--ray-address ADDR] [--config F | --setting NAME]
                  [--time-varying] [--emotion-estimate F] [--checkpoint NAME=PATH …] --out DIR
-emonav config --show [--setting NAME | --config F] [--time-varying]
+emonav config [--dump] [--setting NAME | --config F] [--time-varying]
+emonav config --list
 
 The run directory keeps `settings.json`, `trials.jsonl` (one line per finished trial) and
 the tables (`tables.md`, CSVs); the same command again continues an interrupted run, a
@@ -104,11 +105,30 @@ def cmd_config(args: argparse.Namespace) -> int:
     """Print the resolved configuration as YAML (loadable with --config)."""
     from emonav_drake.params import dump_config
 
-    if not args.show:
-        raise ConfigError("emonav config: nothing to do; use --show")
+    if args.list:
+        sys.stdout.write(_list_examples())
+        return 0
     cfg, _, source = resolve_config(args)
     sys.stdout.write(f"# emonav configuration: {source}\n{dump_config(cfg)}")
     return 0
+
+
+def _list_examples() -> str:
+    """The named settings and example scenarios shipped with the package, one per line."""
+    from emonav_drake.configs import SETTINGS, setting_path
+    from emonav_drake.scenarios import EXAMPLES, SCENARIO_DIR
+
+    def first_comment(path: Path) -> str:
+        for line in path.read_text().splitlines():
+            if line.startswith("#"):
+                return line.lstrip("# ").strip()
+        return ""
+
+    lines = ["settings (--setting NAME):"]
+    lines += [f"  {n:14s} {first_comment(setting_path(n))}" for n in SETTINGS]
+    lines.append("example scenarios (emonav sim --scenario NAME):")
+    lines += [f"  {n:14s} {first_comment(SCENARIO_DIR / f'{n}.yaml')}" for n in EXAMPLES]
+    return "\n".join(lines) + "\n"
 
 
 def _add_config_choice(p: argparse.ArgumentParser) -> None:
@@ -140,8 +160,9 @@ def add_benchmark_parser(subparsers: argparse._SubParsersAction) -> argparse.Arg
     )
     b.add_argument(
         "--planners",
-        default="sac,mpc,dwa",
-        help="comma-separated methods: dwa, mpc, sac, or a name given a --checkpoint",
+        default="policy,mpc,dwa",
+        help="comma-separated methods: dwa, mpc, policy (the shipped policy), a variant, "
+        "or a name given a --checkpoint (sac: a SAC-trained one)",
     )
     b.add_argument("--plant", default="lip", choices=["lip", "digit"])
     b.add_argument("--trials", type=int, default=500, help="trials per method (>= 1)")
@@ -164,8 +185,8 @@ def add_benchmark_parser(subparsers: argparse._SubParsersAction) -> argparse.Arg
         "--checkpoint",
         action="append",
         metavar="NAME=PATH",
-        help="policy checkpoint of a learned method (repeatable); sac defaults to the "
-        "shipped policy",
+        help="policy checkpoint of a learned method (repeatable); policy defaults to the "
+        "shipped policy, a variant to its shipped policy",
     )
     b.add_argument("--out", type=Path, required=True, help="run directory (created if missing)")
     b.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -184,8 +205,21 @@ def add_benchmark_parser(subparsers: argparse._SubParsersAction) -> argparse.Arg
     d.add_argument("--out", type=Path, required=True, help="output directory")
     d.set_defaults(func=cmd_diagnose)
 
-    c = subparsers.add_parser("config", help="print the resolved configuration as YAML")
-    c.add_argument("--show", action="store_true", help="print the configuration")
+    c = subparsers.add_parser(
+        "config",
+        help="print the resolved configuration as YAML (the defaults unless a setting or "
+        "file is given), or list the shipped settings and example scenarios",
+    )
+    c.add_argument(
+        "--dump",
+        "--show",
+        dest="show",
+        action="store_true",
+        help="print the whole configuration, loadable with --config (the default action)",
+    )
+    c.add_argument(
+        "--list", action="store_true", help="list the named settings and example scenarios"
+    )
     _add_config_choice(c)
     c.set_defaults(func=cmd_config)
     return b

@@ -9,16 +9,20 @@ on the object, `reset()` between episodes).
 from __future__ import annotations
 
 from emonav_drake.learning.variants import VARIANTS, is_learned, shipped_checkpoint
-from emonav_drake.params import EmoNavConfig
+from emonav_drake.params import ConfigError, EmoNavConfig
 
-# "sac" is the shipped policy (the EmoBipedNav variant); the other learned methods of the
-# paper by their variant name (`learning/variants.py`).
-PLANNERS = ("dwa", "mpc", "sac", *VARIANTS)
+# "policy" runs any trained checkpoint, by default the shipped policy (the EmoBipedNav
+# variant, a DAgger student); "sac" a SAC-trained checkpoint (`emonav train --algo sac`);
+# the other learned methods of the paper by their variant name (`learning/variants.py`).
+PLANNERS = ("dwa", "mpc", "policy", "sac", *VARIANTS)
 
 
 def make_planner(name: str, config: EmoNavConfig, checkpoint=None, device: str = "cpu"):
-    """Create the planner called `name`: "dwa", "mpc", "sac" or a variant name (a trained
-    policy; `checkpoint` defaults to the policy shipped under that name)."""
+    """Create the planner called `name`: "dwa", "mpc", "policy", "sac" or a variant name.
+
+    "policy" loads `checkpoint` (default: the shipped policy); "sac" needs the checkpoint
+    of a SAC actor (a `ConfigError` names `--planner policy` for a DAgger student or a
+    missing checkpoint); a variant defaults to the policy shipped under its name."""
     if name == "dwa":
         from emonav_drake.core.dwa import DwaPlanner
 
@@ -28,11 +32,23 @@ def make_planner(name: str, config: EmoNavConfig, checkpoint=None, device: str =
 
         return MpcPlanner(config)
     if is_learned(name):
-        from emonav_drake.learning.policy import PolicyPlanner
+        from emonav_drake.learning.policy import PolicyPlanner, describe_policy, policy_kind
 
-        if checkpoint is None and name != "sac":
+        if name == "sac" and checkpoint is None:
+            raise ConfigError(
+                "--planner sac runs a SAC-trained checkpoint (`emonav train --algo sac`): "
+                "give --checkpoint PATH; the shipped policy is a DAgger student, run it "
+                "with --planner policy"
+            )
+        if checkpoint is None and name != "policy":
             checkpoint = shipped_checkpoint(name)
-        return PolicyPlanner(checkpoint, device=device)
+        planner = PolicyPlanner(checkpoint, device=device)
+        if name == "sac" and policy_kind(planner.meta) != "sac":
+            raise ConfigError(
+                f"--planner sac: {planner.path} is not a SAC actor but a "
+                f"{describe_policy(planner.meta)}; run it with --planner policy"
+            )
+        return planner
     raise ValueError(f"unknown planner {name!r}: choose one of {list(PLANNERS)}")
 
 

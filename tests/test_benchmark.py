@@ -30,7 +30,7 @@ from emonav_drake.evaluation.benchmark import (
 )
 from emonav_drake.params import dump_config, load_config
 
-METHODS = "dwa,sac"
+METHODS = "dwa,policy"
 TRIALS = 3
 FIRST = 4
 
@@ -70,14 +70,14 @@ def reference(tmp_path_factory) -> Path:
 
 def test_serial_run_writes_lines_settings_and_tables(reference):
     settings, trials = load_run(reference)
-    assert settings["planners"] == ["dwa", "sac"] and settings["plant"] == "lip"
+    assert settings["planners"] == ["dwa", "policy"] and settings["plant"] == "lip"
     assert settings["trials"] == TRIALS and settings["first_seed"] == FIRST
     assert settings["goal_radius"] == load_config().episode.eval_goal_radius
     assert load_config(data=settings["config_yaml"]) == load_config()
-    assert len(settings["methods"]["sac"]["checkpoint_sha256"]) == 64
+    assert len(settings["methods"]["policy"]["checkpoint_sha256"]) == 64
     assert settings["package"]["code_sha256"] and settings["package"]["version"]
     assert [(t["method"], t["seed"]) for t in trials] == [
-        (m, s) for m in ("dwa", "sac") for s in range(FIRST, FIRST + TRIALS)
+        (m, s) for m in ("dwa", "policy") for s in range(FIRST, FIRST + TRIALS)
     ]
     for t in trials:
         assert t["plant"] == "lip" and t["record"]["seed"] == t["seed"] and t["wall_seconds"] > 0
@@ -185,7 +185,7 @@ def test_other_settings_in_the_same_directory_are_refused(reference, tmp_path, c
     cases = [
         (["--setting", "no_emotion"], "configuration (hash)"),
         (["--time-varying"], "time-varying emotions"),
-        (["--planners", "dwa,mpc"], "planners are dwa,sac there, dwa,mpc here"),
+        (["--planners", "dwa,mpc"], "planners are dwa,policy there, dwa,mpc here"),
         (["--first-seed", "0"], "first seed is 4 there, 0 here"),
         (["--trials", "2"], "--trials 2"),
     ]
@@ -197,7 +197,7 @@ def test_other_settings_in_the_same_directory_are_refused(reference, tmp_path, c
     assert "reward.neutral_discomfort: 0.35 there, 0.2 here" in _err_of(out, capsys)
     assert (out / "trials.jsonl").read_bytes() == before  # nothing touched
     # more trials on the same settings: allowed, only adds
-    assert _bench(out, "--trials", str(TRIALS + 1), "--planners", "dwa,sac") == 0
+    assert _bench(out, "--trials", str(TRIALS + 1), "--planners", "dwa,policy") == 0
     settings, trials = load_run(out)
     assert settings["trials"] == TRIALS + 1 and len(trials) == 2 * (TRIALS + 1)
     assert settings["extended"][0]["from"] == TRIALS
@@ -260,6 +260,14 @@ def test_named_settings_and_config_show(capsys):
     text = capsys.readouterr().out
     assert "neutral_discomfort: 0.2\n" in text
     assert load_config(data=text) == load_setting("no_emotion")
+    assert main(["config"]) == 0  # the defaults: --dump is the default action
+    assert load_config(data=capsys.readouterr().out) == load_config()
+    assert main(["config", "--dump", "--setting", "constant_0.5"]) == 0
+    assert load_config(data=capsys.readouterr().out) == load_setting("constant_0.5")
+    assert main(["config", "--list"]) == 0
+    listing = capsys.readouterr().out
+    for name in (*SETTINGS, "head_on", "crossing", "mood_swing"):
+        assert f"  {name} " in listing, name
 
 
 def test_bad_flags_fail_before_any_trial(tmp_path, capsys):
@@ -268,11 +276,11 @@ def test_bad_flags_fail_before_any_trial(tmp_path, capsys):
         (["--planners", "dwa,foo"], "unknown method 'foo'"),
         (["--planners", "dwa,dwa"], "dwa is listed twice"),
         (["--checkpoint", "dwa=x.pt"], "only learned policies"),
-        (["--checkpoint", "sac=missing.pt"], "no such file"),
+        (["--checkpoint", "policy=missing.pt"], "no such file"),
         (["--trials", "0"], "--trials 0"),
         (["--workers", "0"], "--workers 0"),
     ]:
-        args = ["benchmark", "--planners", "dwa,sac", "--quiet", "--out", str(out), *extra]
+        args = ["benchmark", "--planners", "dwa,policy", "--quiet", "--out", str(out), *extra]
         assert main(args) == 2, extra
         err = capsys.readouterr().err
         assert culprit in err and err.count("\n") == 1, err

@@ -74,3 +74,19 @@ def test_sim_with_misclassified_emotions(tmp_path):
     assert json.loads(out.read_text())["outcome"] in ("success", "collision", "timeout")
     est.write_text("mode: confusion\nconfusion: [[2.0, 0.0, 0.0], [0, 1, 0], [0, 0, 1]]\n")
     assert main(["sim", "--seed", "4", "--emotion-estimate", str(est)]) == 2
+
+
+def test_shipped_example_scenarios_load_and_run_by_name(tmp_path, capsys):
+    """Every example scenario is valid and runs by its name; a bad name lists them."""
+    from emonav_drake.core.scenario import load_scenario
+    from emonav_drake.scenarios import EXAMPLES, scenario_path
+
+    for name in EXAMPLES:
+        sc = load_scenario(scenario_path(name))
+        assert sc.pedestrians and sc.obstacles, name
+    assert any(p.emotion_schedule for p in load_scenario(scenario_path("mood_swing")).pedestrians)
+    out = tmp_path / "r.json"
+    assert main(["sim", "--scenario", "head_on", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["outcome"] in ("success", "collision", "timeout")
+    assert main(["sim", "--scenario", "nowhere"]) == 2
+    assert "head_on, crossing, mood_swing" in capsys.readouterr().err

@@ -193,7 +193,7 @@ def test_policy_drives_the_drake_diagram_within_bounds(tmp_path):
 
 
 def test_shipped_policy_navigates(tmp_path):
-    """`emonav sim --planner sac` works out of the box and the policy reaches the goal."""
+    """`emonav sim --planner policy` works out of the box and the policy reaches the goal."""
     import json
 
     from emonav_drake.cli import main
@@ -201,7 +201,7 @@ def test_shipped_policy_navigates(tmp_path):
     out = tmp_path / "r.json"
     outcomes = []
     for seed in range(6):
-        assert main(["sim", "--planner", "sac", "--seed", str(seed), "--json", str(out)]) == 0
+        assert main(["sim", "--planner", "policy", "--seed", str(seed), "--json", str(out)]) == 0
         outcomes.append(json.loads(out.read_text())["outcome"])
     assert outcomes.count("success") >= 5, outcomes
 
@@ -245,3 +245,27 @@ def test_lndnl_variant_shares_its_lstm_and_trains(tmp_path):
     assert agent.updates == 30
     planner = PolicyPlanner(tmp_path / "lndnl" / "policy.pt")
     assert planner.meta["encoder"]["type"] == "scan_lstm"
+
+
+def test_planner_names_say_what_the_policy_is(tmp_path, capsys):
+    """`policy` runs the shipped DAgger student and says so; `sac` is kept for SAC actors:
+    without a checkpoint, or with a DAgger student's, it is refused naming `policy`."""
+    from emonav_drake.cli import main
+    from emonav_drake.evaluation.benchmark import parse_methods
+    from emonav_drake.learning.policy import DEFAULT_POLICY, describe_policy, load_policy
+
+    _, meta = load_policy(DEFAULT_POLICY, "cpu")
+    assert describe_policy(meta).startswith("DAgger student")
+    cfg = tmp_path / "short.yaml"
+    cfg.write_text("episode: {max_steps: 2}\n")
+    assert main(["sim", "--planner", "policy", "--config", str(cfg)]) == 0
+    assert "planner policy: DAgger student" in capsys.readouterr().out
+    for extra in ([], ["--checkpoint", str(DEFAULT_POLICY)]):
+        assert main(["sim", "--planner", "sac", "--config", str(cfg), *extra]) == 2
+        err = capsys.readouterr().err
+        assert "--planner policy" in err and "DAgger student" in err, err
+    with pytest.raises(ValueError, match="SAC-trained checkpoint"):
+        parse_methods("sac")
+    with pytest.raises(ValueError, match="not a SAC actor"):
+        parse_methods("sac", [f"sac={DEFAULT_POLICY}"])
+    assert parse_methods("policy")[0].checkpoint == str(DEFAULT_POLICY)

@@ -202,7 +202,7 @@ def test_over_an_episode_the_planner_plans_exactly_at_each_step():
 # ------------------------------------------------------- (b) fresh contexts, no reset()
 
 
-@pytest.mark.parametrize("name", ["dwa", "mpc", "sac"])
+@pytest.mark.parametrize("name", ["dwa", "mpc", "policy"])
 def test_two_simulations_of_the_same_diagram_are_identical_without_reset(name):
     cfg = _config()
     nav = _build(name, cfg)

@@ -132,7 +132,7 @@ def test_train_out_that_is_a_file(tmp_path, capsys):
 @pytest.mark.parametrize(
     "argv",
     [
-        ["sim", "--planner", "sac", "--device", "bogus"],
+        ["sim", "--planner", "policy", "--device", "bogus"],
         ["train", "--algo", "dagger", "--device", "bogus", "--out", "{tmp}/run"],
     ],
 )
@@ -144,12 +144,12 @@ def test_bogus_device(tmp_path, capsys, argv):
 
 @pytest.mark.skipif(torch.cuda.is_available(), reason="needs a machine without a GPU")
 def test_cuda_without_a_gpu_blames_the_device_not_the_checkpoint(capsys):
-    line = assert_user_error(*run(capsys, "sim", "--planner", "sac", "--device", "cuda"))
+    line = assert_user_error(*run(capsys, "sim", "--planner", "policy", "--device", "cuda"))
     assert "--device cuda" in line and "no CUDA GPU" in line and "checkpoint" not in line
 
 
 def test_device_or_checkpoint_with_a_planner_that_ignores_them(tmp_path, capsys):
-    assert_user_error(*run(capsys, "sim", "--device", "cuda"), "--device", "--planner sac")
+    assert_user_error(*run(capsys, "sim", "--device", "cuda"), "--device", "--planner policy")
     assert_user_error(*run(capsys, "sim", "--checkpoint", tmp_path), "--checkpoint")
 
 
@@ -167,7 +167,7 @@ def test_policy_file_missing_a_field(tmp_path, capsys, tiny, field, command):
     path = _broken_policy(tmp_path, lambda b: b.pop(field))
     out = tmp_path / "p.ts"
     if command == "sim":
-        argv = ["sim", "--planner", "sac", "--checkpoint", path, "--config", tiny]
+        argv = ["sim", "--planner", "policy", "--checkpoint", path, "--config", tiny]
     else:
         argv = ["export", path, "--out", out]
     assert_user_error(*run(capsys, *argv), str(path), field)

@@ -2,7 +2,7 @@
 
 EmoBipedNav (9 LGM frames), Single-LGM (1 frame), OGM, LiDAR-SAC (stacked raw scans),
 LNDNL (LSTM over scans) and DRL-VO* (scan OGM + pedestrian velocity map): a freshly
-initialised policy checkpoint of each runs through `emonav sim --planner sac` on the LIP
+initialised policy checkpoint of each runs through `emonav sim --planner policy` on the LIP
 plant and on Digit, and the diagram's `lgm_stack` is the Gymnasium env's bit for bit.
 """
 
@@ -62,7 +62,7 @@ def test_every_variant_runs_a_short_episode_on_lip_and_on_digit(tmp_path, name):
     config.write_text("episode: {max_steps: 3}\n")
     for plant in ("lip", "digit"):
         out = tmp_path / f"{plant}.json"
-        argv = ["sim", "--planner", "sac", "--checkpoint", str(ckpt), "--plant", plant]
+        argv = ["sim", "--planner", "policy", "--checkpoint", str(ckpt), "--plant", plant]
         assert main([*argv, "--config", str(config), "--seed", "2", "--json", str(out)]) == 0
         record = json.loads(out.read_text())
         assert record["steps"] == 3 and record["outcome"] == "timeout", (plant, record)

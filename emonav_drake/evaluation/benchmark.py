@@ -64,7 +64,7 @@ SETTINGS_FILE = "settings.json"
 TRIALS_FILE = "trials.jsonl"
 TABLES_FILE = "tables.md"
 FORMAT = 1
-BASE_PLANNERS = ("dwa", "mpc", "sac")
+BASE_PLANNERS = ("dwa", "mpc", "policy", "sac")
 IN_FLIGHT_PER_WORKER = 2
 
 
@@ -78,8 +78,8 @@ class MethodSpec:
     """One compared method: a planner kind and, for learned policies, the checkpoint."""
 
     name: str
-    planner: str  # dwa | mpc | sac (a learned policy)
-    checkpoint: str | None = None  # path; None: the shipped policy for sac
+    planner: str  # dwa | mpc | policy (a learned policy; "sac" in runs before the rename)
+    checkpoint: str | None = None  # path of a learned policy's checkpoint
     checkpoint_sha256: str | None = None
     observation: str = "state"  # what the method sees: "state" (DWA, MPC) or the grid kind
 
@@ -115,9 +115,10 @@ def sha256_file(path: str | Path) -> str:
 def parse_methods(
     planners: str | Sequence[str], checkpoints: Sequence[str] = ()
 ) -> list[MethodSpec]:
-    """`--planners sac,mpc,dwa` and `--checkpoint NAME=PATH …` → the methods (validated).
+    """`--planners policy,mpc,dwa` and `--checkpoint NAME=PATH …` → the methods (validated).
 
-    A method is `dwa`, `mpc`, `sac` (the shipped policy unless a checkpoint is given), a
+    A method is `dwa`, `mpc`, `policy` (the shipped policy unless a checkpoint is given),
+    `sac` (a SAC-trained checkpoint, given with `--checkpoint sac=PATH`), a
     variant of `learning/variants.py` (its shipped policy unless a checkpoint is given) or
     any other name given a checkpoint with `--checkpoint NAME=PATH` (another learned policy).
     """
@@ -134,7 +135,7 @@ def parse_methods(
         name = name.strip()
         if not sep or not name or not path:
             raise ConfigError(
-                f"--checkpoint {item!r}: expected NAME=PATH (e.g. sac=runs/sac/policy.pt)"
+                f"--checkpoint {item!r}: expected NAME=PATH (e.g. policy=runs/x/policy.pt)"
             )
         if name in ckpt:
             raise ConfigError(f"--checkpoint {name}: given twice")
@@ -154,19 +155,38 @@ def parse_methods(
             methods.append(MethodSpec(n, n))
         elif is_learned(n) or n in ckpt:
             path = ckpt.get(n)
-            if path is None and n == "sac":
+            if path is None and n == "policy":
                 from emonav_drake.learning.policy import DEFAULT_POLICY
 
                 path = DEFAULT_POLICY
+            elif path is None and n == "sac":
+                raise ConfigError(
+                    "--planners sac: a SAC-trained checkpoint is needed (--checkpoint "
+                    "sac=PATH); the shipped policy is a DAgger student: use policy"
+                )
             elif path is None:
                 path = shipped_checkpoint(n)
-            methods.append(MethodSpec(n, "sac", str(path), sha256_file(path)))
+            if n == "sac":
+                _check_sac_actor(path)
+            methods.append(MethodSpec(n, "policy", str(path), sha256_file(path)))
         else:
             raise ConfigError(
-                f"--planners: unknown method {n!r}; use dwa, mpc, sac, a variant "
+                f"--planners: unknown method {n!r}; use dwa, mpc, policy, sac, a variant "
                 f"({', '.join(VARIANTS)}), or name a learned policy with --checkpoint {n}=PATH"
             )
     return methods
+
+
+def _check_sac_actor(path: str | Path) -> None:
+    """The method called `sac` must be a SAC actor, not a DAgger student under that label."""
+    from emonav_drake.learning.policy import describe_policy, load_policy, policy_kind
+
+    _, meta = load_policy(Path(path), "cpu")
+    if policy_kind(meta) != "sac":
+        raise ConfigError(
+            f"--checkpoint sac={path}: not a SAC actor but a {describe_policy(meta)}; "
+            "give it another method name (e.g. policy)"
+        )
 
 
 # --------------------------------------------------------------------------- trials
@@ -215,7 +235,9 @@ class TrialRunner:
 
             m = self.spec.method(name)
             cfg = copy.deepcopy(self.config)  # a policy adapts the grid-map settings
-            planner = make_planner(m.planner, cfg, checkpoint=self._checkpoint_path(m))
+            # a learned method is whatever its checkpoint holds ("sac" in older runs)
+            kind = "policy" if m.checkpoint is not None else m.planner
+            planner = make_planner(kind, cfg, checkpoint=self._checkpoint_path(m))
             self._planners[name] = (planner, cfg, configure_for(planner, cfg))
         return self._planners[name]
 

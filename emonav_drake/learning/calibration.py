@@ -1,6 +1,6 @@
 """Calibrating the reduced robot to Digit: traces of Digit episodes → step-response model.
 
-    emonav calibrate collect --planners dwa,sac --episodes 20 --first-seed 3000000 \\
+    emonav calibrate collect --planners dwa,policy --episodes 20 --first-seed 3000000 \\
         --explore 0.3 --workers 2 --out runs/calib/traces.jsonl
     emonav calibrate fit runs/calib/traces.jsonl --held-out 0.25 --out runs/calib/response.json
 

@@ -1,6 +1,6 @@
 """`emonav calibrate`: Digit traces → the step-response model of the calibrated robot.
 
-emonav calibrate collect --planners dwa,sac --episodes 20 --first-seed 3000000
+emonav calibrate collect --planners dwa,policy --episodes 20 --first-seed 3000000
                          [--explore 0.3] [--workers W] [--ray-address ADDR] --out TRACES
 emonav calibrate fit TRACES [TRACES …] [--held-out 0.25] --out MODEL.json
 emonav digit-rounds --from RUN --rounds 2 --episodes 60 [--workers W] --out DIR [--resume]
@@ -26,7 +26,7 @@ def add_calibrate_parser(sub: argparse._SubParsersAction) -> None:
     )
     verbs = c.add_subparsers(dest="verb", required=True)
     col = verbs.add_parser("collect", help="run traced, exploring Digit episodes (resumable)")
-    col.add_argument("--planners", default="dwa,sac", help="comma-separated planners")
+    col.add_argument("--planners", default="dwa,policy", help="comma-separated planners")
     col.add_argument("--episodes", type=int, default=20, help="episodes per planner (>= 1)")
     col.add_argument(
         "--first-seed",

@@ -151,7 +151,7 @@ def collect_round(
     from emonav_drake.params import EmoNavConfig, dump_config
 
     spec = BenchmarkSpec(
-        [MethodSpec("student", "sac", str(policy), sha256_file(policy))],
+        [MethodSpec("student", "policy", str(policy), sha256_file(policy))],
         "digit",
         dump_config(env_config or EmoNavConfig()),
     )

@@ -12,7 +12,7 @@ A policy checkpoint is one `torch.save` file:
 
 `PolicyPlanner` implements the planner interface (`systems.navigation_planner.Planner`:
 `plan(PlannerInput)`, `reset`, and the memoryless `initial_memory`/`plan_with_memory`), so a
-policy drives the Drake diagram (`emonav sim --planner sac`) or the Gymnasium env
+policy drives the Drake diagram (`emonav sim --planner policy`) or the Gymnasium env
 exactly like DWA or MPC. It uses only the map observation of its grid kind (the planner
 input's `lgm_stack`: uint8 (N, M, M) LGM/OGM stack, float32 (N, K) scan stack [m], uint8
 (1, 3, M, M) DRL-VO* image; `core/navigation.py`), the goal state and the last command —
@@ -209,6 +209,40 @@ def _check_meta(path: Path, blob: dict) -> None:
             raise bad("commands", "is missing or not a non-empty list of [u_v, u_dtheta]")
 
 
+_OBSERVATION_NAMES = {
+    "lgm": "LiDAR grid maps",
+    "ogm": "occupancy grids",
+    "scan": "raw scans",
+    "drlvo": "DRL-VO* image",
+}
+
+
+def policy_kind(meta: dict[str, Any]) -> str:
+    """How a checkpoint's policy was trained: "sac" for a SAC actor (Gaussian over the
+    continuous command), "dagger" for an imitation student (categorical over a command
+    grid), from its provenance when recorded, else from its head."""
+    route = (meta.get("provenance") or {}).get("route")
+    if route in ("sac", "dagger"):
+        return route
+    return "sac" if meta.get("kind") == "gaussian" else "dagger"
+
+
+def describe_policy(meta: dict[str, Any]) -> str:
+    """One line for a user: route (and round, variant), observation."""
+    prov = meta.get("provenance") or {}
+    ob = meta["observation"]
+    what = _OBSERVATION_NAMES.get(ob["grid_kind"], ob["grid_kind"])
+    if policy_kind(meta) == "sac":
+        route = "SAC actor"
+    else:
+        route = "DAgger student"
+        if "round" in prov:
+            route += f" (round {prov['round']})"
+    if prov.get("variant"):
+        route += f", variant {prov['variant']}"
+    return f"{route}, {ob['num_frames']} × {what}"
+
+
 def observation_spec(meta: dict[str, Any]) -> tuple[str, tuple[int, ...], np.dtype]:
     """(grid kind, shape, dtype) of the map observation a checkpoint's policy reads.
 
@@ -287,7 +321,7 @@ class PolicyPlanner:
         device: "cpu" or "cuda".
     """
 
-    name = "sac"
+    name = "policy"
 
     def __init__(self, path: str | Path | None = None, device: str = "cpu") -> None:
         self.path = Path(path) if path is not None else DEFAULT_POLICY
@@ -297,6 +331,10 @@ class PolicyPlanner:
         self.grid_kind, self.expected_shape, self.expected_dtype = observation_spec(self.meta)
         if self.meta["kind"] == "categorical":
             self.commands = np.asarray(self.meta["commands"], dtype=float)
+
+    def describe(self) -> str:
+        """What this policy is, for a user: how it was trained, what it reads, its file."""
+        return f"{describe_policy(self.meta)} ({self.path})"
 
     def initial_memory(self) -> None:
         """The policy is memoryless: the frame stack and the last command (the planner

@@ -10,7 +10,7 @@ planner name of `emonav sim|eval|benchmark` (`--planner NAME`, `--planners NAME,
 
 | name | paper | observation |
 |---|---|---|
-| `emobipednav` | EmoBipedNav | 9 LiDAR grid maps (the shipped policy, also `sac`) |
+| `emobipednav` | EmoBipedNav | 9 LiDAR grid maps (the shipped policy, also `policy`) |
 | `single_lgm` | Single-LGM | 1 LiDAR grid map |
 | `ogm` | OGM | 9 Cartesian occupancy grids |
 | `lidar_sac` | LiDAR-SAC | 9 raw scans, 1-D CNN |
@@ -110,5 +110,6 @@ def shipped_checkpoint(name: str) -> Path:
 
 
 def is_learned(name: str) -> bool:
-    """True for the names of learned planners: `sac` (the shipped policy) and the variants."""
-    return name == "sac" or name in VARIANTS
+    """True for the names of learned planners: `policy` (a checkpoint; by default the
+    shipped policy), `sac` (a SAC-trained checkpoint) and the variants."""
+    return name in ("policy", "sac") or name in VARIANTS
