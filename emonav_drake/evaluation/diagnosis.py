@@ -1,6 +1,6 @@
 """Why trials fail on Digit: the cause of every failure and the tracking before it.
 
-    emonav diagnose benchmarks/results/digit_table2 [--methods sac] [--last 5]
+    emonav diagnose benchmarks/results/digit_table2 [--methods policy] [--last 5]
                     [--workers W] --out runs/diagnosis
 
 For every failed trial of a Digit benchmark run (outcome collision, timeout or fall), the
@@ -172,6 +172,28 @@ def diagnosis_table(rows: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _cause_order(cause: str) -> tuple[int, str]:
+    order = ["collision: static", "collision: happy", "collision: neutral"]
+    order += ["collision: negative", "timeout"]
+    return (order.index(cause) if cause in order else len(order), cause)
+
+
+def _cause_color(cause: str) -> tuple[float, float, float]:
+    """The world's colours (`core.palette`): emotions as everywhere, static discs grey;
+    timeouts purple, falls and anything else black."""
+    from emonav_drake.core import palette
+    from emonav_drake.params import EMOTION_NAMES
+
+    kind = cause.removeprefix("collision: ")
+    if kind in EMOTION_NAMES:
+        return palette.EMOTION_RGB[EMOTION_NAMES.index(kind)]
+    if kind == "static":
+        return palette.STATIC_RGB
+    if cause == "timeout":
+        return palette.GOAL_RGB
+    return (0.0, 0.0, 0.0)
+
+
 def plot_diagnosis(rows: list[dict]):
     """Causes of failure per method; heading and position errors of the LIP prediction
     over the last steps, before failures and before successes."""
@@ -181,16 +203,18 @@ def plot_diagnosis(rows: list[dict]):
     import matplotlib.pyplot as plt
 
     methods = sorted({r["method"] for r in rows})
-    causes = sorted({r["cause"] for r in rows if r["outcome"] != "success"})
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4), constrained_layout=True)
+    causes = sorted({r["cause"] for r in rows if r["outcome"] != "success"}, key=_cause_order)
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.6), constrained_layout=True)
     ax = axes[0]
     bottom = np.zeros(len(methods))
+    x = np.arange(len(methods))
     for c in causes:
         n = np.array(
             [sum(r["cause"] == c for r in rows if r["method"] == m) for m in methods], float
         )
-        ax.bar(methods, n, bottom=bottom, label=c)
+        ax.bar(x, n, bottom=bottom, label=c, color=_cause_color(c), edgecolor="white")
         bottom += n
+    ax.set_xticks(x, [m.replace("_", "_\n", 1) for m in methods])
     ax.set(ylabel="failed trials", title="causes of failure")
     ax.legend(fontsize=8)
     for ax, key, scale, unit in (
@@ -203,7 +227,7 @@ def plot_diagnosis(rows: list[dict]):
                 sel = [r for r in rows if r["method"] == m and (r["outcome"] == "success") == ok]
                 v = np.concatenate([r["tracking"].get(key, []) for r in sel] or [[]]) * scale
                 data.append(v)
-                labels.append(f"{m}\n{label}")
+                labels.append(f"{m.replace('_', '_' + chr(10), 1)}\n({label})")
         ax.boxplot(data, tick_labels=labels, showfliers=False)
         name = "heading" if "heading" in key else "position"
         ax.set(
