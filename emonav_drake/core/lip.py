@@ -38,6 +38,11 @@ def wrap_angle(a: float) -> float:
     return math.atan2(math.sin(a), math.cos(a))
 
 
+def wrap_angles(a: np.ndarray) -> np.ndarray:
+    """`wrap_angle` element-wise on an array of angles [rad]."""
+    return np.arctan2(np.sin(a), np.cos(a))
+
+
 def foot_offset(speed: float, target_speed: float, omega: float, step_time: float) -> float:
     """Paper Eq. 1, first line: sagittal foot position ahead of the CoM, d_k [m]."""
     wt = omega * step_time

@@ -33,7 +33,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
-from emonav_drake.core.lip import LipState, lip_steps, wrap_angle
+from emonav_drake.core.lip import LipState, lip_steps, wrap_angle, wrap_angles
 
 FEATURES = (
     "u_v[k-2]",  # commanded speed of step k − 2 [m/s]
@@ -65,7 +65,7 @@ def outcome(state: np.ndarray, next_state: np.ndarray) -> np.ndarray:
     s, s1 = np.asarray(state, float), np.asarray(next_state, float)
     dx, dy = s1[..., 0] - s[..., 0], s1[..., 1] - s[..., 1]
     c, sn = np.cos(s[..., 2]), np.sin(s[..., 2])
-    turn = np.arctan2(np.sin(s1[..., 2] - s[..., 2]), np.cos(s1[..., 2] - s[..., 2]))
+    turn = wrap_angles(s1[..., 2] - s[..., 2])
     return np.stack([c * dx + sn * dy, -sn * dx + c * dy, turn, s1[..., 3]], axis=-1)
 
 

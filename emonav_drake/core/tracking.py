@@ -27,7 +27,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from emonav_drake.core.lip import lip_steps
+from emonav_drake.core.lip import lip_steps, wrap_angles
 
 COLUMNS = (
     "step",  # k: the step's index (foot switch k / planner instant t_k where it starts)
@@ -75,11 +75,6 @@ def column(table: np.ndarray, name: str) -> np.ndarray:
     if name not in _INDEX:
         raise KeyError(f"{name!r} is not a tracking column ({', '.join(COLUMNS)})")
     return np.asarray(table, float).reshape(-1, len(COLUMNS))[:, _INDEX[name]]
-
-
-def _wrap(a: np.ndarray) -> np.ndarray:
-    """Angles wrapped to (−π, π] (as `core.lip.wrap_angle`)."""
-    return np.arctan2(np.sin(a), np.cos(a))
 
 
 def step_tracking(
@@ -131,7 +126,7 @@ def step_tracking(
             a,
             ex,
             ey,
-            _wrap(a[:, 2] - heading_des),
+            wrap_angles(a[:, 2] - heading_des),
             c * ex + sn * ey,
             -sn * ex + c * ey,
         ]

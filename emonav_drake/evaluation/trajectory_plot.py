@@ -261,13 +261,19 @@ def plot_trajectory(ax, traj: Trajectory, times: Sequence[float] | None = None):
     ax.add_collection(path)
     ax.scatter(xy[:, 0], xy[:, 1], c=traj.t, cmap=ROBOT_TIME_CMAP, norm=norm, s=7, zorder=8)
     x0, x1, y0, y1 = _bounds(traj)
+    _frame_axes(ax, (x0, x1, y0, y1))
+    return path
+
+
+def _frame_axes(ax, bounds: tuple[float, float, float, float]) -> None:
+    """Limits (x0, x1, y0, y1) [m], equal aspect, world-frame labels and a light grid."""
+    x0, x1, y0, y1 = bounds
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal")
     ax.set_xlabel("x [m] (world)")
     ax.set_ylabel("y [m] (world)")
     ax.grid(alpha=0.25)
-    return path
 
 
 def render_trajectory_figure(
@@ -351,12 +357,7 @@ def render_trajectory_animation(
     ax, key = fig.add_subplot(grid[0]), fig.add_subplot(grid[1])
     key.axis("off")
     _draw_static(ax, traj)
-    ax.set_xlim(x0, x1)
-    ax.set_ylim(y0, y1)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x [m] (world)")
-    ax.set_ylabel("y [m] (world)")
-    ax.grid(alpha=0.25)
+    _frame_axes(ax, (x0, x1, y0, y1))
     key.legend(
         handles=_legend_handles(traj, "now", still=False),
         loc="upper left",
