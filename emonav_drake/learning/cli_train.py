@@ -2,8 +2,8 @@
 
 emonav train --algo dagger --out runs/dagger --seed 0 [--device cpu] [--resume runs/dagger]
 emonav train --variant NAME [--out runs/NAME] [--seed 0] [--resume runs/NAME]
-emonav train --algo sac [--config FILE] [--steps N] [--device cpu|cuda] [--out DIR]
-             [--resume DIR]
+emonav train --algo sac [--config FILE] [--plant lip|digit] [--steps N] [--device cpu|cuda]
+             [--out DIR] [--resume DIR]
 """
 
 from __future__ import annotations
@@ -37,6 +37,12 @@ def add_train_parser(sub: argparse._SubParsersAction) -> None:
     )
     t.add_argument(
         "--steps", type=int, help="SAC environment steps, >= 1 (default from the config)"
+    )
+    t.add_argument(
+        "--plant",
+        choices=["lip", "digit"],
+        help="--algo sac: train on EmoNavLIP-v0 (lip, the default) or on the full-order "
+        "Digit, EmoNavDigit-v0 (digit: the paper's Digit/Digit route, a GPU or cluster job)",
     )
     t.add_argument("--seed", type=int, default=0, help="seed of the run (>= 0)")
     t.add_argument("--device", default="cpu", help="cpu or cuda (cuda:N)")
@@ -74,6 +80,11 @@ def _training_config(args: argparse.Namespace):
 
         if args.steps is not None:
             raise ConfigError("--steps applies to --algo sac only (DAgger counts rounds)")
+        if args.plant is not None:
+            raise ConfigError(
+                "--plant applies to --algo sac only (the CPU route learns Digit's dynamics "
+                "through its calibrated world: `response: digit` in its configuration)"
+            )
     else:
         from emonav_drake.learning.config import SacConfig as schema
     cfg = load_typed_yaml(schema, path=args.config) if args.config else schema()
@@ -84,6 +95,8 @@ def _training_config(args: argparse.Namespace):
     cfg.seed, cfg.device = args.seed, args.device
     if args.steps is not None:
         cfg.total_steps = args.steps
+    if args.plant is not None:
+        cfg.plant = args.plant
     where = f"{args.config}: " if args.config else ""
     try:
         cfg.validate()

@@ -99,6 +99,9 @@ class SacConfig:
     grid_size: int = 100
     encoder: str = "cnn"  # "lstm" with grid_kind "scan" = LNDNL (LSTM over normalised scans)
     goal_radius: float = 0.1
+    # The robot of the training environment: "lip" (`EmoNavLIP-v0`) or "digit" (the
+    # full-order Digit diagram, `EmoNavDigit-v0`: ~0.2 s of CPU per environment step).
+    plant: str = "lip"
     reuse_features: bool = True  # the actor step reuses the critic pass's conv features
     channels_last: bool = False  # NHWC memory format for the conv stacks
 
@@ -106,6 +109,7 @@ class SacConfig:
         """Raise `ConfigError` naming the field if a value is out of range or inconsistent."""
         validate_ranges(self, _SAC_RANGES)
         _check_observation(self.grid_kind, self.encoder, self.num_frames)
+        _choice("plant", self.plant, ("lip", "digit"))
         if self.grid_kind != "scan":
             if _NUM_BEAMS % self.grid_size:
                 raise ConfigError(

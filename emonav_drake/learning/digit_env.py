@@ -16,10 +16,17 @@ scenario `emonav sim --plant digit --seed s` plays, from Digit standing at the s
 new diagram is built per episode (the crowd and the goal are part of it).
 `options={"scenario": Scenario}` plays a given one. An invalid action (NaN, out of the
 bounds of Eq. 2) raises `CommandError`, as in `EmoNavLIP-v0`; nothing is clipped.
+
+`state_dict()` / `load_state_dict()` save and continue an episode (for a trainer's
+resumable checkpoint): the state is the episode's scenario, its reset seed and the
+commands applied so far, and loading simulates them again from the start — the diagram is
+deterministic, so the continued episode is the saved one (tested), at the cost of
+re-simulating up to one episode.
 """
 
 from __future__ import annotations
 
+import dataclasses as dc
 from typing import Any
 
 import gymnasium as gym
@@ -29,9 +36,9 @@ from pydrake.gym import DrakeGymEnv
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context
 
-from emonav_drake.core.navigation import check_command
+from emonav_drake.core.navigation import check_command, scenario_from_plain
 from emonav_drake.core.scenario import Scenario, sample_scenario
-from emonav_drake.learning.env import set_task
+from emonav_drake.learning.env import np_random_state, set_np_random_state, set_task
 from emonav_drake.params import EmoNavConfig
 
 
@@ -56,6 +63,8 @@ class EmoNavDigitEnv(DrakeGymEnv):
         observation_space, action_space = self.observation_space, self.action_space
         self._scenario: Scenario | None = None
         self._fallen = False
+        self._reset_seed: int | None = None
+        self._commands: list[list[float]] = []  # this episode's commands (for state_dict)
         self.navigation = None  # the episode's `DigitNavigationDiagram`
         super().__init__(
             simulator=self._make_simulator,
@@ -106,6 +115,7 @@ class EmoNavDigitEnv(DrakeGymEnv):
             raise TypeError(f"options['scenario'] must be a Scenario, got {type(scenario)}")
         self._scenario = scenario.validate()
         self._fallen = False
+        self._reset_seed, self._commands = seed, []
         observation, info = super().reset(seed=seed)
         return observation, {**info, "scenario_seed": scenario.seed}
 
@@ -116,6 +126,7 @@ class EmoNavDigitEnv(DrakeGymEnv):
         if status.done or fall.fallen or self._fallen:
             raise RuntimeError("the episode has ended: call reset()")
         command, _ = check_command(np.asarray(action, dtype=float), self.config.robot)
+        self._commands.append([float(c) for c in command])
         # `DrakeGymEnv.step` advances to t + T; summing T drifts off the planner's instants
         # k·T in the last bits (and a 1 ms plant step with it): advance to k·T exactly
         context = self.simulator.get_mutable_context()
@@ -157,3 +168,33 @@ class EmoNavDigitEnv(DrakeGymEnv):
         self._fallen = True
         observation = self.observation_port.Eval(self.simulator.get_context())
         return observation, 0.0, True, False, {"outcome": "fall", "episode_record": rec}
+
+    def state_dict(self) -> dict:
+        """The running episode as plain data (see the module): map kind, goal radius, the
+        scenario, the reset seed, the commands so far and gymnasium's `np_random`."""
+        scenario = self._scenario if self.navigation is not None else None
+        return {
+            "grid_kind": self.grid_kind,
+            "goal_radius": self.goal_radius,
+            "scenario": None if scenario is None else dc.asdict(scenario),
+            "reset_seed": self._reset_seed,
+            "commands": [list(c) for c in self._commands],
+        } | np_random_state(self)
+
+    def load_state_dict(self, state: dict) -> None:
+        """Continue the episode saved by `state_dict`: reset to its scenario and apply its
+        commands again (`ValueError` if it does not fit this environment)."""
+        if state["grid_kind"] != self.grid_kind:
+            raise ValueError(f"saved map kind {state['grid_kind']!r} != {self.grid_kind!r}")
+        self.goal_radius = state["goal_radius"]
+        if state["scenario"] is None:
+            self.navigation, self._scenario, self._commands = None, None, []
+        else:
+            scenario = scenario_from_plain(state["scenario"])
+            self.reset(seed=state["reset_seed"], options={"scenario": scenario})
+            for k, command in enumerate(state["commands"]):
+                status, fall = self._status()
+                if status.done or fall.fallen or self._fallen:
+                    raise ValueError(f"the saved episode ended before its command {k}")
+                self.step(np.asarray(command, dtype=float))
+        set_np_random_state(self, state)

@@ -154,14 +154,11 @@ class EmoNavLIPEnv(gym.Env):
     def state_dict(self) -> dict:
         """The environment's state as plain data: the running episode (`NavigationWorld.
         state_dict`) and gymnasium's `np_random` state; `load_state_dict` reads it back."""
-        rng = self._np_random
         return {
             "grid_kind": self.grid_kind,
             "goal_radius": self.goal_radius,
             "world": None if self.world is None else self.world.state_dict(),
-            "np_random": None if rng is None else rng.bit_generator.state,
-            "np_random_seed": self._np_random_seed,
-        }
+        } | np_random_state(self)
 
     def load_state_dict(self, state: dict) -> None:
         """Continue the episode saved by `state_dict` (same configuration and map kind;
@@ -171,20 +168,34 @@ class EmoNavLIPEnv(gym.Env):
         self.goal_radius = state["goal_radius"]
         w = state["world"]
         self.world = None if w is None else NavigationWorld.from_state_dict(w, self.config)
-        rng_state = state["np_random"]
-        if rng_state is None:
-            self._np_random = None
-        else:
-            name = rng_state["bit_generator"]
-            if name not in _BIT_GENERATORS:
-                raise ValueError(f"unknown bit generator {name!r}")
-            rng = np.random.Generator(getattr(np.random, name)())
-            rng.bit_generator.state = rng_state
-            self._np_random = rng
-        self._np_random_seed = state["np_random_seed"]
+        set_np_random_state(self, state)
 
     def planner_input(self) -> PlannerInput:
         """The privileged view (crowd state included) for model-based planners."""
         if self.world is None:
             raise RuntimeError("call reset() first")
         return self.world.planner_input()
+
+
+def np_random_state(env: gym.Env) -> dict:
+    """Gymnasium's `np_random` of `env` (and the seed it was made from) as plain data."""
+    rng = env._np_random
+    return {
+        "np_random": None if rng is None else rng.bit_generator.state,
+        "np_random_seed": env._np_random_seed,
+    }
+
+
+def set_np_random_state(env: gym.Env, state: dict) -> None:
+    """Restore what `np_random_state` saved (`ValueError` for an unknown generator)."""
+    rng_state = state["np_random"]
+    if rng_state is None:
+        env._np_random = None
+    else:
+        name = rng_state["bit_generator"]
+        if name not in _BIT_GENERATORS:
+            raise ValueError(f"unknown bit generator {name!r}")
+        rng = np.random.Generator(getattr(np.random, name)())
+        rng.bit_generator.state = rng_state
+        env._np_random = rng
+    env._np_random_seed = state["np_random_seed"]

@@ -28,6 +28,7 @@ import csv
 import dataclasses as dc
 import logging
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
@@ -35,6 +36,7 @@ from tqdm import tqdm
 
 from emonav_drake.core.metrics import summarize
 from emonav_drake.errors import RunInterrupted
+from emonav_drake.evaluation.tables import record_from_json
 from emonav_drake.learning.config import SacConfig
 from emonav_drake.learning.env import EmoNavLIPEnv
 from emonav_drake.learning.policy import encoder_spec, save_policy, vector_state
@@ -54,6 +56,9 @@ from emonav_drake.learning.run_state import (
 from emonav_drake.learning.sac import SacAgent
 from emonav_drake.params import EmoNavConfig
 
+if TYPE_CHECKING:
+    from emonav_drake.learning.digit_env import EmoNavDigitEnv
+
 log = logging.getLogger(__name__)
 TRAIN_SEED_OFFSET = 20_000_000
 CHECKPOINT = "checkpoint.pt"
@@ -61,12 +66,17 @@ CHECKPOINT = "checkpoint.pt"
 
 def make_env(
     cfg: SacConfig, env_cfg: EmoNavConfig | None = None, goal_radius: float | None = None
-) -> EmoNavLIPEnv:
-    """The training environment for the configured observation variant."""
+) -> EmoNavLIPEnv | EmoNavDigitEnv:
+    """The training environment of `cfg.plant` (`EmoNavLIP-v0` or `EmoNavDigit-v0`) for
+    the configured observation variant."""
     env_cfg = env_cfg or EmoNavConfig()
     env_cfg.lidar.num_frames = cfg.num_frames
     env_cfg.lidar.grid_size = cfg.grid_size
-    return EmoNavLIPEnv(
+    if cfg.plant == "digit":
+        from emonav_drake.learning.digit_env import EmoNavDigitEnv as env_class
+    else:
+        env_class = EmoNavLIPEnv
+    return env_class(
         env_cfg,
         grid_kind=cfg.grid_kind,
         goal_radius=cfg.goal_radius if goal_radius is None else goal_radius,
@@ -124,15 +134,15 @@ def evaluate(agent: SacAgent, cfg: SacConfig, episodes: int) -> dict:
         while not done:
             state = vector_state(obs["goal"], obs["last_action"], agent.bounds)
             command = agent.to_command(agent.act(obs[env.map_key], state, deterministic=True))
-            obs, r, term, trunc, _ = env.step(command)
+            obs, r, term, trunc, info = env.step(command)
             total += r
             done = term or trunc
-        records.append(env.world.record)
+        records.append(record_from_json(info["episode_record"]))
         returns.append(total)
     return summarize(records) | {"return_mean": float(np.mean(returns))}
 
 
-def policy_meta(cfg: SacConfig, env: EmoNavLIPEnv) -> dict:
+def policy_meta(cfg: SacConfig, env: EmoNavLIPEnv | EmoNavDigitEnv) -> dict:
     enc = encoder_spec(
         cfg.grid_kind,
         cfg.encoder,
