@@ -282,6 +282,7 @@ def test_training_config_values_name_the_field(
         (["--algo", "sac", "--steps", "0"], "--steps 0"),
         (["--algo", "dagger", "--steps", "10"], "--steps"),
         (["--algo", "dagger", "--plant", "digit"], "--plant"),
+        (["--algo", "dagger", "--ray-address", "auto"], "--ray-address"),
         (["--algo", "sac", "--seed", "-4"], "--seed -4"),
         (["--algo", "sac", "--resume", "{tmp}/nowhere"], "--resume"),
     ],

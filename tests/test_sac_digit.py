@@ -85,7 +85,7 @@ def test_tiny_sac_on_digit_writes_a_loadable_actor_and_resumes_bit_for_bit(tmp_p
     # stopped after 5 steps (mid-episode: random actions rarely end one in 2 s), resumed
     train_sac(tmp_path / "split", _tiny(), stop_at=5, progress=False)
     saved, _ = read_run_state(tmp_path / "split" / "checkpoint.pt", SAC_FORMAT)
-    assert saved["step"] == 5 and len(saved["env"]["commands"]) > 0
+    assert saved["step"] == 5 and len(saved["envs"][0]["commands"]) > 0
     resumed = train_sac(tmp_path / "split", _tiny(), resume=True, progress=False)
     _assert_equal(whole.state_dict(), resumed.state_dict())
 

@@ -3,7 +3,7 @@
 emonav train --algo dagger --out runs/dagger --seed 0 [--device cpu] [--resume runs/dagger]
 emonav train --variant NAME [--out runs/NAME] [--seed 0] [--resume runs/NAME]
 emonav train --algo sac [--config FILE] [--plant lip|digit] [--steps N] [--device cpu|cuda]
-             [--out DIR] [--resume DIR]
+             [--ray-address ADDR] [--out DIR] [--resume DIR]
 """
 
 from __future__ import annotations
@@ -44,6 +44,11 @@ def add_train_parser(sub: argparse._SubParsersAction) -> None:
         help="--algo sac: train on EmoNavLIP-v0 (lip, the default) or on the full-order "
         "Digit, EmoNavDigit-v0 (digit: the paper's Digit/Digit route, a GPU or cluster job)",
     )
+    t.add_argument(
+        "--ray-address",
+        help="--algo sac with num_envs > 1: step the environments on this Ray cluster "
+        "(e.g. auto or HOST:6379; default: a local Ray)",
+    )
     t.add_argument("--seed", type=int, default=0, help="seed of the run (>= 0)")
     t.add_argument("--device", default="cpu", help="cpu or cuda (cuda:N)")
     t.add_argument(
@@ -80,6 +85,8 @@ def _training_config(args: argparse.Namespace):
 
         if args.steps is not None:
             raise ConfigError("--steps applies to --algo sac only (DAgger counts rounds)")
+        if args.ray_address is not None:
+            raise ConfigError("--ray-address applies to --algo sac only")
         if args.plant is not None:
             raise ConfigError(
                 "--plant applies to --algo sac only (the CPU route learns Digit's dynamics "
@@ -128,7 +135,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         return 0
     from emonav_drake.learning.sac_trainer import train_sac
 
-    train_sac(out, cfg, resume=args.resume is not None)
+    train_sac(out, cfg, resume=args.resume is not None, ray_address=args.ray_address)
     return 0
 
 

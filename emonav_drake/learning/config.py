@@ -102,6 +102,8 @@ class SacConfig:
     # The robot of the training environment: "lip" (`EmoNavLIP-v0`) or "digit" (the
     # full-order Digit diagram, `EmoNavDigit-v0`: ~0.2 s of CPU per environment step).
     plant: str = "lip"
+    # Environments stepped together (on Ray actors when > 1; `learning/env_pool.py`).
+    num_envs: int = 1
     reuse_features: bool = True  # the actor step reuses the critic pass's conv features
     channels_last: bool = False  # NHWC memory format for the conv stacks
 
@@ -196,6 +198,7 @@ _SAC_RANGES = {
     "eval_episodes": (1, None),
     "eval_seed_offset": (0, None),
     "checkpoint_every": (1, None),
+    "num_envs": (1, 4096),
     "num_frames": (1, 64),
     "grid_size": (2, 1000),
     "goal_radius": (0.01, 2.0),

@@ -39,6 +39,7 @@ from emonav_drake.errors import RunInterrupted
 from emonav_drake.evaluation.tables import record_from_json
 from emonav_drake.learning.config import SacConfig
 from emonav_drake.learning.env import EmoNavLIPEnv
+from emonav_drake.learning.env_pool import LocalEnvs, make_envs
 from emonav_drake.learning.policy import encoder_spec, save_policy, vector_state
 from emonav_drake.learning.replay import FrameReplayBuffer
 from emonav_drake.learning.run_state import (
@@ -172,11 +173,19 @@ def train_sac(
     resume: bool = False,
     stop_at: int | None = None,
     progress: bool = True,
+    ray_address: str | None = None,
+    parallel: bool = True,
 ) -> SacAgent:
     """Train (or resume) a SAC run in `out`; returns the agent.
 
     `stop_at` ends the run early after that many steps as an interruption would (a
-    checkpoint is written), for tests and for splitting a long run.
+    checkpoint is written), for tests and for splitting a long run. With `cfg.num_envs`
+    > 1 the environments step together, on Ray actors (a local Ray, or the cluster at
+    `ray_address`) unless `parallel` is False; the result does not depend on where they
+    run (`learning/env_pool.py`). One iteration then takes `num_envs` environment steps
+    (env 0's first), inserts them in that order and makes `num_envs × updates_per_step`
+    updates; evaluations and checkpoints fall due when the step count crosses a multiple
+    of their period, and the run ends at the first multiple of `num_envs` ≥ `total_steps`.
 
     Raises:
         RunStateError: `resume` and `out` has no checkpoint, or one that is damaged, of
@@ -199,31 +208,56 @@ def train_sac(
     torch.set_num_threads(cfg.threads)
     torch.manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
-    env = make_env(cfg)
+    envs = make_envs(cfg, ray_address, parallel)
+    try:
+        return _train(out, cfg, envs, rng, saved, tensors if resume else {}, progress, stop_at)
+    finally:
+        envs.close()
+
+
+def _train(
+    out: Path,
+    cfg: SacConfig,
+    envs: LocalEnvs,
+    rng: np.random.Generator,
+    saved: dict,
+    tensors: dict,
+    progress: bool,
+    stop_at: int | None,
+) -> SacAgent:
+    ckpt_path = out / CHECKPOINT
+    env = envs.spec
     bounds = (env.config.robot.max_speed, env.config.robot.max_heading_change)
     agent = SacAgent(cfg, bounds)
     space = env.observation_space[env.map_key]
     replay = FrameReplayBuffer(cfg.replay_size, space.shape[1:], space.dtype.type, cfg.num_frames)
     curve = out / "learning_curve.csv"
-    if resume:
+    n_envs = len(envs)
+    if saved:
 
-        def restore() -> _Episode:
+        def restore() -> list[_Episode]:
             if saved["config"] != dc.asdict(cfg):
                 log.warning("resuming with a configuration that differs from the checkpoint's")
             agent.load_state_dict(tensors["agent"])
             replay.load_state_dict(saved["replay"])
             set_rng_state(rng, saved["rng"], tensors)
-            env.load_state_dict(saved["env"])
-            return _Episode.from_plain(replay, saved["episode"], bounds)
+            # one environment: the keys of checkpoints written before `num_envs`
+            env_states = saved["envs"] if "envs" in saved else [saved["env"]]
+            running = saved["running"] if "running" in saved else [saved["episode"]]
+            envs.load_state_dicts(env_states)
+            if len(running) != n_envs:
+                raise ValueError(f"{len(running)} saved episodes for {n_envs} environments")
+            return [_Episode.from_plain(replay, st, bounds) for st in running]
 
-        episode = check_state(f"{CHECKPOINT} in {out}", restore)
+        running = check_state(f"{CHECKPOINT} in {out}", restore)
         step, episodes = int(saved["step"]), int(saved["episodes"])
         eval_pending, curve_rows = bool(saved["eval_pending"]), int(saved["curve_rows"])
         saved_at = (step, eval_pending)
     else:
         step, episodes, eval_pending, curve_rows, saved_at = 0, 0, False, 0, None
-        obs, _ = env.reset(seed=TRAIN_SEED_OFFSET + episodes)
-        episode = _Episode(replay, obs, bounds)
+        running = []
+        for i in range(n_envs):  # environment i starts with training scenario i
+            running.append(_Episode(replay, envs.reset(i, TRAIN_SEED_OFFSET + i), bounds))
     _truncate_csv(curve, curve_rows)  # drop rows of evaluations after the checkpoint
 
     def save() -> None:
@@ -236,8 +270,8 @@ def train_sac(
             "eval_pending": eval_pending,  # the evaluation due at `step` has not run
             "curve_rows": curve_rows,
             "rng": rng_plain,
-            "env": env.state_dict(),
-            "episode": episode.to_plain(),
+            "envs": envs.state_dicts(),
+            "running": [ep.to_plain() for ep in running],
             "replay": replay.state_dict(),
         }
         write_run_state(ckpt_path, SAC_FORMAT, state, {"agent": agent.state_dict()} | rng_tensors)
@@ -275,31 +309,44 @@ def train_sac(
                         for k in ("SR", "collision_rate", "timeout_rate", "DT", "return_mean"):
                             writer.add_scalar(f"eval/{k}", summary[k], step)
                     bar.set_postfix(SR=summary["SR"])
-                if step > 0 and step % cfg.checkpoint_every == 0 and saved_at != (step, False):
+                if (
+                    step > 0
+                    and _crossed(step, n_envs, cfg.checkpoint_every)
+                    and saved_at != (step, False)
+                ):
                     save()
                 if guard.requested or step >= end:
                     break
-                if step < cfg.random_steps:
-                    action = rng.uniform(-1.0, 1.0, 2).astype(np.float32)
-                else:
-                    action = agent.act(episode.obs, episode.state, deterministic=False)
-                obs, reward, term, trunc, _ = env.step(agent.to_command(action))
-                obs_ids, state = episode.window.copy(), episode.state
-                episode.advance(obs)
-                replay.add(obs_ids, state, action, reward, episode.window, episode.state, term)
-                if step >= cfg.random_steps:
+                actions = []
+                for i, ep in enumerate(running):
+                    if step + i < cfg.random_steps:
+                        actions.append(rng.uniform(-1.0, 1.0, 2).astype(np.float32))
+                    else:
+                        actions.append(agent.act(ep.obs, ep.state, deterministic=False))
+                results = envs.step([agent.to_command(a) for a in actions])
+                ended = []
+                for i, (ep, action) in enumerate(zip(running, actions, strict=True)):
+                    obs, reward, term, trunc, _ = results[i]
+                    obs_ids, state = ep.window.copy(), ep.state
+                    ep.advance(obs)
+                    replay.add(obs_ids, state, action, reward, ep.window, ep.state, term)
+                    if term or trunc:
+                        ended.append(i)
+                for k in range(n_envs):
+                    if step + k < cfg.random_steps:
+                        continue
                     for _ in range(cfg.updates_per_step):
                         info = agent.update(replay.sample(cfg.batch_size, rng, agent.device))
-                    if writer is not None and step % 100 == 0:
-                        for k, v in info.items():
-                            writer.add_scalar(f"train/{k}", v, step)
-                if term or trunc:
+                    if writer is not None and (step + k) % 100 == 0:
+                        for key, v in info.items():
+                            writer.add_scalar(f"train/{key}", v, step + k)
+                for i in ended:  # the next scenarios, in the order of the environments
                     episodes += 1
-                    obs, _ = env.reset(seed=TRAIN_SEED_OFFSET + episodes)
-                    episode = _Episode(replay, obs, bounds)
-                step += 1
-                bar.update(1)
-                eval_pending = step % cfg.eval_every == 0
+                    seed = TRAIN_SEED_OFFSET + n_envs - 1 + episodes
+                    running[i] = _Episode(replay, envs.reset(i, seed), bounds)
+                step += n_envs
+                bar.update(n_envs)
+                eval_pending = _crossed(step, n_envs, cfg.eval_every)
         finally:
             bar.close()
             if writer is not None:
@@ -317,6 +364,11 @@ def train_sac(
             f"continue with `emonav train --algo sac --resume {out}` (same --config)"
         )
     return agent
+
+
+def _crossed(step: int, stride: int, period: int) -> bool:
+    """Whether the last `stride` steps up to `step` reached a multiple of `period`."""
+    return step // period > (step - stride) // period
 
 
 def _truncate_csv(path: Path, rows: int) -> None:
