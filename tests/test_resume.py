@@ -32,6 +32,7 @@ from emonav_drake.learning.run_state import (
 )
 from emonav_drake.learning.sac_trainer import train_sac
 from emonav_drake.params import EmoNavConfig
+from tests.state_equality import assert_equal_state
 
 DEAD_PID = 2**22 + 12_345  # above Linux's largest pid_max: never a running process
 
@@ -259,21 +260,6 @@ def _second_ctrl_c_during_saves(mp, pressed):
     mp.setattr(run_state.torch, "save", save)
 
 
-def _assert_equal(a, b, where="state"):
-    if isinstance(a, torch.Tensor):
-        assert torch.equal(a, b), f"{where} differs"
-    elif isinstance(a, dict):
-        assert a.keys() == b.keys(), where
-        for k in a:
-            _assert_equal(a[k], b[k], f"{where}.{k}")
-    elif isinstance(a, list | tuple):
-        assert len(a) == len(b), where
-        for i, (x, y) in enumerate(zip(a, b, strict=True)):
-            _assert_equal(x, y, f"{where}[{i}]")
-    else:
-        assert a == b, f"{where}: {a!r} != {b!r}"
-
-
 @pytest.fixture(scope="module")
 def sac_reference(tmp_path_factory):
     """The uninterrupted run, and which environment steps were training or evaluation."""
@@ -315,7 +301,7 @@ def test_sac_ctrl_c_at_a_random_step_then_resume_is_bit_exact(
     assert state["eval_pending"] == (phase == "eval" or state["step"] % 50 == 0)
     assert list(run.glob("*.tmp")) == []
     resumed = train_sac(run, _sac_cfg(), resume=True, progress=False)
-    _assert_equal(reference, resumed.state_dict())
+    assert_equal_state(reference, resumed.state_dict())
     assert (run / "learning_curve.csv").read_text() == curve
 
 
@@ -419,9 +405,9 @@ def test_dagger_ctrl_c_at_a_random_point_then_resume_is_bit_exact(
     train_dagger(run, _dagger_cfg(), _dagger_env(), resume=True)
     assert not stale.exists()
     model, optim, policy, history, demos = _dagger_result(run)
-    _assert_equal(reference[0], model, "model")
-    _assert_equal(reference[1], optim, "optim")
-    _assert_equal(reference[2], policy, "policy")
+    assert_equal_state(reference[0], model, "model")
+    assert_equal_state(reference[1], optim, "optim")
+    assert_equal_state(reference[2], policy, "policy")
     assert history == reference[3]
     for key, array in reference[4].items():
         assert np.array_equal(array, demos[key]), key

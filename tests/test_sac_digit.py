@@ -7,7 +7,6 @@ loadable SAC actor that runs in the Digit diagram; an interrupted run resumes bi
 
 import numpy as np
 import pytest
-import torch
 
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.diagrams.navigation_digit import run_digit_episode
@@ -17,6 +16,7 @@ from emonav_drake.learning.run_state import SAC_FORMAT, read_run_state
 from emonav_drake.learning.sac_trainer import make_env, train_sac
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners import configure_for, make_planner
+from tests.state_equality import assert_equal_state
 
 
 def _tiny(**kw) -> SacConfig:
@@ -87,7 +87,7 @@ def test_tiny_sac_on_digit_writes_a_loadable_actor_and_resumes_bit_for_bit(tmp_p
     saved, _ = read_run_state(tmp_path / "split" / "checkpoint.pt", SAC_FORMAT)
     assert saved["step"] == 5 and len(saved["envs"][0]["commands"]) > 0
     resumed = train_sac(tmp_path / "split", _tiny(), resume=True, progress=False)
-    _assert_equal(whole.state_dict(), resumed.state_dict())
+    assert_equal_state(whole.state_dict(), resumed.state_dict())
 
     # the actor runs in the Digit diagram through --planner sac
     cfg = EmoNavConfig()
@@ -96,18 +96,3 @@ def test_tiny_sac_on_digit_writes_a_loadable_actor_and_resumes_bit_for_bit(tmp_p
     assert configure_for(planner, cfg) == "lgm" and cfg.lidar.num_frames == 2
     record = run_digit_episode(sample_scenario(0, cfg), cfg, planner)
     assert record.steps == 3 and record.outcome in ("timeout", "collision", "success")
-
-
-def _assert_equal(a, b, where: str = "agent") -> None:
-    if isinstance(a, torch.Tensor):
-        assert torch.equal(a, b), f"{where} differs"
-    elif isinstance(a, dict):
-        assert a.keys() == b.keys(), where
-        for k in a:
-            _assert_equal(a[k], b[k], f"{where}.{k}")
-    elif isinstance(a, list | tuple):
-        assert len(a) == len(b), where
-        for i, (x, y) in enumerate(zip(a, b, strict=True)):
-            _assert_equal(x, y, f"{where}[{i}]")
-    else:
-        assert a == b, f"{where}: {a!r} != {b!r}"

@@ -2,11 +2,11 @@
 an interrupted run resumes bit-for-bit (real LIP envs, real networks, a real local Ray)."""
 
 import pytest
-import torch
 
 from emonav_drake.learning.config import SacConfig
 from emonav_drake.learning.run_state import SAC_FORMAT, read_run_state
 from emonav_drake.learning.sac_trainer import train_sac
+from tests.state_equality import assert_equal_state
 
 
 def _cfg(**kw) -> SacConfig:
@@ -25,21 +25,6 @@ def _cfg(**kw) -> SacConfig:
         threads=1,
     )
     return SacConfig(**(base | kw)).validate()
-
-
-def _assert_equal(a, b, where: str = "agent") -> None:
-    if isinstance(a, torch.Tensor):
-        assert torch.equal(a, b), f"{where} differs"
-    elif isinstance(a, dict):
-        assert a.keys() == b.keys(), where
-        for k in a:
-            _assert_equal(a[k], b[k], f"{where}.{k}")
-    elif isinstance(a, list | tuple):
-        assert len(a) == len(b), where
-        for i, (x, y) in enumerate(zip(a, b, strict=True)):
-            _assert_equal(x, y, f"{where}[{i}]")
-    else:
-        assert a == b, f"{where}: {a!r} != {b!r}"
 
 
 @pytest.fixture(scope="module")
@@ -62,7 +47,7 @@ def test_two_envs_step_together_and_evaluate_on_crossings(serial):
 def test_ray_equals_serial(serial, tmp_path):
     out, agent = serial
     ray_agent = train_sac(tmp_path / "ray", _cfg(), progress=False, parallel=True)
-    _assert_equal(agent.state_dict(), ray_agent.state_dict())
+    assert_equal_state(agent.state_dict(), ray_agent.state_dict())
     assert (tmp_path / "ray" / "learning_curve.csv").read_text() == (
         out / "learning_curve.csv"
     ).read_text()
@@ -74,4 +59,4 @@ def test_an_interrupted_two_env_run_resumes_bit_for_bit(serial, tmp_path):
     saved, _ = read_run_state(tmp_path / "run" / "checkpoint.pt", SAC_FORMAT)
     assert saved["step"] == 20
     resumed = train_sac(tmp_path / "run", _cfg(), resume=True, progress=False, parallel=False)
-    _assert_equal(agent.state_dict(), resumed.state_dict())
+    assert_equal_state(agent.state_dict(), resumed.state_dict())
