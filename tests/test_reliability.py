@@ -283,6 +283,8 @@ def test_training_config_values_name_the_field(
         (["--algo", "dagger", "--steps", "10"], "--steps"),
         (["--algo", "dagger", "--plant", "digit"], "--plant"),
         (["--algo", "dagger", "--ray-address", "auto"], "--ray-address"),
+        (["--algo", "dagger", "--envs", "4"], "--envs"),
+        (["--algo", "sac", "--envs", "0"], "--envs 0"),
         (["--algo", "sac", "--seed", "-4"], "--seed -4"),
         (["--algo", "sac", "--resume", "{tmp}/nowhere"], "--resume"),
     ],

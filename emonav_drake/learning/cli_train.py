@@ -3,7 +3,7 @@
 emonav train --algo dagger --out runs/dagger --seed 0 [--device cpu] [--resume runs/dagger]
 emonav train --variant NAME [--out runs/NAME] [--seed 0] [--resume runs/NAME]
 emonav train --algo sac [--config FILE] [--plant lip|digit] [--steps N] [--device cpu|cuda]
-             [--ray-address ADDR] [--out DIR] [--resume DIR]
+             [--envs W] [--ray-address ADDR] [--out DIR] [--resume DIR]
 """
 
 from __future__ import annotations
@@ -43,6 +43,11 @@ def add_train_parser(sub: argparse._SubParsersAction) -> None:
         choices=["lip", "digit"],
         help="--algo sac: train on EmoNavLIP-v0 (lip, the default) or on the full-order "
         "Digit, EmoNavDigit-v0 (digit: the paper's Digit/Digit route, a GPU or cluster job)",
+    )
+    t.add_argument(
+        "--envs",
+        type=int,
+        help="--algo sac: environments stepped together (num_envs; > 1 runs them on Ray)",
     )
     t.add_argument(
         "--ray-address",
@@ -85,8 +90,9 @@ def _training_config(args: argparse.Namespace):
 
         if args.steps is not None:
             raise ConfigError("--steps applies to --algo sac only (DAgger counts rounds)")
-        if args.ray_address is not None:
-            raise ConfigError("--ray-address applies to --algo sac only")
+        if args.ray_address is not None or args.envs is not None:
+            flag = "--envs" if args.envs is not None else "--ray-address"
+            raise ConfigError(f"{flag} applies to --algo sac only")
         if args.plant is not None:
             raise ConfigError(
                 "--plant applies to --algo sac only (the CPU route learns Digit's dynamics "
@@ -104,6 +110,10 @@ def _training_config(args: argparse.Namespace):
         cfg.total_steps = args.steps
     if args.plant is not None:
         cfg.plant = args.plant
+    if args.envs is not None:
+        if args.envs < 1:
+            raise ConfigError(f"--envs {args.envs}: must be >= 1")
+        cfg.num_envs = args.envs
     where = f"{args.config}: " if args.config else ""
     try:
         cfg.validate()
