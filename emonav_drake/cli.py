@@ -32,10 +32,11 @@ from emonav_drake.atomic_io import (
     write_json,
 )
 from emonav_drake.errors import RunInterrupted
-from emonav_drake.learning.variants import VARIANTS, is_learned
+from emonav_drake.learning.variants import is_learned
 from emonav_drake.params import ConfigError, EmoNavConfig, load_config
+from emonav_drake.planners import PLANNERS
 
-PLANNER_CHOICES = ["dwa", "mpc", "policy", "sac", *VARIANTS]
+PLANNER_CHOICES = list(PLANNERS)
 
 # Exit codes.
 EXIT_USAGE = 2  # a user error: bad flag, file, field or output path

@@ -161,8 +161,9 @@ def add_benchmark_parser(subparsers: argparse._SubParsersAction) -> argparse.Arg
     b.add_argument(
         "--planners",
         default="policy,mpc,dwa",
-        help="comma-separated methods: dwa, mpc, policy (the shipped policy), a variant, "
-        "or a name given a --checkpoint (sac: a SAC-trained one)",
+        help="comma-separated methods: dwa, mpc, dwa_digit (DWA planning with Digit's "
+        "step-response model: the Digit/Digit route's expert), policy (the shipped policy), "
+        "a variant, or a name given a --checkpoint (sac: a SAC-trained one)",
     )
     b.add_argument("--plant", default="lip", choices=["lip", "digit"])
     b.add_argument("--trials", type=int, default=500, help="trials per method (>= 1)")

@@ -14,11 +14,15 @@ from emonav_drake.params import ConfigError, EmoNavConfig
 # "policy" runs any trained checkpoint, by default the shipped policy (the EmoBipedNav
 # variant, a DAgger student); "sac" a SAC-trained checkpoint (`emonav train --algo sac`);
 # the other learned methods of the paper by their variant name (`learning/variants.py`).
-PLANNERS = ("dwa", "mpc", "policy", "sac", *VARIANTS)
+# Model-based planners (no checkpoint). "dwa_digit" is the Digit/Digit route's expert: DWA
+# planning with Digit's step-response model and the route's collision margin.
+MODEL_PLANNERS = ("dwa", "mpc", "dwa_digit")
+PLANNERS = (*MODEL_PLANNERS, "policy", "sac", *VARIANTS)
 
 
 def make_planner(name: str, config: EmoNavConfig, checkpoint=None, device: str = "cpu"):
-    """Create the planner called `name`: "dwa", "mpc", "policy", "sac" or a variant name.
+    """Create the planner called `name`: "dwa", "mpc", "dwa_digit", "policy", "sac" or a
+    variant name.
 
     "policy" loads `checkpoint` (default: the shipped policy); "sac" needs the checkpoint
     of a SAC actor (a `ConfigError` names `--planner policy` for a DAgger student or a
@@ -31,6 +35,14 @@ def make_planner(name: str, config: EmoNavConfig, checkpoint=None, device: str =
         from emonav_drake.core.mpc import MpcPlanner
 
         return MpcPlanner(config)
+    if name == "dwa_digit":
+        from emonav_drake.learning.calibration import model_aware_expert
+        from emonav_drake.learning.config import DaggerConfig
+        from emonav_drake.learning.variants import variant
+        from emonav_drake.params import load_typed_yaml
+
+        route = load_typed_yaml(DaggerConfig, path=variant("emobipednav_digit").config)
+        return model_aware_expert(config, route.expert_margin, route.response)
     if is_learned(name):
         from emonav_drake.learning.policy import PolicyPlanner, describe_policy, policy_kind
 

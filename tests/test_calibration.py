@@ -103,3 +103,23 @@ def test_the_shipped_model_predicts_a_fresh_digit_episode_within_its_reported_er
     # better than the LIP in heading, the error that matters most for collisions
     assert (err[:3] < 2.0 * reported[:3]).all(), (err, reported)
     assert err[2] < 0.5 * lip[2]
+
+
+def test_the_routes_expert_is_a_planner_by_name():
+    from emonav_drake.evaluation.benchmark import parse_methods
+    from emonav_drake.learning.config import DaggerConfig
+    from emonav_drake.learning.variants import variant
+    from emonav_drake.params import ConfigError, EmoNavConfig, load_typed_yaml
+    from emonav_drake.planners import make_planner
+
+    route = load_typed_yaml(DaggerConfig, path=variant("emobipednav_digit").config)
+    expert = make_planner("dwa_digit", EmoNavConfig())
+    assert expert.config.dwa.safety_margin == route.expert_margin == 0.1
+    assert expert.response is not None and expert.response.to_plain() == (
+        load_response("digit").to_plain()
+    )
+    assert make_planner("dwa", EmoNavConfig()).response is None
+    (spec,) = parse_methods("dwa_digit")
+    assert (spec.planner, spec.checkpoint) == ("dwa_digit", None)
+    with pytest.raises(ConfigError, match="only learned policies take a checkpoint"):
+        parse_methods("dwa_digit", ["dwa_digit=x.pt"])

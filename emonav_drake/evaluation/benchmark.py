@@ -57,6 +57,7 @@ from emonav_drake.errors import RunInterrupted
 from emonav_drake.evaluation import tables
 from emonav_drake.learning.variants import VARIANTS, is_learned, shipped_checkpoint
 from emonav_drake.params import ConfigError, EmoNavConfig, dump_config, load_config
+from emonav_drake.planners import MODEL_PLANNERS
 
 log = logging.getLogger(__name__)
 
@@ -64,7 +65,6 @@ SETTINGS_FILE = "settings.json"
 TRIALS_FILE = "trials.jsonl"
 TABLES_FILE = "tables.md"
 FORMAT = 1
-BASE_PLANNERS = ("dwa", "mpc", "policy", "sac")
 IN_FLIGHT_PER_WORKER = 2
 
 
@@ -143,7 +143,7 @@ def parse_methods(
             raise ConfigError(
                 f"--checkpoint {name}=…: {name} is not among --planners ({','.join(names)})"
             )
-        if name in ("dwa", "mpc"):
+        if name in MODEL_PLANNERS:
             raise ConfigError(f"--checkpoint {name}=…: only learned policies take a checkpoint")
         p = Path(path)
         if not p.is_file():
@@ -151,7 +151,7 @@ def parse_methods(
         ckpt[name] = p
     methods = []
     for n in names:
-        if n in ("dwa", "mpc"):
+        if n in MODEL_PLANNERS:
             methods.append(MethodSpec(n, n))
         elif is_learned(n) or n in ckpt:
             path = ckpt.get(n)
@@ -171,7 +171,8 @@ def parse_methods(
             methods.append(MethodSpec(n, "policy", str(path), sha256_file(path)))
         else:
             raise ConfigError(
-                f"--planners: unknown method {n!r}; use dwa, mpc, policy, sac, a variant "
+                f"--planners: unknown method {n!r}; use {', '.join(MODEL_PLANNERS)}, policy, "
+                f"sac, a variant "
                 f"({', '.join(VARIANTS)}), or name a learned policy with --checkpoint {n}=PATH"
             )
     return methods

@@ -51,6 +51,18 @@ def load_response(spec: str) -> StepResponseModel | None:
     return read_response(DIGIT_RESPONSE if spec == "digit" else spec)
 
 
+def model_aware_expert(config: EmoNavConfig, margin: float, response: str = "digit"):
+    """The expert of the routes that learn a robot's dynamics: DWA with collision margin
+    `margin` [m] planning with the step-response model `response` (`load_response`)."""
+    import copy
+
+    from emonav_drake.core.dwa import DwaPlanner
+
+    expert_cfg = copy.deepcopy(config)
+    expert_cfg.dwa.safety_margin = margin
+    return DwaPlanner(expert_cfg, response=load_response(response))
+
+
 # ------------------------------------------------------------------------ collection
 class ExploringPlanner:
     """A planner whose command is replaced, on a fraction of the steps, by a uniformly

@@ -60,7 +60,7 @@ from emonav_drake.core.navigation import (
 from emonav_drake.core.scenario import Scenario, sample_scenario
 from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.errors import RunInterrupted
-from emonav_drake.learning.calibration import load_response
+from emonav_drake.learning.calibration import model_aware_expert
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.networks import CategoricalPolicy
 from emonav_drake.learning.policy import (
@@ -429,10 +429,8 @@ def train_dagger(
     torch.set_num_threads(cfg.threads)
     torch.manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
-    response = load_response(cfg.response)
-    expert_cfg = copy.deepcopy(env_cfg)
-    expert_cfg.dwa.safety_margin = cfg.expert_margin
-    expert = DwaPlanner(expert_cfg, response=response)
+    expert = model_aware_expert(env_cfg, cfg.expert_margin, cfg.response)
+    response = expert.response
     commands = expert.candidates.copy()
     student = Student(cfg, env_cfg, commands)
     if cfg.init_policy and not resume:

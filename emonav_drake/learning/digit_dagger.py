@@ -26,7 +26,6 @@ nothing here looks at evaluation seeds.
 
 from __future__ import annotations
 
-import copy
 import dataclasses as dc
 import time
 from pathlib import Path
@@ -95,12 +94,10 @@ def _labelled_episode(runner, method: str, seed: int, beta: float, margin: float
     """One Digit episode of the student (`runner`'s method) labelled by the expert."""
     from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
-    from emonav_drake.learning.calibration import load_response
+    from emonav_drake.learning.calibration import model_aware_expert
 
     student, cfg, grid_kind = runner.planner(method)
-    expert_cfg = copy.deepcopy(cfg)
-    expert_cfg.dwa.safety_margin = margin
-    expert = DwaPlanner(expert_cfg, response=load_response("digit"))
+    expert = model_aware_expert(cfg, margin)
     planner = LabellingPlanner(student, expert, beta, seed)
     t0 = time.perf_counter()
     record = run_digit_episode(
