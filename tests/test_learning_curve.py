@@ -55,7 +55,7 @@ def test_points_are_summarised_on_their_common_seeds(runs):
     text = curve_markdown(curve, "Curve")
     assert text.startswith("## Curve") and "seeds 32–34" in text
     assert text.count("(n=3)") == 2
-    assert f"p = {tables._p(step['p_value'])}" in text
+    assert f"p = {tables.format_p(step['p_value'])}" in text
 
     only = measure(points, seeds=[33])
     assert only.seeds == [33] and only.summary["second"]["episodes"] == 1

@@ -17,7 +17,7 @@ import json
 from collections.abc import Sequence
 from pathlib import Path
 
-from emonav_drake.core.metrics import COLLISION, FALL, SUCCESS, TIMEOUT
+from emonav_drake.core.metrics import COLLISION, FALL, TIMEOUT
 from emonav_drake.evaluation import tables
 
 
@@ -126,7 +126,7 @@ def curve_markdown(curve: Curve, title: str) -> str:
         "DT / trial",
         "IDT [static; happy, neutral, negative]",
         "failures",
-        f"vs previous ({SUCCESS} only here : only there, McNemar p)",
+        "vs previous (success only here : only there, McNemar p)",
     ]
     rows = []
     for i, lab in enumerate(curve.labels):
@@ -135,7 +135,8 @@ def curve_markdown(curve: Curve, title: str) -> str:
         vs = "—"
         if i:
             st = curve.steps[i - 1]
-            vs = f"{st['b_only_success']} : {st['a_only_success']}, p = {tables._p(st['p_value'])}"
+            p = tables.format_p(st["p_value"])
+            vs = f"{st['b_only_success']} : {st['a_only_success']}, p = {p}"
         rows.append(
             [
                 lab,

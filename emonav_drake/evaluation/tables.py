@@ -145,11 +145,12 @@ def pairwise_statement(row: dict, alpha: float = ALPHA) -> str:
     )
     return (
         f"{lead} on {n} paired seeds: {row['a_only_success']} vs {row['b_only_success']} "
-        f"discordant, McNemar exact p = {_p(row['p_value'])} — {verdict}"
+        f"discordant, McNemar exact p = {format_p(row['p_value'])} — {verdict}"
     )
 
 
-def _p(p: float) -> str:
+def format_p(p: float) -> str:
+    """A p-value for tables: 4 decimals, "< 1e-4" below."""
     return "< 1e-4" if p < 1e-4 else f"{p:.4f}"
 
 
@@ -252,7 +253,7 @@ def pairwise_rows(pairs: Sequence[dict]) -> tuple[list[str], list[list[object]]]
             _f(r["SR_b"]),
             r["a_only_success"],
             r["b_only_success"],
-            _p(r["p_value"]),
+            format_p(r["p_value"]),
             "yes" if r["significant"] else "no",
         ]
         for r in pairs

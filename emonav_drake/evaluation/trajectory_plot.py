@@ -22,6 +22,7 @@ import math
 import shutil
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -285,14 +286,7 @@ def render_trajectory_figure(
     """Write the episode's top view (`plot_trajectory`) with title, colour bar and legend
     as a PNG; returns `path` (parent directories are created)."""
     rows = _rows(traj, times)
-    x0, x1, y0, y1 = _bounds(traj)
-    width = 7.5  # of the axes [in]; its height follows the data's aspect
-    height = min(max(width * (y1 - y0) / (x1 - x0), 4.0), 9.0)
-    fig = Figure(figsize=(width + 4.3, height + 1.4), layout="constrained")
-    FigureCanvasAgg(fig)
-    grid = fig.add_gridspec(1, 2, width_ratios=[width + 1.1, 3.0])
-    ax, key = fig.add_subplot(grid[0]), fig.add_subplot(grid[1])
-    key.axis("off")
+    fig, ax, key = _figure_with_key(traj, 7.5, (4.0, 9.0), (4.3, 1.4), (1.1, 3.0))
     line = plot_trajectory(ax, traj, [float(traj.t[k]) for k in rows])
     # in the axes' own coordinates: as tall as the equal-aspect plot, not its layout cell
     fig.colorbar(line, cax=ax.inset_axes((1.015, 0.0, 0.025, 1.0)), label="robot: time [s]")
@@ -348,16 +342,9 @@ def render_trajectory_animation(
     if not (fps > 0 and math.isfinite(fps)):
         raise ValueError(f"fps {fps}: must be > 0")
     writer = animation_writer(path, fps)
-    x0, x1, y0, y1 = _bounds(traj)
-    width = 6.0  # of the axes [in]; its height follows the data's aspect
-    height = min(max(width * (y1 - y0) / (x1 - x0), 3.5), 7.0)
-    fig = Figure(figsize=(width + 2.9, height + 1.0), layout="constrained")
-    FigureCanvasAgg(fig)
-    grid = fig.add_gridspec(1, 2, width_ratios=[width, 2.8])
-    ax, key = fig.add_subplot(grid[0]), fig.add_subplot(grid[1])
-    key.axis("off")
+    fig, ax, key = _figure_with_key(traj, 6.0, (3.5, 7.0), (2.9, 1.0), (0.0, 2.8))
     _draw_static(ax, traj)
-    _frame_axes(ax, (x0, x1, y0, y1))
+    _frame_axes(ax, _bounds(traj))
     key.legend(
         handles=_legend_handles(traj, "now", still=False),
         loc="upper left",
@@ -416,3 +403,23 @@ def render_trajectory_animation(
             frame(k)
             writer.grab_frame()
     return out
+
+
+def _figure_with_key(
+    traj: Trajectory,
+    width: float,
+    height_limits: tuple[float, float],
+    margins: tuple[float, float],
+    columns: tuple[float, float],
+) -> tuple[Figure, Any, Any]:
+    """A figure of the top-view axes (`width` [in] wide, height from the data's aspect,
+    clipped to `height_limits`) beside a key panel: figure size = axes + `margins` [in],
+    grid columns (axes `width` + columns[0], key columns[1])."""
+    x0, x1, y0, y1 = _bounds(traj)
+    height = min(max(width * (y1 - y0) / (x1 - x0), height_limits[0]), height_limits[1])
+    fig = Figure(figsize=(width + margins[0], height + margins[1]), layout="constrained")
+    FigureCanvasAgg(fig)
+    grid = fig.add_gridspec(1, 2, width_ratios=[width + columns[0], columns[1]])
+    ax, key = fig.add_subplot(grid[0]), fig.add_subplot(grid[1])
+    key.axis("off")
+    return fig, ax, key

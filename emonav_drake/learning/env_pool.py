@@ -89,7 +89,7 @@ class _EnvActor:
         self.env.load_state_dict(state)
 
 
-class RayEnvs(LocalEnvs):
+class RayEnvs:
     """`n` training environments, one per Ray actor (one CPU each), stepped in parallel.
 
     Args:
@@ -158,9 +158,12 @@ def _writable(obs: dict) -> dict:
     return {k: np.array(v) for k, v in obs.items()}
 
 
-def make_envs(cfg: SacConfig, ray_address: str | None = None, parallel: bool = True) -> LocalEnvs:
-    """The trainer's `cfg.num_envs` environments: on Ray (local, or the cluster at
-    `ray_address`) when there are several and `parallel`, else in this process."""
-    if cfg.num_envs > 1 and parallel or ray_address:
+EnvPool = LocalEnvs | RayEnvs  # one interface: len, reset, step, state_dicts, close
+
+
+def make_envs(cfg: SacConfig, ray_address: str | None = None, parallel: bool = True) -> EnvPool:
+    """The trainer's `cfg.num_envs` environments: on the Ray cluster at `ray_address`, or
+    on a local Ray when there are several and `parallel`, else in this process."""
+    if ray_address or (cfg.num_envs > 1 and parallel):
         return RayEnvs(cfg, cfg.num_envs, address=ray_address)
     return LocalEnvs(cfg, cfg.num_envs)

@@ -39,7 +39,7 @@ from emonav_drake.errors import RunInterrupted
 from emonav_drake.evaluation.tables import record_from_json
 from emonav_drake.learning.config import SacConfig
 from emonav_drake.learning.env import EmoNavLIPEnv
-from emonav_drake.learning.env_pool import LocalEnvs, make_envs
+from emonav_drake.learning.env_pool import EnvPool, make_envs
 from emonav_drake.learning.policy import encoder_spec, save_policy, vector_state
 from emonav_drake.learning.replay import FrameReplayBuffer
 from emonav_drake.learning.run_state import (
@@ -218,7 +218,7 @@ def train_sac(
 def _train(
     out: Path,
     cfg: SacConfig,
-    envs: LocalEnvs,
+    envs: EnvPool,
     rng: np.random.Generator,
     saved: dict,
     tensors: dict,
