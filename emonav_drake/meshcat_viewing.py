@@ -1,6 +1,8 @@
 """Watching an episode in Meshcat: the server, waiting for a browser, captions, replays.
 
-* `make_meshcat(live)`: a Meshcat server; a record-only one (live False) does not log
+* `make_meshcat(live, host)`: a Meshcat server, listening on loopback (`localhost`) unless
+  another host is asked for (then with a warning: Meshcat has no authentication and
+  accepts a websocket from any origin); a record-only one (live False) does not log
   Drake's "Meshcat listening for connections at http://..." line.
 * `wait_for_browser(meshcat, timeout)`: block until a browser (any websocket client) is
   connected.
@@ -16,11 +18,12 @@ from __future__ import annotations
 
 import dataclasses as dc
 import html
+import ipaddress
 import logging
 import time
 from pathlib import Path
 
-from pydrake.geometry import Meshcat
+from pydrake.geometry import Meshcat, MeshcatParams
 
 from emonav_drake.systems import navigation_meshcat as nm
 
@@ -53,16 +56,45 @@ LIVE_LEGEND = (
 )
 
 
-def make_meshcat(live: bool) -> Meshcat:
-    """A Meshcat server. `live` False (recording only): Drake's log line announcing the
-    URL is suppressed, since nobody is meant to connect."""
+LOOPBACK_HOST = "localhost"  # Meshcat's default host here: this machine only
+
+
+def is_loopback_host(host: str) -> bool:
+    """True for a host name or address that only this machine can reach."""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host.strip("[]")).is_loopback
+    except ValueError:
+        return False
+
+
+def make_meshcat(live: bool, host: str = LOOPBACK_HOST, port: int | None = None) -> Meshcat:
+    """A Meshcat server listening on `host` (default loopback only).
+
+    Args:
+        live: False (recording only): Drake's log line announcing the URL is suppressed,
+            since nobody is meant to connect.
+        host: the interface to listen on: "localhost" (default), an address of this
+            machine, or "*" for every interface. Anything but loopback logs a warning:
+            Meshcat has no authentication and accepts a websocket from any origin, so
+            whoever reaches that interface can watch and change the scene.
+        port: the port (None: Drake's choice, the first free one from 7000).
+    """
+    if not is_loopback_host(host):
+        log.warning(
+            "Meshcat listens on %s: any host that reaches this machine there can watch and "
+            "change the scene (no authentication); use it on a trusted network only",
+            "every interface" if host in ("*", "0.0.0.0", "::") else host,
+        )
+    params = MeshcatParams(host=host, port=port)
     if live:
-        return Meshcat()
+        return Meshcat(params)
     drake_log = logging.getLogger("drake")
     level = drake_log.level
     drake_log.setLevel(logging.WARNING)
     try:
-        return Meshcat()
+        return Meshcat(params)
     finally:
         drake_log.setLevel(level)
 

@@ -49,7 +49,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
-from emonav_drake.meshcat_viewing import ReplayCaption, write_replay_html
+from emonav_drake.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.systems.crowd_system import CrowdSystem
@@ -224,7 +224,7 @@ def run_episode(
     `planner.initial_memory()` in the new diagram's Context (no `reset()` needed).
     """
     if record_html is not None and meshcat is None:
-        meshcat = Meshcat()
+        meshcat = make_meshcat(live=False)  # loopback only
     nav = build_navigation_diagram(
         scenario, config, planner, meshcat, show_rays, grid_kind, goal_radius, emotion_estimate
     )

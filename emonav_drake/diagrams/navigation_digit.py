@@ -41,7 +41,7 @@ from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
 from emonav_drake.diagrams.navigation import AddNavigationStack
 from emonav_drake.evaluation.rates import RateMeasurement
-from emonav_drake.meshcat_viewing import ReplayCaption, write_replay_html
+from emonav_drake.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.episode_monitor import EpisodeMonitor
@@ -145,7 +145,7 @@ def run_digit_episode(
     robot state and held command at every planner instant are appended to it
     (`simulate_digit_episode`)."""
     if record_html is not None and meshcat is None:
-        meshcat = Meshcat()
+        meshcat = make_meshcat(live=False)  # loopback only
     nd = build_digit_navigation_diagram(scenario, config, planner, meshcat, grid_kind, goal_radius)
     sim = Simulator(nd.diagram)
     sim.set_target_realtime_rate(realtime_rate)

@@ -32,6 +32,7 @@ from emonav_drake.core.tracking import COLUMNS as TRACKING_COLUMNS
 from emonav_drake.core.tracking import column as tracking_column
 from emonav_drake.core.tracking import step_tracking
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
+from emonav_drake.meshcat_viewing import make_meshcat
 from emonav_drake.params import EmoNavConfig, load_config
 from emonav_drake.systems.alip_footstep_planner import (
     LOG_COM,
@@ -270,7 +271,7 @@ def run_walk(
         script=script,
     )
     if record_html is not None and meshcat is None:
-        meshcat = Meshcat()
+        meshcat = make_meshcat(live=False)  # loopback only
     wd = build_walking_diagram(cfg, seq, meshcat=meshcat, record_timing=record_timing)
     station = wd.station
     plant = station.plant

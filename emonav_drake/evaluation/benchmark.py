@@ -43,10 +43,8 @@ import hashlib
 import json
 import logging
 import os
-import signal
 import subprocess
 import tempfile
-import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
@@ -58,6 +56,7 @@ from emonav_drake.evaluation import tables
 from emonav_drake.learning.variants import VARIANTS, is_learned, shipped_checkpoint
 from emonav_drake.params import ConfigError, EmoNavConfig, dump_config, load_config
 from emonav_drake.planners import MODEL_PLANNERS
+from emonav_drake.ray_cluster import init_ray
 
 log = logging.getLogger(__name__)
 
@@ -726,31 +725,6 @@ class _Progress:
         self.bar.close()
 
 
-def _ray_init(workers: int, address: str | None):
-    try:
-        import ray
-    except ImportError:
-        raise ConfigError("--workers > 1 needs ray (pip install ray), or use --workers 1") from None
-    os.environ.setdefault("RAY_USAGE_STATS_ENABLED", "0")
-    kwargs: dict[str, Any] = dict(
-        include_dashboard=False,
-        log_to_driver=False,
-        logging_level=logging.ERROR,
-        ignore_reinit_error=True,
-    )
-    # Ray's core worker installs its own SIGTERM handler in the driver (it would kill the
-    # process at once); keep ours, which turns SIGTERM into a Ctrl-C (tables written, exit 130)
-    main = threading.current_thread() is threading.main_thread()
-    previous = signal.getsignal(signal.SIGTERM) if main else None
-    if address:
-        ray.init(address=address, **kwargs)
-    else:
-        ray.init(num_cpus=workers, **kwargs)
-    if main and previous is not None:
-        signal.signal(signal.SIGTERM, previous)
-    return ray
-
-
 def _run_serial(
     spec: BenchmarkSpec,
     tasks: list[tuple[str, int]],
@@ -781,7 +755,7 @@ def run_on_ray(
     must offer `identity()` and `run(method, seed) -> dict`; the checkpoints of learned
     methods reach workers on other machines as bytes."""
     worker_cls = worker_cls or RayTrialWorker
-    ray = _ray_init(workers or 1, address)
+    ray = init_ray(workers or 1, address)
     try:
         if workers is None:  # a cluster: one worker per CPU it has
             workers = max(1, int(ray.cluster_resources().get("CPU", 1)))

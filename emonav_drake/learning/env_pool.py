@@ -106,10 +106,11 @@ class RayEnvs:
         goal_radius: float | None = None,
         address: str | None = None,
     ) -> None:
-        from emonav_drake.evaluation.benchmark import _ray_init, code_hash
+        from emonav_drake.evaluation.benchmark import code_hash
         from emonav_drake.params import ConfigError
+        from emonav_drake.ray_cluster import init_ray
 
-        self.ray = _ray_init(n, address)
+        self.ray = init_ray(n, address)
         plain = dc.asdict(cfg)
         actor_cls = self.ray.remote(num_cpus=1)(_EnvActor)
         self.actors = [actor_cls.remote(plain, goal_radius) for _ in range(n)]
