@@ -83,10 +83,17 @@ random problem in ten gave a command differing in the last bit depending on what
 workspace had solved before). Zero survives any scaling exactly; the price is a cost
 scaling that ignores q (about 50 % more ADMM iterations, ~0.3 ms a planning step; a new
 workspace per planning step would keep the q-aware scaling but a setup costs ~1.3 ms).
-`tests/test_navigation_planner_rate.py` checks it bit for bit. OSQP's `time_limit` is a
-wall-clock guard (0.1 s per QP, 3 QPs fit in a 0.4 s step); it is never reached on an idle
-machine (a QP takes ~0.2 ms), but on a starved one a solve that hits it makes the result
-timing-dependent — `max_iter` is the deterministic bound on the work.
+`tests/test_navigation_planner_rate.py` checks it bit for bit.
+
+Work budget in iterations, not seconds. Every number that decides how far OSQP iterates is
+a count: `max_iter` (400 ADMM iterations per QP), the termination check every 25
+iterations and rho adapted every `_RHO_INTERVAL` = 50 iterations (OSQP's iteration-based
+rule, set explicitly: OSQP also has a rule that adapts rho after a fraction of the setup
+*time*). So a plan is the same on an idle and on a starved machine. OSQP's wall-clock
+`time_limit` (`mpc.time_limit`, 1 s per QP, ~1000× what a QP takes here) is only a
+safety: a solve it cuts would depend on the load, so each time it fires the planner counts
+it (`time_limit_hits`) and logs a warning naming the planning step; no result we publish
+had one (`tests/test_mpc_load.py` runs the MPC beside a CPU hog and under stalls).
 
 scipy (a dependency of osqp) provides the sparse matrices OSQP takes and the Dijkstra of
 the guide path; the module needs nothing else beyond numpy.
@@ -102,6 +109,7 @@ clipped to the bounds of Eq. 2.
 from __future__ import annotations
 
 import dataclasses as dc
+import logging
 import math
 
 import numpy as np
@@ -112,19 +120,20 @@ from scipy.sparse import csgraph
 from emonav_drake.core.navigation import PlannerInput
 from emonav_drake.params import EmoNavConfig, MpcParams
 
+log = logging.getLogger(__name__)
+
 _HARD_PENALTY = 1e4  # seed selection: cost per metre of hard-constraint violation
 _MIN_NORMAL_DISTANCE = 1e-6  # [m]
 _CONVERGED = 1e-4  # SCP stops when no command changes by more than this
 _MAX_ITER_RESIDUAL = 1e-2  # a solve stopped by max_iter/time_limit is kept below this [m]
 _RHO0 = 0.1  # OSQP's initial rho, restored at each planning step
+_RHO_INTERVAL = 50  # ADMM iterations between rho adaptations (never OSQP's timed rule)
 _GUIDE_MAX_CELLS = 60_000  # the guide grid is coarsened beyond this
 
 
 _OK = {int(osqp.SolverStatus.OSQP_SOLVED), int(osqp.SolverStatus.OSQP_SOLVED_INACCURATE)}
-_STOPPED = {
-    int(osqp.SolverStatus.OSQP_MAX_ITER_REACHED),
-    int(osqp.SolverStatus.OSQP_TIME_LIMIT_REACHED),
-}
+_TIME_LIMIT = int(osqp.SolverStatus.OSQP_TIME_LIMIT_REACHED)
+_STOPPED = {int(osqp.SolverStatus.OSQP_MAX_ITER_REACHED), _TIME_LIMIT}
 
 
 @dc.dataclass
@@ -304,6 +313,9 @@ class MpcPlanner:
     Attributes:
         fallbacks: planning steps that fell back to the safe command (never reset).
         plans, qp_solves, qp_failures: counters since construction.
+        time_limit_hits: QPs cut by OSQP's wall-clock safety (`mpc.time_limit`) since
+            construction; each makes that plan depend on the machine's load (a warning is
+            logged), so a reproducible run has none.
         last_info: diagnostics of the last planning step (solves, iterations, statuses,
             OSQP run time [s], whether it fell back).
     """
@@ -348,6 +360,7 @@ class MpcPlanner:
         self.plans = 0
         self.qp_solves = 0
         self.qp_failures = 0
+        self.time_limit_hits = 0
         self.last_info: dict = {}
 
     # ------------------------------------------------------------------ interface
@@ -390,6 +403,7 @@ class MpcPlanner:
         key = (obst["num_ped"], obst["num_static"])
         layout = self._layout(key)
         info = {
+            "step": int(obs.step),
             "solves": 0,
             "iterations": 0,
             "status": [],
@@ -397,6 +411,7 @@ class MpcPlanner:
             "qp_run_times": [],
             "qp_iterations": [],
             "fallback": False,
+            "time_limit_hits": 0,
         }
         self.last_info = info
 
@@ -837,6 +852,7 @@ class MpcPlanner:
                 warm_starting=True,
                 rho=_RHO0,
                 adaptive_rho=1,  # iteration-based adaptation: deterministic
+                adaptive_rho_interval=_RHO_INTERVAL,
             )
             layout.solver = solver
         # Always the same sequence of operations, also right after the setup, so that a
@@ -860,6 +876,16 @@ class MpcPlanner:
         info["run_time"] += float(res.info.run_time)
         info["qp_run_times"].append(float(res.info.run_time))
         status = int(res.info.status_val)
+        if status == _TIME_LIMIT:
+            self.time_limit_hits += 1
+            info["time_limit_hits"] += 1
+            log.warning(
+                "MPC: OSQP stopped by its wall-clock safety (mpc.time_limit %.3g s) after "
+                "%d iterations at planning step %s: this plan depends on the machine's load",
+                p.time_limit,
+                int(res.info.iter),
+                info["step"],
+            )
         x = np.asarray(res.x, dtype=float)
         ok = bool(np.all(np.isfinite(x))) and (
             status in _OK or (status in _STOPPED and res.info.prim_res <= _MAX_ITER_RESIDUAL)
