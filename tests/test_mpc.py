@@ -269,3 +269,20 @@ def test_mpc_params_are_validated():
         load_config(data="mpc: {horizon_steps: 1}")
     with pytest.raises(ConfigError, match=r"mpc\.prediction_discount"):
         load_config(data="mpc: {prediction_discount: 1.5}")
+
+
+def test_a_wall_clock_cut_is_counted_and_warned(caplog):
+    """OSQP's wall-clock limit is a safety: every solve it cuts is counted and logged (a
+    limit of 1e-6 s, far below one ADMM iteration here, cuts every QP that iterates)."""
+    cfg = load_config()
+    cfg.mpc.time_limit = 1e-6
+    cfg.episode.max_steps = 8
+    mpc = MpcPlanner(cfg)
+    with caplog.at_level("WARNING", logger="emonav_drake.core.mpc"):
+        _episode(sample_scenario(3, cfg), cfg, mpc)
+    assert mpc.time_limit_hits > 0
+    assert caplog.text.count("wall-clock safety") == mpc.time_limit_hits
+    # the default (1 s) never fires on the same episode
+    quiet = MpcPlanner(load_config())
+    _episode(sample_scenario(3, cfg), cfg, quiet)
+    assert quiet.time_limit_hits == 0
