@@ -15,10 +15,14 @@ Two rules (docs/reliability.md):
 
 JSON is strict: `write_json` turns NaN and ±inf into `null` and serialises with
 `allow_nan=False`, so every file written is valid JSON for any parser.
+
+A full disk (ENOSPC, a quota or a file size limit) while writing is an `OSError` naming
+the target file (the OS names none), and the target keeps its previous content.
 """
 
 from __future__ import annotations
 
+import errno
 import json
 import math
 import os
@@ -29,6 +33,8 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 TMP_MARK = ".tmp-"
+# The errors of a storage that is full: no space, a quota, a file size limit.
+FULL_DISK_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 
 
 class OutputPathError(ValueError):
@@ -85,16 +91,30 @@ def check_output_dir(path: str | Path, flag: str | None = None) -> Path:
     return p
 
 
+def _same_file(a: Path, b: Path) -> bool:
+    """Whether two paths name one file: the same path once links are resolved, or the
+    same inode (a hard link)."""
+    if a.resolve() == b.resolve():
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one does not exist (yet): not the same file
+        return False
+
+
 def check_distinct(outputs: Mapping[str, Path | None]) -> None:
-    """`OutputPathError` if two output flags name the same file (one would overwrite the other)."""
-    seen: dict[Path, str] = {}
+    """`OutputPathError` if two flags name the same file (one would overwrite the other),
+    also by another path: a symbolic link to it, `..` or a hard link."""
+    seen: list[tuple[Path, str]] = []
     for flag, path in outputs.items():
         if path is None:
             continue
-        key = Path(os.path.abspath(path))
-        if key in seen:
-            raise OutputPathError(f"{flag} {path}: the same file as {seen[key]}")
-        seen[key] = flag
+        p = Path(path)
+        for other, other_flag in seen:
+            if _same_file(p, other):
+                same = "the same file as" if p == other else f"the same file ({other}) as"
+                raise OutputPathError(f"{flag} {path}: {same} {other_flag}")
+        seen.append((p, flag))
 
 
 def process_alive(pid: int) -> bool:
@@ -142,6 +162,18 @@ def _umask() -> int:
 
 
 @contextmanager
+def naming_full_disk(path: str | Path, what: str = "not written") -> Iterator[None]:
+    """Re-raise a full-disk `OSError` (`FULL_DISK_ERRNOS`) as one naming `path`:
+    "[Errno 28] No space left on device: <path> <what>"."""
+    try:
+        yield
+    except OSError as e:
+        if e.errno not in FULL_DISK_ERRNOS:
+            raise
+        raise OSError(e.errno, f"{os.strerror(e.errno)}: {path} {what}") from e
+
+
+@contextmanager
 def atomic_output(path: str | Path) -> Iterator[Path]:
     """Yield a temporary path to write; on success it replaces `path`, on failure it goes.
 
@@ -150,14 +182,15 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
             fig.savefig(tmp)
     """
     path = Path(path)
-    tmp = temp_sibling(path)
-    try:
-        yield tmp
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; give the usual mode
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    with naming_full_disk(path, "not written (its previous content, if any, is kept)"):
+        tmp = temp_sibling(path)
+        try:
+            yield tmp
+            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; give the usual mode
+            os.replace(tmp, path)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
 
 
 def write_text_atomic(path: str | Path, text: str) -> None:
@@ -203,11 +236,12 @@ def atomic_write(path: str | Path, write: Callable[[BinaryIO], None]) -> None:
     path = Path(path)
     tmp = path.with_name(f"{path.name}.emonav-{os.getpid()}.tmp")
     try:
-        with open(tmp, "wb") as f:
-            write(f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
+        with naming_full_disk(path, "not written (its previous content, if any, is kept)"):
+            with open(tmp, "wb") as f:
+                write(f)
+                f.flush()
+                os.fsync(f.fileno())
+            os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise

@@ -47,6 +47,54 @@ EXIT_INTERNAL = 1  # an unexpected exception: a bug
 # CommandError, ImageReadError, OutputPathError, DeviceError, …) and the file system's.
 USER_ERRORS = (ValueError, OSError, NotImplementedError)
 
+# `eval --episodes` at most: every scenario is sampled before the first episode (a crowd
+# that does not fit fails at once), ~0.2 ms per seed, ~20 s at the maximum; 100 000 DWA
+# episodes already take ~8 h on one core.
+MAX_EPISODES = 100_000
+
+
+def parse_seed(text: str, flag: str) -> int:
+    """A seed flag's value: an integer in [0, 2**64 - 1]; else `ConfigError` naming `flag`."""
+    from emonav_drake.core.scenario import MAX_SEED
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise ConfigError(f"{flag} {text!r}: must be an integer in [0, 2**64 - 1]") from None
+    if value < 0:
+        raise ConfigError(f"{flag} {value}: must be >= 0")
+    if value > MAX_SEED:
+        raise ConfigError(
+            f"{flag} {value}: beyond 64 bits; seeds are in [0, 2**64 - 1] = [0, {MAX_SEED}]"
+        )
+    return value
+
+
+class SeedArg(argparse.Action):
+    """The argparse action shared by every seed flag (`--seed`, `--first-seed`): the value
+    is an integer in [0, 2**64 - 1] (`parse_seed`). Unlike a `type`, an action knows the
+    flag, so a bad value is a `ConfigError` naming it: one line, exit 2 (`main`)."""
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: object,
+        option_string: str | None = None,
+    ) -> None:
+        setattr(namespace, self.dest, parse_seed(str(values), option_string or self.dest))
+
+
+def check_seed_range(first: int, count: int, flag: str) -> None:
+    """Seeds `first` … `first + count - 1` must all fit in 64 bits (`ConfigError` naming `flag`)."""
+    from emonav_drake.core.scenario import MAX_SEED
+
+    if first + count - 1 > MAX_SEED:
+        raise ConfigError(
+            f"{flag} {first}: with {count} seeds the last one, {first + count - 1}, is beyond "
+            "64 bits (2**64 - 1)"
+        )
+
 
 def _add_common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--config", type=Path, help="YAML configuration overriding the defaults")
@@ -132,11 +180,6 @@ def _check_planner_flags(args: argparse.Namespace) -> None:
     resolve_device(args.device)
 
 
-def _check_seed(value: int, flag: str) -> None:
-    if value < 0:
-        raise ConfigError(f"{flag} {value}: must be >= 0")
-
-
 def _check_outputs(args: argparse.Namespace, *flags: str) -> None:
     """Every output flag given: a writable file path (checked before any work), all distinct."""
     outputs = {}
@@ -148,7 +191,6 @@ def _check_outputs(args: argparse.Namespace, *flags: str) -> None:
 
 
 def cmd_sim(args: argparse.Namespace) -> int:
-    _check_seed(args.seed, "--seed")
     _check_outputs(args, "--json", "--record", "--steps-out")
     if args.plant == "digit" and (args.emotion_estimate or args.rays):
         raise ConfigError(
@@ -278,9 +320,12 @@ def _format_rates(report) -> str:
 
 def cmd_eval(args: argparse.Namespace) -> int:
     """Evaluate over seeds; on Ctrl-C keep the finished episodes (summary, --json, exit 130)."""
-    _check_seed(args.first_seed, "--first-seed")
-    if args.episodes < 1:
-        raise ConfigError(f"--episodes {args.episodes}: must be >= 1")
+    if not 1 <= args.episodes <= MAX_EPISODES:
+        raise ConfigError(
+            f"--episodes {args.episodes}: must be in [1, {MAX_EPISODES}] (split a longer "
+            "evaluation with --first-seed)"
+        )
+    check_seed_range(args.first_seed, args.episodes, "--first-seed")
     _check_outputs(args, "--json")
     _check_planner_flags(args)
     cfg = _config(args)
@@ -294,8 +339,10 @@ def cmd_eval(args: argparse.Namespace) -> int:
     from emonav_drake.planners import configure_for, make_planner
 
     seeds = range(args.first_seed, args.first_seed + args.episodes)
-    # Every scenario first (cheap): a crowd that does not fit fails now, not at episode k.
-    scenarios = [_sample(args, seed, cfg) for seed in seeds]
+    # Every scenario first (cheap): a crowd that does not fit fails now, not at episode k;
+    # none is kept (each is drawn again for its episode), so memory does not grow with N.
+    for seed in seeds:
+        _sample(args, seed, cfg)
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
     grid_kind = configure_for(planner, cfg)
     if hasattr(planner, "describe"):
@@ -304,7 +351,8 @@ def cmd_eval(args: argparse.Namespace) -> int:
     interrupted = False
     with tqdm(total=len(seeds), desc=f"{args.planner}/{args.plant}", unit="ep") as bar:
         try:
-            for scenario in scenarios:
+            for seed in seeds:
+                scenario = _sample(args, seed, cfg)
                 rec = run_evaluation_episode(
                     args.plant, scenario, cfg, planner, grid_kind, estimate
                 )
@@ -315,7 +363,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     if not records:
         raise RunInterrupted("interrupted before the first episode finished; nothing written")
     summary = summarize(records)
-    done = [s.seed for s in scenarios[: len(records)]]
+    done = list(seeds[: len(records)])
     print(format_summary(summary))
     if args.json:
         out = {
@@ -338,10 +386,11 @@ def cmd_eval(args: argparse.Namespace) -> int:
 
 
 def cmd_lgm(args: argparse.Namespace) -> int:
-    _check_seed(args.seed, "--seed")
     if args.steps < 0:
         raise ConfigError(f"--steps {args.steps}: must be >= 0")
     _check_outputs(args, "--png")
+    if args.png.suffix.lower() != ".png":
+        raise ConfigError(f"--png {args.png}: the file name must end in .png")
     import numpy as np
 
     from emonav_drake.core.crowd import obstacle_discs
@@ -408,7 +457,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     s.add_argument("--planner", default="dwa", choices=PLANNER_CHOICES)
     s.add_argument("--plant", default="lip", choices=["lip", "digit"])
-    s.add_argument("--seed", type=int, default=0, help="scenario seed (>= 0)")
+    s.add_argument("--seed", action=SeedArg, default=0, help="scenario seed, in [0, 2**64 - 1]")
     s.add_argument(
         "--scenario",
         help="YAML scenario file instead of a sampled one, or the name of a shipped "
@@ -457,8 +506,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     e.add_argument("--planner", default="dwa", choices=PLANNER_CHOICES)
     e.add_argument("--plant", default="lip", choices=["lip", "digit"])
-    e.add_argument("--episodes", type=int, default=100, help=">= 1")
-    e.add_argument("--first-seed", type=int, default=0, help=">= 0")
+    e.add_argument(
+        "--episodes",
+        type=int,
+        default=100,
+        help=f"in [1, {MAX_EPISODES}]: every scenario is sampled before the first episode "
+        "(a crowd that does not fit fails at once; ~0.2 ms per seed); split longer "
+        "evaluations with --first-seed",
+    )
+    e.add_argument(
+        "--first-seed", action=SeedArg, default=0, help="episode i runs seed first-seed + i (>= 0)"
+    )
     e.add_argument(
         "--json",
         type=Path,
@@ -471,13 +529,13 @@ def build_parser() -> argparse.ArgumentParser:
     g = sub.add_parser(
         "lgm", parents=[debug], help="render a scenario's LiDAR grid map and OGM as a PNG"
     )
-    g.add_argument("--seed", type=int, default=0, help="scenario seed (>= 0)")
+    g.add_argument("--seed", action=SeedArg, default=0, help="scenario seed, in [0, 2**64 - 1]")
     g.add_argument(
         "--scenario",
         help="YAML scenario file instead of a sampled one, or the name of a shipped example",
     )
     g.add_argument("--steps", type=int, default=8, help="DWA steps to walk before the snapshot")
-    g.add_argument("--png", type=Path, required=True)
+    g.add_argument("--png", type=Path, required=True, help="output image (a .png file)")
     g.add_argument("--config", type=Path, help="YAML configuration overriding the defaults")
     g.add_argument(
         "--time-varying",
@@ -554,7 +612,14 @@ def main(argv: list[str] | None = None) -> int:
     unexpected exception (a bug), one line. `--debug` re-raises instead, with the
     traceback. Argument-syntax errors are argparse's (usage and exit code 2).
     """
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    try:
+        args = build_parser().parse_args(argv)
+    except USER_ERRORS as e:  # a flag value refused while parsing (the seed flags)
+        if "--debug" in argv:
+            raise
+        print(f"emonav: error: {_one_line(e)}", file=sys.stderr)
+        return EXIT_USAGE
     debug = getattr(args, "debug", False)
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,

@@ -26,6 +26,7 @@ from emonav_drake.atomic_io import (
     write_json,
     write_text_atomic,
 )
+from emonav_drake.cli import SeedArg
 from emonav_drake.core.tracking import COLUMNS
 from emonav_drake.params import ConfigError, EmoNavConfig
 
@@ -36,11 +37,17 @@ STEPS_OUT_HELP = (
 
 
 def _validate_walk_args(args: argparse.Namespace, max_speed: float) -> None:
-    """Every flag checked before the (minutes-long) simulation starts."""
+    """Every flag checked before the (minutes-long) simulation starts (the seed while
+    parsing: `cli.SeedArg`)."""
+    from emonav_drake.diagrams.walking import MAX_WALK_SECONDS
+
     if not (math.isfinite(args.seconds) and args.seconds > 0):
         raise ConfigError(f"--seconds {args.seconds}: must be a finite number > 0")
-    if args.seed < 0:
-        raise ConfigError(f"--seed {args.seed}: must be >= 0")
+    if args.seconds > MAX_WALK_SECONDS:
+        raise ConfigError(
+            f"--seconds {args.seconds:g}: at most {MAX_WALK_SECONDS:g} (one simulated hour, "
+            "about an hour of wall time); run longer walks in parts"
+        )
     if args.speed is not None:
         if args.command != "straight":
             raise ConfigError(
@@ -152,8 +159,19 @@ def cmd_walk(args: argparse.Namespace) -> int:
 def add_walk_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register `emonav walk` on the CLI's sub-parsers."""
     w = subparsers.add_parser("walk", help="simulate the full-order Digit walking (Drake, 1 kHz)")
-    w.add_argument("--seconds", type=float, default=10.0, help="simulated time [s], > 0")
-    w.add_argument("--seed", type=int, default=0, help="seed of the random commands (>= 0)")
+    w.add_argument(
+        "--seconds",
+        type=float,
+        default=10.0,
+        help="simulated time [s], in (0, 3600]: the walk runs at about real time and its "
+        "step logs keep ~2 MB per simulated minute",
+    )
+    w.add_argument(
+        "--seed",
+        action=SeedArg,
+        default=0,
+        help="seed of the random commands, in [0, 2**64 - 1]",
+    )
     w.add_argument(
         "--command",
         default="random",

@@ -6,7 +6,10 @@ robot's start and goal. `sample_scenario(seed, config)` draws one as the paper d
 (§IV-B); the same seed gives the same scenario. Scenarios also load from YAML
 (`load_scenario`), with every field validated: a pedestrian needs `start`, `goal` and
 `emotion`, an obstacle `center` and `radius` (no silent defaults); the robot's start
-and goal must be clear of every obstacle, and its start clear of every pedestrian's.
+and goal must be clear of every obstacle, its start clear of every pedestrian's and its
+goal farther than the goal radius from its start; pedestrians must not start overlapping
+each other nor start or head for a spot inside an obstacle; at most `MAX_PEDESTRIANS`
+pedestrians and `MAX_OBSTACLES` obstacles.
 
 World frame: x towards the robot's goal, y left, metres.
 """
@@ -27,6 +30,13 @@ from emonav_drake.params import (
 )
 
 PLACEMENT_TRIES = 1000  # rejection-sampling draws per object
+# The most a scenario may hold: what the sampler can be configured to draw
+# (crowd.max_pedestrians, crowd.max_static <= 20); the crowd's ORCA step is quadratic in it.
+MAX_PEDESTRIANS = 20
+MAX_OBSTACLES = 20
+# Seeds are 64-bit unsigned integers: a larger one would alias a smaller one (the episode's
+# step-response generator takes `seed % 2**64`).
+MAX_SEED = 2**64 - 1
 
 
 class ScenarioSamplingError(ConfigError):
@@ -69,14 +79,32 @@ class Scenario:
     emotion_change_period: float = 2.0  # [s], used when a schedule is present
     seed: int = -1  # the seed it was sampled with, −1 when written by hand
 
-    def validate(self, robot_radius: float = 0.3, pedestrian_radius: float = 0.3) -> "Scenario":
+    def validate(
+        self, robot_radius: float = 0.3, pedestrian_radius: float = 0.3, goal_radius: float = 0.2
+    ) -> "Scenario":
         """Raise `ConfigError` naming the field if any value is invalid.
 
-        Besides ranges: the robot's start and goal must be clear of every obstacle (the
-        robot's disc of `robot_radius` must not overlap it: a start inside one is an
-        instant collision, a goal inside one a certain timeout), and the robot must not
-        start overlapping a pedestrian's start (disc of `pedestrian_radius`).
+        Besides ranges and counts (at most `MAX_PEDESTRIANS` pedestrians and
+        `MAX_OBSTACLES` obstacles): the robot's start and goal must be clear of every
+        obstacle (the robot's disc of `robot_radius` must not overlap it: a start inside
+        one is an instant collision, a goal inside one a certain timeout), its goal
+        farther than `goal_radius` from its start, and it must not start overlapping a
+        pedestrian's start (disc of `pedestrian_radius`). Pedestrians must not start
+        overlapping each other, and their starts and goals must be clear of every obstacle.
         """
+        if len(self.pedestrians) > MAX_PEDESTRIANS:
+            raise ConfigError(
+                f"pedestrians: {len(self.pedestrians)} given, at most {MAX_PEDESTRIANS} allowed"
+            )
+        if len(self.obstacles) > MAX_OBSTACLES:
+            raise ConfigError(
+                f"obstacles: {len(self.obstacles)} given, at most {MAX_OBSTACLES} allowed"
+            )
+        if not (self.seed == -1 or 0 <= self.seed <= MAX_SEED):
+            raise ConfigError(
+                f"seed = {self.seed!r} is invalid: must be -1 (written by hand) or in "
+                "[0, 2**64 - 1]"
+            )
         for name in ("robot_start", "robot_goal"):
             _check_point(getattr(self, name), name)
         if not math.isfinite(self.robot_heading):
@@ -109,6 +137,11 @@ class Scenario:
                         f"radius {o.radius}): the robot (radius {robot_radius} m) must stand "
                         f"clear of it ({-gap:.2f} m overlap)"
                     )
+        if math.dist(self.robot_start, self.robot_goal) <= goal_radius:
+            raise ConfigError(
+                f"robot_goal = {self.robot_goal!r} is within the goal radius ({goal_radius} m) "
+                f"of robot_start = {self.robot_start!r}: there would be nothing to navigate"
+            )
         for i, p in enumerate(self.pedestrians):
             gap = math.dist(self.robot_start, p.start) - pedestrian_radius - robot_radius
             if gap < 0:
@@ -116,6 +149,22 @@ class Scenario:
                     f"robot_start = {self.robot_start!r} overlaps pedestrians[{i}].start "
                     f"= {p.start!r}: the episode would begin in collision"
                 )
+            for j, q in enumerate(self.pedestrians[:i]):
+                if math.dist(p.start, q.start) < 2 * pedestrian_radius:
+                    raise ConfigError(
+                        f"pedestrians[{i}].start = {p.start!r} overlaps pedestrians[{j}].start "
+                        f"= {q.start!r}: pedestrians (radius {pedestrian_radius} m) must start "
+                        f"at least {2 * pedestrian_radius:g} m apart"
+                    )
+            for where in ("start", "goal"):
+                point = getattr(p, where)
+                for k, o in enumerate(self.obstacles):
+                    if math.dist(point, o.center) < o.radius + pedestrian_radius:
+                        raise ConfigError(
+                            f"pedestrians[{i}].{where} = {point!r} is inside obstacles[{k}] "
+                            f"(center {o.center!r}, radius {o.radius}): the pedestrian (radius "
+                            f"{pedestrian_radius} m) must stand clear of it"
+                        )
         return self
 
 
@@ -130,7 +179,8 @@ def load_scenario(path: str | Path, config: EmoNavConfig | None = None) -> Scena
     Absent top-level fields take the documented defaults (no obstacles, no pedestrians,
     the paper's start (−4, 0) and goal (4, 0)); `robot_heading`, if absent, faces the
     goal. Inside `pedestrians` and `obstacles` every field but `emotion_schedule` is
-    required. `config` gives the robot's and pedestrians' radii for the overlap checks.
+    required. `config` gives the robot's and pedestrians' radii for the overlap checks and
+    the goal radius (the larger of training's and evaluation's) for the start–goal check.
     """
     cfg = config or EmoNavConfig()
     scenario, raw = load_typed_yaml_raw(Scenario, path=path)
@@ -138,7 +188,8 @@ def load_scenario(path: str | Path, config: EmoNavConfig | None = None) -> Scena
         (sx, sy), (gx, gy) = scenario.robot_start, scenario.robot_goal
         scenario.robot_heading = math.atan2(gy - sy, gx - sx) if (sx, sy) != (gx, gy) else 0.0
     try:
-        return scenario.validate(cfg.robot.radius, cfg.crowd.pedestrian_radius)
+        goal_radius = max(cfg.episode.goal_radius, cfg.episode.eval_goal_radius)
+        return scenario.validate(cfg.robot.radius, cfg.crowd.pedestrian_radius, goal_radius)
     except ConfigError as e:
         raise ConfigError(f"{path}: {e}") from None
 
@@ -200,6 +251,8 @@ def sample_scenario(seed: int, config: EmoNavConfig | None = None) -> Scenario:
     In the time-varying mode, one pedestrian's emotion changes every
     `emotion_change_period` seconds to a different one, for the whole episode.
     """
+    if not 0 <= seed <= MAX_SEED:
+        raise ConfigError(f"seed {seed}: must be in [0, 2**64 - 1]")
     cfg = config or EmoNavConfig()
     c, robot = cfg.crowd, cfg.robot
     rng = np.random.default_rng(seed)

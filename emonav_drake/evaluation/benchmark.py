@@ -14,8 +14,14 @@ A *run directory* holds one benchmark:
   (`method`, `seed`, `plant`, `record` = `EpisodeRecord.to_json()`, `wall_seconds`), each
   line written with one `write` + flush + fsync. A kill can leave at most a torn last line;
   it is detected and dropped (and its trial redone) when the directory is opened again.
+  Every other line is checked when read (`check_trial`: a known outcome, counts and
+  lengths >= 0, …); a bad one is an error naming the file and line, never a table entry.
 * `tables.md` and `table2.csv`, `table3.csv`, `social.csv`, `pairwise.csv` — the tables of
   `evaluation.tables`, written at the end and on an interruption, from the sorted trials.
+
+The files of a run directory must be regular files: a symbolic link (or a `trials.jsonl`
+with another hard link) is refused when the directory is opened, since a write would go
+into the file it points to.
 
 Trial i of every method runs the scenario of seed `first_seed + i` with the evaluation goal
 radius (`episode.eval_goal_radius`, as `emonav eval`).
@@ -42,6 +48,7 @@ import datetime
 import hashlib
 import json
 import logging
+import math
 import os
 import subprocess
 import tempfile
@@ -50,7 +57,15 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from emonav_drake.atomic_io import check_output_dir, json_safe, write_json, write_text_atomic
+from emonav_drake.atomic_io import (
+    check_output_dir,
+    json_safe,
+    naming_full_disk,
+    write_json,
+    write_text_atomic,
+)
+from emonav_drake.core.metrics import COLLISION, FALL, SUCCESS, TIMEOUT, EpisodeRecord
+from emonav_drake.core.scenario import MAX_SEED
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.evaluation import tables
 from emonav_drake.learning.variants import VARIANTS, is_learned, shipped_checkpoint
@@ -63,7 +78,13 @@ log = logging.getLogger(__name__)
 SETTINGS_FILE = "settings.json"
 TRIALS_FILE = "trials.jsonl"
 TABLES_FILE = "tables.md"
+TABLE_CSV_FILES = ("table2.csv", "table3.csv", "social.csv", "pairwise.csv")
+RUN_FILES = (SETTINGS_FILE, TRIALS_FILE, TABLES_FILE, *TABLE_CSV_FILES)
 FORMAT = 1
+# --trials at most (per method): every scenario is sampled (~0.2 ms per seed, ~20 s at the
+# maximum) and every (method, seed) task listed before the first trial.
+MAX_TRIALS = 100_000
+OUTCOMES = (SUCCESS, COLLISION, TIMEOUT, FALL)
 IN_FLIGHT_PER_WORKER = 2
 
 
@@ -478,10 +499,84 @@ def comparable(t: dict) -> dict:
     return {k: v for k, v in t.items() if k != "wall_seconds"}
 
 
+_RECORD_FIELDS = {f.name for f in dc.fields(EpisodeRecord)}
+_RECORD_REQUIRED = (
+    "outcome",
+    "steps",
+    "nav_time",
+    "path_length",
+    "min_ped_distance",
+    "discomfort_steps",
+    "idt",
+    "total_reward",
+)
+
+
+def _is_int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def check_trial(t: dict) -> str | None:
+    """What is wrong with one `trials.jsonl` line (a dict with `method`, `seed`, `record`),
+    in words; None if it is a valid trial: a method name, a seed in [0, 2**64 - 1], a
+    record with every field of `EpisodeRecord.to_json()` and no other, a known outcome,
+    step counts that are integers in [0, steps], lengths and times that are finite and
+    >= 0 (`min_ped_distance` may be null: no pedestrian), a finite reward."""
+    if not isinstance(t["method"], str) or not t["method"]:
+        return f"method = {t['method']!r} is not a method name"
+    if not (_is_int(t["seed"]) and 0 <= t["seed"] <= MAX_SEED):
+        return f"seed = {t['seed']!r} is not a seed (an integer in [0, 2**64 - 1])"
+    if "plant" in t and t["plant"] not in ("lip", "digit"):
+        return f"plant = {t['plant']!r} is not lip or digit"
+    if "wall_seconds" in t and not (_is_number(t["wall_seconds"]) and t["wall_seconds"] >= 0):
+        return f"wall_seconds = {t['wall_seconds']!r} must be a number >= 0"
+    r = t["record"]
+    if not isinstance(r, dict):
+        return f"record = {r!r} is not an object"
+    missing = [k for k in _RECORD_REQUIRED if k not in r]
+    if missing:
+        return f"record lacks {', '.join(missing)}"
+    unknown = sorted(set(r) - _RECORD_FIELDS)
+    if unknown:
+        return f"record has the unknown field {unknown[0]!r}"
+    if r["outcome"] not in OUTCOMES:
+        return f"record.outcome = {r['outcome']!r} is not one of {', '.join(OUTCOMES)}"
+    if not (_is_int(r["steps"]) and r["steps"] >= 0):
+        return f"record.steps = {r['steps']!r} must be an integer >= 0"
+    idt = r["idt"]
+    if not (isinstance(idt, list) and len(idt) == 4):
+        return f"record.idt = {idt!r} must be a list of 4 step counts"
+    counts = [("discomfort_steps", r["discomfort_steps"])]
+    counts += [(f"idt[{i}]", v) for i, v in enumerate(idt)]
+    for name, v in counts:
+        if not (_is_int(v) and 0 <= v <= r["steps"]):
+            return f"record.{name} = {v!r} must be an integer in [0, steps = {r['steps']}]"
+    for name in ("nav_time", "path_length", "min_ped_distance"):
+        v = r[name]
+        if v is None and name == "min_ped_distance":
+            continue
+        if not (_is_number(v) and v >= 0):
+            return f"record.{name} = {v!r} must be a finite number >= 0"
+    if not _is_number(r["total_reward"]):
+        return f"record.total_reward = {r['total_reward']!r} must be a finite number"
+    if "seed" in r and r["seed"] != t["seed"]:
+        return f"record.seed = {r['seed']!r} differs from the line's seed {t['seed']!r}"
+    for name in ("fall_reason", "collided_with"):
+        if name in r and not isinstance(r[name], str):
+            return f"record.{name} = {r[name]!r} must be a string"
+    return None
+
+
 def read_trials(path: Path, repair: bool = False) -> list[dict]:
-    """The trial lines of `trials.jsonl`. A torn last line (a kill while writing: no final
-    newline, or not a trial's JSON) is dropped — and cut from the file with `repair`, so
-    the next append starts on a fresh line; a damaged earlier line is an error."""
+    """The trial lines of `trials.jsonl`, each checked (`check_trial`). A torn last line (a
+    kill while writing: no final newline, or not a trial's JSON) is dropped — and cut from
+    the file with `repair`, so the next append starts on a fresh line; a damaged earlier
+    line, or any line that is a trial's JSON with invalid values, is an error naming the
+    file and the line."""
     if not path.exists():
         return []
     data = path.read_bytes()
@@ -511,10 +606,16 @@ def read_trials(path: Path, repair: bool = False) -> list[dict]:
             raise BenchmarkSettingsError(
                 f"{path}: line {number} is damaged (not a trial's JSON); fix or remove that line"
             )
+        problem = check_trial(t)
+        if problem is not None:
+            raise BenchmarkSettingsError(
+                f"{path}: line {number} is not a valid trial: {problem}; fix or remove that line"
+            )
         trials.append(t)
         pos = nl + 1
     if repair and pos < len(data):
-        with open(path, "r+b") as f:
+        fd = os.open(path, os.O_RDWR | os.O_NOFOLLOW)  # never cut the file a link points to
+        with os.fdopen(fd, "r+b") as f:
             f.truncate(pos)
             f.flush()
             os.fsync(f.fileno())
@@ -552,6 +653,29 @@ class RunDirectory:
             os.close(fd)
             self._lock_fd = None
 
+    def check_regular_files(self) -> None:
+        """`BenchmarkSettingsError` if a file of the run directory (`RUN_FILES`) is a
+        symbolic link, or `trials.jsonl` has another hard link: writing it would change
+        the other file."""
+        for name in RUN_FILES:
+            p = self.path / name
+            if p.is_symlink():
+                raise BenchmarkSettingsError(
+                    f"--out {self.path}: {name} is a symbolic link (to {os.readlink(p)}); a run "
+                    "directory's files must be regular files (a write would go into the file "
+                    "it points to): replace it by a copy of that file, or use another --out"
+                )
+            if p.exists() and not p.is_file():
+                raise BenchmarkSettingsError(
+                    f"--out {self.path}: {name} exists and is not a regular file"
+                )
+        if self.trials_path.exists() and self.trials_path.stat().st_nlink > 1:
+            raise BenchmarkSettingsError(
+                f"--out {self.path}: {TRIALS_FILE} has {self.trials_path.stat().st_nlink} hard "
+                "links: appending would change the file under its other names too; replace it "
+                "by a copy, or use another --out"
+            )
+
     def read_settings(self) -> dict | None:
         if not self.settings_path.exists():
             return None
@@ -564,8 +688,10 @@ class RunDirectory:
         """Check or create `settings.json`; the valid trials already done (torn line cut).
 
         Returns the directory's settings (its planners' order and first creation kept; the
-        number of trials raised to `settings["trials"]`) and the finished trials.
+        number of trials raised to `settings["trials"]`) and the finished trials. A file
+        that is a link is refused first (`check_regular_files`).
         """
+        self.check_regular_files()
         old = self.read_settings()
         if old is None:
             if self.trials_path.exists() and self.trials_path.stat().st_size:
@@ -621,12 +747,14 @@ class RunDirectory:
         return list(seen.values())
 
     def append(self, trial: dict) -> None:
-        """Append one trial line: one write, flushed and fsynced."""
+        """Append one trial line: one write, flushed and fsynced (never through a link)."""
         line = json.dumps(json_safe(trial), allow_nan=False) + "\n"
-        with open(self.trials_path, "ab") as f:
-            f.write(line.encode())
-            f.flush()
-            os.fsync(f.fileno())
+        flags = os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW
+        with naming_full_disk(self.trials_path, "could not be appended to"):
+            with os.fdopen(os.open(self.trials_path, flags, 0o666), "ab") as f:
+                f.write(line.encode())
+                f.flush()
+                os.fsync(f.fileno())
 
     def write_tables(
         self, settings: dict, trials: Sequence[dict], interrupted: bool = False
@@ -662,10 +790,14 @@ class RunDirectory:
                 trials, methods, label, plant, obs, title=f"Benchmark {self.path.name}", notes=notes
             ),
         )
-        write_text_atomic(self.path / "table2.csv", tables.table2_csv(summary))
-        write_text_atomic(self.path / "table3.csv", tables.table3_csv(summary, label, plant, obs))
-        write_text_atomic(self.path / "social.csv", tables.social_csv(summary))
-        write_text_atomic(self.path / "pairwise.csv", tables.pairwise_csv(pairs))
+        csvs = (
+            tables.table2_csv(summary),
+            tables.table3_csv(summary, label, plant, obs),
+            tables.social_csv(summary),
+            tables.pairwise_csv(pairs),
+        )
+        for name, text in zip(TABLE_CSV_FILES, csvs, strict=True):
+            write_text_atomic(self.path / name, text)
         return md
 
 
@@ -840,10 +972,18 @@ def run_benchmark(
     """
     if plant not in ("lip", "digit"):
         raise ConfigError(f"--plant {plant!r}: choose lip or digit")
-    if trials < 1:
-        raise ConfigError(f"--trials {trials}: must be >= 1")
+    if not 1 <= trials <= MAX_TRIALS:
+        raise ConfigError(
+            f"--trials {trials}: must be in [1, {MAX_TRIALS}] (trials per method; every "
+            "scenario is sampled before the first trial)"
+        )
     if first_seed < 0:
         raise ConfigError(f"--first-seed {first_seed}: must be >= 0")
+    if first_seed + trials - 1 > MAX_SEED:
+        raise ConfigError(
+            f"--first-seed {first_seed}: with --trials {trials} the last seed, "
+            f"{first_seed + trials - 1}, is beyond 64 bits (2**64 - 1)"
+        )
     if workers is not None and workers < 1:
         raise ConfigError(f"--workers {workers}: must be >= 1")
     if workers is None and not ray_address:
