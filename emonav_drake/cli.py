@@ -1,7 +1,8 @@
 """The `emonav` command line.
 
 emonav sim  --planner dwa --plant lip --seed S [--scenario F.yaml] [--config F.yaml]
-            [--meshcat [--no-wait]] [--record out.html] [--json out.json] [--rays]
+            [--meshcat [--no-wait] [--meshcat-host H]]
+            [--record out.html] [--json out.json] [--rays]
 emonav eval --planner dwa --plant lip --episodes 100 --first-seed 0 [--json out.json]
 emonav lgm  --seed S --png out.png [--steps K] [--time-varying]
 emonav plot RUN.json --png out.png [--times 0,5,10] [--gif out.gif]   (cli_plot.py)
@@ -94,6 +95,32 @@ def check_seed_range(first: int, count: int, flag: str) -> None:
             f"{flag} {first}: with {count} seeds the last one, {first + count - 1}, is beyond "
             "64 bits (2**64 - 1)"
         )
+
+
+def add_meshcat_host(p: argparse.ArgumentParser) -> None:
+    """`--meshcat-host`: where a live Meshcat listens (loopback unless asked)."""
+    p.add_argument(
+        "--meshcat-host",
+        default=None,
+        metavar="HOST",
+        help="with --meshcat: the interface Meshcat listens on (default localhost: this "
+        "machine only); '*' = every interface, or one address of this machine. Meshcat has "
+        "no authentication: anyone who reaches it can watch and change the scene (a warning "
+        "is printed); prefer `ssh -L 7000:localhost:7000` to watch from another machine",
+    )
+
+
+def meshcat_host(args: argparse.Namespace) -> str:
+    """The Meshcat host of `--meshcat-host` (checked: only with `--meshcat`, not empty)."""
+    from emonav_drake.meshcat_viewing import LOOPBACK_HOST
+
+    if args.meshcat_host is None:
+        return LOOPBACK_HOST
+    if not args.meshcat:
+        raise ConfigError("--meshcat-host is used with --meshcat only")
+    if not args.meshcat_host.strip():
+        raise ConfigError("--meshcat-host '': give a host name or address, or '*'")
+    return args.meshcat_host.strip()
 
 
 def _add_common(p: argparse.ArgumentParser) -> None:
@@ -192,6 +219,7 @@ def _check_outputs(args: argparse.Namespace, *flags: str) -> None:
 
 def cmd_sim(args: argparse.Namespace) -> int:
     _check_outputs(args, "--json", "--record", "--steps-out")
+    meshcat_host(args)
     if args.plant == "digit" and (args.emotion_estimate or args.rays):
         raise ConfigError(
             "--plant digit: --rays and --emotion-estimate are available "
@@ -214,7 +242,8 @@ def cmd_sim(args: argparse.Namespace) -> int:
         from emonav_drake.meshcat_viewing import ReplayCaption, make_meshcat, start_live_view
         from emonav_drake.systems.navigation_meshcat import set_overview_camera
 
-        meshcat = make_meshcat(live=args.meshcat)  # record only: no "listening at" line
+        # record only: no "listening at" line
+        meshcat = make_meshcat(live=args.meshcat, host=meshcat_host(args))
         set_overview_camera(meshcat, cfg)
         if args.meshcat:
             plant = "Digit" if args.plant == "digit" else "LIP"
@@ -475,6 +504,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --meshcat: start without waiting for a browser and exit when the "
         "episode ends (scripts, tests)",
     )
+    add_meshcat_host(s)
     s.add_argument("--record", type=Path, help="write a self-contained HTML replay")
     s.add_argument(
         "--rays", action="store_true", help="draw the LiDAR rays (per walking step) in Meshcat"

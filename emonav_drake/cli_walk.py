@@ -1,7 +1,8 @@
 """`emonav walk`: the full-order Digit walking under navigation commands.
 
 emonav walk --seconds S --seed K [--command random|straight|turn|stand] [--speed V]
-            [--config F.yaml] [--meshcat [--no-wait]] [--record out.html] [--json out.json]
+            [--config F.yaml] [--meshcat [--no-wait] [--meshcat-host H]]
+            [--record out.html] [--json out.json]
             [--steps-out steps.csv]
 
 `write_steps_csv` also writes `emonav sim --steps-out` (one row per planner step).
@@ -26,7 +27,7 @@ from emonav_drake.atomic_io import (
     write_json,
     write_text_atomic,
 )
-from emonav_drake.cli import SeedArg
+from emonav_drake.cli import SeedArg, add_meshcat_host, meshcat_host
 from emonav_drake.core.tracking import COLUMNS
 from emonav_drake.params import ConfigError, EmoNavConfig
 
@@ -110,13 +111,15 @@ def cmd_walk(args: argparse.Namespace) -> int:
 
     cfg = load_config(args.config) if args.config else load_config()
     _validate_walk_args(args, cfg.robot.max_speed)
+    meshcat_host(args)
     from emonav_drake.diagrams.walking import run_walk
 
     meshcat = None
     if args.meshcat or args.record:
         from emonav_drake.meshcat_viewing import make_meshcat, start_live_view
 
-        meshcat = make_meshcat(live=args.meshcat)  # record only: no "listening at" line
+        # record only: no "listening at" line
+        meshcat = make_meshcat(live=args.meshcat, host=meshcat_host(args))
         if args.meshcat:
             start_live_view(meshcat, wait=not args.no_wait)
     with contextlib.ExitStack() as stack:
@@ -196,6 +199,7 @@ def add_walk_parser(subparsers: argparse._SubParsersAction) -> argparse.Argument
         action="store_true",
         help="with --meshcat: neither wait for a browser nor keep serving afterwards",
     )
+    add_meshcat_host(w)
     w.add_argument("--record", type=Path, help="write a self-contained HTML replay")
     w.add_argument("--json", type=Path, help="write the result as JSON (NaN written as null)")
     w.add_argument("--steps-out", type=Path, metavar="FILE.csv", help=STEPS_OUT_HELP)

@@ -96,3 +96,32 @@ def test_local_ray_listens_on_loopback_only():
         assert _loopback(ray_node_address(ray))
     finally:
         ray.shutdown()
+
+
+def _tiny_config(tmp_path: Path) -> str:
+    path = tmp_path / "tiny.yaml"
+    path.write_text("episode: {max_steps: 2}\n")
+    return str(path)
+
+
+def test_sim_meshcat_host_opens_only_on_request_and_warns(tmp_path, caplog):
+    from emonav_drake.cli import main
+
+    base = ["sim", "--seed", "3", "--config", _tiny_config(tmp_path), "--meshcat", "--no-wait"]
+    with caplog.at_level(logging.WARNING):
+        assert main(base) == 0
+    assert "no authentication" not in caplog.text
+    caplog.clear()
+    with caplog.at_level(logging.WARNING):
+        assert main([*base, "--meshcat-host", "*"]) == 0
+    assert "every interface" in caplog.text
+
+
+def test_meshcat_host_without_meshcat_is_refused(tmp_path, capsys):
+    from emonav_drake.cli import main
+
+    argv = ["sim", "--config", _tiny_config(tmp_path), "--meshcat-host", "*"]
+    assert main(argv) == 2
+    assert "--meshcat-host is used with --meshcat only" in capsys.readouterr().err
+    assert main(["walk", "--seconds", "0.1", "--meshcat-host", "0.0.0.0"]) == 2
+    assert "--meshcat-host is used with --meshcat only" in capsys.readouterr().err
