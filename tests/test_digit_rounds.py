@@ -33,3 +33,41 @@ def test_a_tiny_digit_round_writes_a_loadable_policy(tmp_path):
     assert (tmp_path / "digit" / "digit_rounds.pt").is_file()
     u = planner.act(np.zeros((9, 100, 100), np.uint8), np.array([8.0, 0.0]), np.zeros(2))
     assert 0 <= u[0] <= 0.4 and abs(u[1]) <= 0.2
+
+
+def test_resuming_the_rounds_from_a_damaged_state_names_it_and_the_changed_settings(
+    tmp_path, caplog, monkeypatch
+):
+    import dataclasses as dc
+
+    import pytest
+
+    import emonav_drake.learning.digit_dagger as digit_dagger
+    from emonav_drake.learning.dagger import Demonstrations, FrameStore
+    from emonav_drake.learning.run_state import RunStateError, write_run_state
+
+    cfg = DaggerConfig(expert_episodes=1, rounds=1, episodes_per_round=1, batch_size=8)
+    cfg.grad_steps_first = cfg.grad_steps_per_round = 2
+    cfg.hidden, cfg.pool, cfg.eval_episodes = 16, 4, 1
+    short = EmoNavConfig()
+    short.episode.max_steps = 10
+    source = tmp_path / "calibrated"
+    train_dagger(source, cfg, short, command="test")
+
+    def collected(*_a, **_k):
+        raise AssertionError("a round started from a damaged state")
+
+    monkeypatch.setattr(digit_dagger, "collect_round", collected)
+    out = tmp_path / "digit"
+    out.mkdir()
+    saved = DigitRoundsConfig(rounds=1, episodes=7)
+    demos = Demonstrations(FrameStore((100, 100))).to_plain(cfg.num_frames)
+    state = {"round": 1, "history": [{}], "demos": demos, "config": dc.asdict(saved)}
+    write_run_state(out / "digit_rounds.pt", digit_dagger.DIGIT_ROUNDS_FORMAT, state, {})
+    rounds = DigitRoundsConfig(rounds=1, episodes=2)
+    with pytest.raises(
+        RunStateError,
+        match=r"digit_rounds\.pt in .*digit is damaged .*no 'model' in it.*episodes: 7 → 2",
+    ):
+        run_digit_rounds(out, source, rounds, resume=True)
+    assert "settings that differ from the saved ones: episodes: 7 → 2" in caplog.text

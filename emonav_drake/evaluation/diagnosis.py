@@ -103,23 +103,40 @@ def diagnose_run(
     from tqdm import tqdm
 
     from emonav_drake.atomic_io import write_json, write_text_atomic
-    from emonav_drake.evaluation.benchmark import TrialRunner, load_run, spec_from_settings
+    from emonav_drake.evaluation.benchmark import (
+        SETTINGS_FILE,
+        TrialRunner,
+        load_run,
+        spec_from_settings,
+    )
     from emonav_drake.learning.calibration import load_response
 
     settings, trials = load_run(run_dir)
+    where = Path(run_dir) / SETTINGS_FILE
+    try:  # the run's configuration, stored as YAML text in its settings
+        runner = TrialRunner(spec_from_settings(settings))
+    except KeyError as e:
+        raise ConfigError(f"{where}: no {e} in it (not a benchmark's settings?)") from None
+    except ConfigError as e:
+        # the YAML loader names no file for a YAML string: name the settings and the field
+        field = "config_yaml"
+        if settings.get("emotion_estimate_yaml") is not None:
+            field += " or emotion_estimate_yaml"
+        raise ConfigError(f"{where} ({field}): {str(e).removeprefix('<yaml>: ')}") from None
     if settings["plant"] != "digit":
         raise ConfigError(f"{run_dir} is a {settings['plant']} run: diagnose reads Digit runs")
     methods = methods or list(settings["planners"])
     unknown = set(methods) - set(settings["planners"])
     if unknown:
         raise ConfigError(f"--methods: {sorted(unknown)} not in the run ({settings['planners']})")
-    runner = TrialRunner(spec_from_settings(settings))
     model = load_response("digit")
     todo = []
     for m in methods:
         mine = sorted((t for t in trials if t["method"] == m), key=lambda t: t["seed"])
         todo += [t for t in mine if t["record"]["outcome"] != "success"]
         todo += [t for t in mine if t["record"]["outcome"] == "success"][:reference]
+    if not todo:
+        raise ConfigError(f"{run_dir}: no finished trials of {methods} to diagnose")
     rows = []
     for t in tqdm(todo, desc="re-simulating", unit="trial", disable=not progress):
         row = diagnose_trial(runner, t["method"], t["seed"], last, model)

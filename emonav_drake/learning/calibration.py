@@ -157,7 +157,9 @@ def collect_traces(
     from tqdm import tqdm
 
     from emonav_drake.atomic_io import write_text_atomic
+    from emonav_drake.core.scenario import MAX_SEED
     from emonav_drake.evaluation.benchmark import (
+        MAX_TRIALS,
         BenchmarkSpec,
         TrialRunner,
         parse_methods,
@@ -167,18 +169,17 @@ def collect_traces(
 
     if not 0.0 <= explore <= 1.0:
         raise ConfigError(f"--explore {explore}: must be in [0, 1]")
-    if episodes < 1 or first_seed < 0:
-        raise ConfigError("--episodes must be >= 1 and --first-seed >= 0")
+    if not 1 <= episodes <= MAX_TRIALS:
+        raise ConfigError(f"--episodes {episodes}: must be in [1, {MAX_TRIALS}] (per planner)")
+    if not 0 <= first_seed <= MAX_SEED - episodes + 1:
+        raise ConfigError(
+            f"--first-seed {first_seed}: the seeds {first_seed} … {first_seed + episodes - 1} "
+            "must be in [0, 2**64 - 1]"
+        )
     out = Path(out)
     methods = parse_methods(planners)
     spec = BenchmarkSpec(methods, "digit", dump_config(config or EmoNavConfig()))
-    have: list[dict] = []
-    if out.is_file():
-        for i, line in enumerate(out.read_text().splitlines()):
-            try:
-                have.append(json.loads(line))
-            except json.JSONDecodeError:
-                raise ConfigError(f"{out}:{i + 1} is not a trace line (damaged file?)") from None
+    have = read_trace_lines(out) if out.is_file() else []
     if any(h.get("explore") != explore for h in have):
         raise ConfigError(f"{out} holds episodes of another --explore; use another --out")
     done = {(h["method"], h["seed"]) for h in have}
@@ -217,15 +218,46 @@ def collect_traces(
 
 
 # ------------------------------------------------------------------------------- fit
+TRACE_KEYS = {"method": str, "seed": int, "trace": list}  # what every trace line has
+
+
+def read_trace_lines(path: str | Path) -> list[dict]:
+    """The episodes of a trace file, one JSON object per line, each with `TRACE_KEYS`;
+    `ConfigError` naming the file and line of anything else (a torn or edited line)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as e:
+        raise ConfigError(f"{path}: not a trace file (not UTF-8 text: {e})") from None
+    lines = []
+    for i, line in enumerate(text.splitlines(), 1):
+        try:
+            h = json.loads(line)
+        except ValueError as e:
+            raise ConfigError(f"{path}:{i}: not a JSON trace line ({e}); damaged file?") from None
+        if not isinstance(h, dict):
+            raise ConfigError(f"{path}:{i}: not a trace line (a JSON {type(h).__name__})")
+        for key, kind in TRACE_KEYS.items():
+            if key not in h:
+                raise ConfigError(f"{path}:{i}: the trace line has no {key!r}")
+            if not isinstance(h[key], kind) or isinstance(h[key], bool):
+                raise ConfigError(f"{path}:{i}: the trace line's {key!r} is not a {kind.__name__}")
+        lines.append(h)
+    return lines
+
+
 def read_traces(paths: list[str | Path], step_time: float):
-    """All episodes of trace files as `Transitions` (episode ids in file order)."""
+    """All episodes of trace files as `Transitions` (episode ids in file order);
+    `ConfigError` naming the file and line of a malformed episode."""
     from emonav_drake.core.step_response import Transitions, transitions_from_trace
 
     parts, names = [], []
     for path in paths:
-        for line in Path(path).read_text().splitlines():
-            h = json.loads(line)
-            parts.append(transitions_from_trace(h["trace"], step_time, episode=len(parts)))
+        for i, h in enumerate(read_trace_lines(path), 1):
+            try:
+                parts.append(transitions_from_trace(h["trace"], step_time, episode=len(parts)))
+            except (KeyError, TypeError, ValueError, IndexError) as e:
+                raise ConfigError(f"{path}:{i}: the trace is malformed ({e!r})") from None
             names.append((h["method"], h["seed"]))
     if not parts:
         raise ConfigError("no episodes in the trace files")

@@ -14,6 +14,7 @@ import argparse
 import json
 from pathlib import Path
 
+from emonav_drake.cli import SeedArg
 from emonav_drake.params import ConfigError
 
 
@@ -30,21 +31,28 @@ def add_calibrate_parser(sub: argparse._SubParsersAction) -> None:
     col.add_argument("--episodes", type=int, default=20, help="episodes per planner (>= 1)")
     col.add_argument(
         "--first-seed",
-        type=int,
+        action=SeedArg,
         default=3_000_000,
         help="episode i plays the scenario of seed first-seed + i (keep clear of the "
         "evaluation seeds 0-499 and the training and selection seeds)",
     )
     col.add_argument(
-        "--explore", type=float, default=0.3, help="fraction of steps with a random command"
+        "--explore",
+        type=float,
+        default=0.3,
+        help="fraction of steps with a random command, in [0, 1]",
     )
-    col.add_argument("--workers", type=int, default=1, help="parallel Ray workers (1: serial)")
+    col.add_argument(
+        "--workers", type=int, default=1, help="parallel Ray workers, >= 1 (1: serial)"
+    )
     col.add_argument("--ray-address", help="run on this Ray cluster")
     col.add_argument("--out", type=Path, required=True, help="trace file (JSONL), extended")
     col.set_defaults(func=cmd_collect)
     fit = verbs.add_parser("fit", help="fit the model; report held-out errors")
     fit.add_argument("traces", type=Path, nargs="+")
-    fit.add_argument("--held-out", type=float, default=0.25, help="fraction of episodes held out")
+    fit.add_argument(
+        "--held-out", type=float, default=0.25, help="fraction of episodes held out, in (0, 1)"
+    )
     fit.add_argument("--out", type=Path, required=True, help="model + report (JSON)")
     fit.set_defaults(func=cmd_fit)
 
@@ -59,23 +67,37 @@ def add_calibrate_parser(sub: argparse._SubParsersAction) -> None:
         required=True,
         help="the calibrated DAgger run (its dagger_state.pt and policy.pt)",
     )
-    r.add_argument("--rounds", type=int, default=2)
-    r.add_argument("--episodes", type=int, default=60, help="Digit episodes per round")
-    r.add_argument("--first-seed", type=int, default=4_000_000)
-    r.add_argument("--beta", type=float, default=0.25, help="expert-acting probability, round 0")
-    r.add_argument("--grad-steps", type=int, default=1500)
-    r.add_argument("--workers", type=int, default=1)
+    r.add_argument("--rounds", type=int, default=2, help="Digit rounds, >= 1")
+    r.add_argument("--episodes", type=int, default=60, help="Digit episodes per round, >= 1")
+    r.add_argument(
+        "--first-seed",
+        action=SeedArg,
+        default=4_000_000,
+        help="round r's episodes play seeds first-seed + r * episodes + i",
+    )
+    r.add_argument(
+        "--beta",
+        type=float,
+        default=0.25,
+        help="expert-acting probability in round 0, in [0, 1] (halved every round)",
+    )
+    r.add_argument("--grad-steps", type=int, default=1500, help="gradient steps per round, >= 1")
+    r.add_argument("--workers", type=int, default=1, help="parallel Ray workers, >= 1")
     r.add_argument("--ray-address")
     r.add_argument("--out", type=Path, required=True)
     r.add_argument("--resume", action="store_true", help="continue the rounds in --out")
     r.set_defaults(func=cmd_digit_rounds)
 
 
+def _check_workers(workers: int) -> None:
+    if workers < 1:
+        raise ConfigError(f"--workers {workers}: must be >= 1")
+
+
 def cmd_collect(args: argparse.Namespace) -> int:
     from emonav_drake.learning.calibration import collect_traces
 
-    if args.workers < 1:
-        raise ConfigError(f"--workers {args.workers}: must be >= 1")
+    _check_workers(args.workers)
     summary = collect_traces(
         args.out,
         args.planners,
@@ -105,17 +127,16 @@ def cmd_fit(args: argparse.Namespace) -> int:
 def cmd_digit_rounds(args: argparse.Namespace) -> int:
     from emonav_drake.learning.digit_dagger import DigitRoundsConfig, run_digit_rounds
 
-    if min(args.rounds, args.episodes, args.grad_steps, args.workers) < 1:
-        raise ConfigError("--rounds, --episodes, --grad-steps and --workers must be >= 1")
-    if not (args.source / "dagger_state.pt").is_file():
-        raise ConfigError(f"--from {args.source}: no DAgger run there (dagger_state.pt)")
     cfg = DigitRoundsConfig(
         rounds=args.rounds,
         episodes=args.episodes,
         first_seed=args.first_seed,
         beta=args.beta,
         grad_steps=args.grad_steps,
-    )
+    ).validate()
+    _check_workers(args.workers)
+    if not (args.source / "dagger_state.pt").is_file():
+        raise ConfigError(f"--from {args.source}: no DAgger run there (dagger_state.pt)")
     policy = run_digit_rounds(
         args.out, args.source, cfg, args.workers, args.ray_address, resume=args.resume
     )

@@ -14,13 +14,16 @@ import sys
 from pathlib import Path
 
 from emonav_drake.atomic_io import check_output_dir
+from emonav_drake.cli import SeedArg
 from emonav_drake.learning.variants import VARIANTS, variant
 from emonav_drake.params import ConfigError
 
 
 def add_train_parser(sub: argparse._SubParsersAction) -> None:
     t = sub.add_parser("train", help="train a navigation policy (SAC, or the CPU DAgger route)")
-    t.add_argument("--algo", choices=["sac", "dagger"], default="sac")
+    t.add_argument(
+        "--algo", choices=["sac", "dagger"], help="sac (default) or dagger (the CPU route)"
+    )
     t.add_argument(
         "--variant",
         choices=list(VARIANTS),
@@ -54,7 +57,7 @@ def add_train_parser(sub: argparse._SubParsersAction) -> None:
         help="--algo sac with num_envs > 1: step the environments on this Ray cluster "
         "(e.g. auto or HOST:6379; default: a local Ray)",
     )
-    t.add_argument("--seed", type=int, default=0, help="seed of the run (>= 0)")
+    t.add_argument("--seed", action=SeedArg, default=0, help="seed of the run, in [0, 2**64 - 1]")
     t.add_argument("--device", default="cpu", help="cpu or cuda (cuda:N)")
     t.add_argument(
         "--out", type=Path, help="run directory (default: runs/train, or runs/NAME with --variant)"
@@ -66,6 +69,7 @@ def add_train_parser(sub: argparse._SubParsersAction) -> None:
 def _apply_variant(args: argparse.Namespace) -> None:
     """--variant NAME → --algo dagger --config <the variant's YAML>, --out runs/NAME."""
     if args.variant is None:
+        args.algo = args.algo or "sac"
         if args.out is None:
             args.out = Path("runs/train")
         return
@@ -74,7 +78,7 @@ def _apply_variant(args: argparse.Namespace) -> None:
             f"--variant {args.variant} brings its configuration "
             f"({variant(args.variant).config.name}); --config cannot be combined with it"
         )
-    if args.algo == "sac" and "--algo" in sys.argv[1:]:
+    if args.algo == "sac":
         raise ConfigError("--variant trains by the CPU route: drop --algo sac")
     args.algo, args.config = "dagger", variant(args.variant).config
     if args.out is None:
@@ -101,8 +105,6 @@ def _training_config(args: argparse.Namespace):
     else:
         from emonav_drake.learning.config import SacConfig as schema
     cfg = load_typed_yaml(schema, path=args.config) if args.config else schema()
-    if args.seed < 0:
-        raise ConfigError(f"--seed {args.seed}: must be >= 0")
     if args.steps is not None and args.steps < 1:
         raise ConfigError(f"--steps {args.steps}: must be >= 1")
     cfg.seed, cfg.device = args.seed, args.device
@@ -111,8 +113,11 @@ def _training_config(args: argparse.Namespace):
     if args.plant is not None:
         cfg.plant = args.plant
     if args.envs is not None:
-        if args.envs < 1:
-            raise ConfigError(f"--envs {args.envs}: must be >= 1")
+        from emonav_drake.learning.config import _SAC_RANGES
+
+        low, high = _SAC_RANGES["num_envs"]
+        if not low <= args.envs <= high:
+            raise ConfigError(f"--envs {args.envs}: must be in [{low}, {high}]")
         cfg.num_envs = args.envs
     where = f"{args.config}: " if args.config else ""
     try:
@@ -120,6 +125,29 @@ def _training_config(args: argparse.Namespace):
     except ConfigError as e:
         raise ConfigError(f"{where}{e}") from None
     return cfg
+
+
+def resume_command(args: argparse.Namespace, out: Path) -> str:
+    """The `emonav train` command that continues the run in `out`: the same route
+    (`--variant`, or `--algo` and `--config`) and command-line overrides."""
+    words = ["emonav", "train"]
+    if args.variant is not None:
+        words += ["--variant", args.variant]
+    else:
+        words += ["--algo", args.algo]
+        if args.config is not None:
+            words += ["--config", str(args.config)]
+    for flag, value in (
+        ("--plant", args.plant),
+        ("--steps", args.steps),
+        ("--envs", args.envs),
+        ("--ray-address", args.ray_address),
+        ("--seed", args.seed or None),
+        ("--device", None if args.device == "cpu" else args.device),
+    ):
+        if value is not None:
+            words += [flag, str(value)]
+    return shlex.join([*words, "--resume", str(out)])
 
 
 def cmd_train(args: argparse.Namespace) -> int:
@@ -139,13 +167,24 @@ def cmd_train(args: argparse.Namespace) -> int:
 
         command = "emonav " + " ".join(shlex.quote(a) for a in sys.argv[1:])
         path = train_dagger(
-            out, cfg, resume=args.resume is not None, command=command, variant=args.variant
+            out,
+            cfg,
+            resume=args.resume is not None,
+            command=command,
+            variant=args.variant,
+            resume_command=resume_command(args, out),
         )
         print(f"policy written to {path}")
         return 0
     from emonav_drake.learning.sac_trainer import train_sac
 
-    train_sac(out, cfg, resume=args.resume is not None, ray_address=args.ray_address)
+    train_sac(
+        out,
+        cfg,
+        resume=args.resume is not None,
+        ray_address=args.ray_address,
+        resume_command=resume_command(args, out),
+    )
     return 0
 
 

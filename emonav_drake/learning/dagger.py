@@ -78,6 +78,7 @@ from emonav_drake.learning.run_state import (
     atomic_write_text,
     check_state,
     clean_stale_temp_files,
+    config_changes,
     read_run_state,
     rng_state,
     set_rng_state,
@@ -87,6 +88,9 @@ from emonav_drake.params import ConfigError, EmoNavConfig
 
 log = logging.getLogger(__name__)
 STATE_FILE = "dagger_state.pt"
+# What a DAgger state holds (`train_dagger`'s `save`).
+STATE_KEYS = ("config", "env_config", "progress", "episodes", "best_sr", "history", "rng")
+DEMO_KEYS = ("frames", "windows", "states", "labels")
 
 
 class FrameStore:
@@ -176,6 +180,43 @@ class Demonstrations:
 def command_index(commands: np.ndarray, command: np.ndarray) -> int:
     """Index of the grid command nearest to `command`."""
     return int(np.argmin(np.abs(commands - command).sum(axis=1)))
+
+
+def read_dagger_state(path: str | Path) -> tuple[DaggerConfig, dict, dict]:
+    """A DAgger run's state file, read without running code and checked: (its
+    configuration, its plain state, its tensors).
+
+    `RunStateError` naming the file if it is missing, damaged, of another format, lacks
+    part of the state (`STATE_KEYS`, the demonstrations' `DEMO_KEYS`), or its
+    configuration has fields this emonav does not know or values out of range.
+    """
+    path = Path(path)
+    saved, tensors = read_run_state(path, DAGGER_FORMAT)
+
+    def check() -> DaggerConfig:
+        missing = [k for k in (*STATE_KEYS, "demos") if k not in saved]
+        if not missing and isinstance(saved["demos"], dict):
+            missing = [f"demos.{k}" for k in DEMO_KEYS if k not in saved["demos"]]
+        if missing:
+            raise ValueError(f"no {', '.join(missing)} in it")
+        bad = [k for k in DEMO_KEYS if not isinstance(saved["demos"][k], np.ndarray)]
+        if bad:
+            raise ValueError(f"demos.{bad[0]} is not an array")
+        for key in ("model", "optim"):
+            if not isinstance(tensors.get(key), dict):
+                raise ValueError(f"no {key} state in it")
+        if not isinstance(saved["config"], dict):
+            raise ValueError("its configuration is not a mapping")
+        known = {f.name for f in dc.fields(DaggerConfig)}
+        unknown = sorted(set(saved["config"]) - known)
+        if unknown:
+            raise ValueError(f"configuration fields this emonav does not know: {unknown}")
+        try:
+            return DaggerConfig(**saved["config"]).validate()
+        except ConfigError as e:
+            raise ValueError(f"its configuration: {e}") from None
+
+    return check_state(f"{path.name} in {path.parent}", check), saved, tensors
 
 
 class Student:
@@ -398,13 +439,16 @@ def train_dagger(
     resume: bool = False,
     command: str | None = None,
     variant: str | None = None,
+    resume_command: str | None = None,
 ) -> Path:
     """Run the CPU route; write `out/policy.pt` (best round) and a per-round log.
 
     Returns the path of the best policy, which this run (or the run it resumes) wrote.
     Every policy file carries its provenance: the route, `variant` and `command` (as
     given), round, seed, configuration, samples, cumulative wall time, the training
-    scenario seeds and the seeds the round was evaluated (selected) on.
+    scenario seeds and the seeds the round was evaluated (selected) on. After Ctrl-C the
+    message quotes `resume_command`, the command that continues the run (default:
+    `emonav train --algo dagger --resume OUT`).
 
     Raises:
         RunStateError: `resume` and `out` has no DAgger state, or one that is damaged, of
@@ -422,7 +466,7 @@ def train_dagger(
                 f"no DAgger state ({STATE_FILE}) in {out}: nothing to resume "
                 f"(start a new run with --out {out})"
             )
-        saved, tensors = read_run_state(ckpt, DAGGER_FORMAT)  # before any work
+        _, saved, tensors = read_dagger_state(ckpt)  # before any work
     out.mkdir(parents=True, exist_ok=True)
     for p in clean_stale_temp_files(out):
         log.info("removed %s, left by a save that was killed", p)
@@ -440,10 +484,17 @@ def train_dagger(
     demos = Demonstrations(FrameStore(frame_shape, dtype=observation_dtype(cfg.grid_kind).type))
     prog, episode_counter, best_sr, history = _Progress(), 0, -1.0, []
     if resume:
+        changes = config_changes(
+            {"config": saved["config"], "env": saved["env_config"]},
+            {"config": dc.asdict(cfg), "env": dc.asdict(env_cfg)},
+        )
+        if changes:
+            log.warning(
+                "resuming with a configuration that differs from the saved one: %s",
+                ", ".join(changes),
+            )
 
-        def restore() -> _Progress:
-            if saved["config"] != dc.asdict(cfg) or saved["env_config"] != dc.asdict(env_cfg):
-                log.warning("resuming with a configuration that differs from the saved one")
+        def restore() -> tuple[_Progress, int, float, list]:
             student.model.load_state_dict(tensors["model"])
             student.optim.load_state_dict(tensors["optim"])
             demos.load_plain(saved["demos"], n_frames)
@@ -454,11 +505,10 @@ def train_dagger(
                 or min(progress.round, progress.episode, progress.grad_step) < 0
             ):
                 raise ValueError(f"progress {saved['progress']} is invalid")
-            return progress
+            return progress, int(saved["episodes"]), float(saved["best_sr"]), list(saved["history"])
 
-        prog = check_state(f"{STATE_FILE} in {out}", restore)
-        episode_counter, best_sr = int(saved["episodes"]), float(saved["best_sr"])
-        history = list(saved["history"])
+        where = f"{STATE_FILE} in {out}"
+        prog, episode_counter, best_sr, history = check_state(where, restore, changes)
         log.info("resumed in round %d (%s; %d samples)", prog.round, prog.phase, len(demos))
 
     def save() -> None:
@@ -600,9 +650,10 @@ def train_dagger(
             "train": f"{prog.grad_step} gradient steps done",
             "eval": "evaluation to run",
         }[prog.phase]
+        hint = resume_command or f"emonav train --algo dagger --resume {out} (same --config)"
         raise RunInterrupted(
             f"interrupted in round {prog.round} ({where}); state saved in {out}; continue "
-            f"with `emonav train --algo dagger --resume {out}` (same --config)"
+            f"with `{hint}`"
         )
     policy = out / "policy.pt"
     if not history or not policy.is_file():

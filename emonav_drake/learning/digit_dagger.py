@@ -27,6 +27,7 @@ nothing here looks at evaluation seeds.
 from __future__ import annotations
 
 import dataclasses as dc
+import logging
 import time
 from pathlib import Path
 
@@ -36,6 +37,7 @@ from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.learning.policy import vector_state
 from emonav_drake.params import ConfigError
 
+log = logging.getLogger(__name__)
 DIGIT_ROUNDS_FORMAT = "emonav-digit-dagger/1"
 STATE_FILE = "digit_rounds.pt"
 ACT_SALT = 0xDA6
@@ -128,6 +130,38 @@ class DigitRoundsConfig:
     expert_margin: float = 0.1
     seed: int = 0
 
+    def validate(self) -> DigitRoundsConfig:
+        """Raise `ConfigError` naming the flag (or field) of a value out of range."""
+        from emonav_drake.core.scenario import MAX_SEED
+        from emonav_drake.evaluation.benchmark import MAX_TRIALS
+
+        for name in ("rounds", "episodes", "grad_steps", "batch_size"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and value >= 1):
+                raise ConfigError(f"{_flag(name)} {value}: must be an integer >= 1")
+        if self.episodes > MAX_TRIALS:
+            raise ConfigError(f"--episodes {self.episodes}: must be in [1, {MAX_TRIALS}]")
+        if not 0.0 <= self.beta <= 1.0:
+            raise ConfigError(f"--beta {self.beta}: must be in [0, 1] (a probability)")
+        if not 0.0 < self.digit_fraction <= 1.0:
+            raise ConfigError(f"digit_fraction = {self.digit_fraction}: must be in (0, 1]")
+        if not 0.0 <= self.expert_margin <= 2.0:
+            raise ConfigError(f"expert_margin = {self.expert_margin}: must be in [0, 2] m")
+        if not 0 <= self.seed <= MAX_SEED:
+            raise ConfigError(f"seed = {self.seed}: must be in [0, 2**64 - 1]")
+        last = self.first_seed + self.rounds * self.episodes - 1
+        if self.first_seed < 0 or last > MAX_SEED:
+            raise ConfigError(
+                f"--first-seed {self.first_seed}: the rounds' seeds {self.first_seed} … {last} "
+                "must be in [0, 2**64 - 1]"
+            )
+        return self
+
+
+def _flag(name: str) -> str:
+    """The command-line flag of a `DigitRoundsConfig` field (the field if it has none)."""
+    return "--" + name.replace("_", "-") if name != "batch_size" else "batch_size ="
+
 
 def collect_round(
     policy: Path,
@@ -187,29 +221,42 @@ def run_digit_rounds(
 ) -> Path:
     """Digit rounds after the calibrated run in `source` (module docstring); returns the
     last round's policy. `env_config`: the episodes' navigation configuration (default:
-    the defaults)."""
+    the defaults).
+
+    Raises:
+        ConfigError: a setting of `cfg` out of range (its flag named).
+        RunStateError: `source` has no DAgger state, or one that `train --resume` would
+            refuse (`dagger.read_dagger_state`); `resume` and `out` has no state of the
+            rounds, or a damaged one.
+    """
     import torch
 
-    from emonav_drake.learning.config import DaggerConfig
     from emonav_drake.learning.dagger import STATE_FILE as SOURCE_STATE
-    from emonav_drake.learning.dagger import Demonstrations, FrameStore, Student
+    from emonav_drake.learning.dagger import (
+        Demonstrations,
+        FrameStore,
+        Student,
+        read_dagger_state,
+    )
     from emonav_drake.learning.policy import save_policy
     from emonav_drake.learning.run_state import (
-        DAGGER_FORMAT,
+        check_state,
+        config_changes,
         read_run_state,
         write_run_state,
     )
     from emonav_drake.params import EmoNavConfig
 
+    cfg.validate()
     out, source = Path(out), Path(source)
-    saved, _ = read_run_state(source / SOURCE_STATE, DAGGER_FORMAT)
-    dcfg = DaggerConfig(**saved["config"])
+    dcfg, saved, _ = read_dagger_state(source / SOURCE_STATE)
     env_cfg = EmoNavConfig()
     env_cfg.lidar.num_frames = dcfg.num_frames
     n = dcfg.num_frames
     shape = saved["demos"]["frames"].shape[1:]
     calibrated = Demonstrations(FrameStore(shape))
-    calibrated.load_plain(saved["demos"], n)
+    where = f"{SOURCE_STATE} in {source}"
+    check_state(where, lambda: calibrated.load_plain(saved["demos"], n))
     digit = Demonstrations(FrameStore(shape))
     commands = DwaPlanner(env_cfg).candidates.copy()
     student = Student(dcfg, env_cfg, commands)
@@ -218,10 +265,23 @@ def run_digit_rounds(
     rnd, history = 0, []
     if resume:
         state, tensors = read_run_state(out / STATE_FILE, DIGIT_ROUNDS_FORMAT)
-        digit.load_plain(state["demos"], n)
-        student.model.load_state_dict(tensors["model"])
-        student.optim.load_state_dict(tensors["optim"])
-        rnd, history = int(state["round"]), list(state["history"])
+        changes = config_changes(state.get("config"), dc.asdict(cfg))
+        if changes:
+            log.warning(
+                "resuming the rounds with settings that differ from the saved ones: %s",
+                ", ".join(changes),
+            )
+
+        def restore() -> tuple[int, list]:
+            digit.load_plain(state["demos"], n)
+            student.model.load_state_dict(tensors["model"])
+            student.optim.load_state_dict(tensors["optim"])
+            done, past = int(state["round"]), list(state["history"])
+            if not 0 <= done == len(past):
+                raise ValueError(f"round {done} with {len(past)} rounds in its history")
+            return done, past
+
+        rnd, history = check_state(f"{STATE_FILE} in {out}", restore, changes)
     out.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(cfg.seed + rnd)
     rng = np.random.default_rng([cfg.seed, rnd])

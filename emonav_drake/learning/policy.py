@@ -38,6 +38,7 @@ from emonav_drake.learning.networks import (
     ScanEncoder,
     ScanLstmEncoder,
 )
+from emonav_drake.learning.run_state import load_failure, refused_global
 
 FORMAT = "emonav-policy/1"
 DEFAULT_POLICY = Path(__file__).resolve().parent.parent / "data" / "policy_lgm.pt"
@@ -286,8 +287,16 @@ def load_policy(path: str | Path, device: str = "cpu") -> tuple[torch.nn.Module,
         raise PolicyError(f"policy checkpoint {path} does not exist")
     try:
         blob = torch.load(io.BytesIO(path.read_bytes()), map_location=dev, weights_only=True)
-    except Exception as e:
-        raise PolicyError(f"{path} is not a readable policy checkpoint ({e})") from None
+    except Exception as e:  # noqa: BLE001 — every failure is reported the same way
+        refused = refused_global(e)
+        if refused is not None:
+            raise PolicyError(
+                f"{path} is not an emonav policy checkpoint: loading it would run code "
+                f"({refused}); refused"
+            ) from None
+        raise PolicyError(
+            f"{path} is not a readable policy checkpoint ({load_failure(e)})"
+        ) from None
     if not isinstance(blob, dict) or blob.get("format") != FORMAT:
         raise PolicyError(f"{path} is not an {FORMAT} checkpoint")
     _check_meta(path, blob)

@@ -165,6 +165,21 @@ def clean_stale_temp_files(directory: str | Path) -> list[Path]:
     return removed
 
 
+def refused_global(e: BaseException) -> str | None:
+    """The Python global (e.g. "posix.system") whose loading made
+    `torch.load(weights_only=True)` fail, or None if it failed for another reason."""
+    if not isinstance(e, pickle.UnpicklingError):
+        return None
+    m = _UNSAFE_GLOBAL.search(str(e))
+    return m[1] if m else None
+
+
+def load_failure(e: BaseException) -> str:
+    """Why a `torch.load` failed, in one short line (its message's first line)."""
+    text = str(e).strip()
+    return text.splitlines()[0][:200] if text else type(e).__name__
+
+
 def write_run_state(path: str | Path, fmt: str, state: Any, tensors: dict[str, Any]) -> None:
     """Save a run's state (`state`: plain data, `tensors`: torch-native) atomically."""
     text, arrays = pack(state)
@@ -183,19 +198,20 @@ def read_run_state(path: str | Path, fmt: str) -> tuple[Any, dict[str, Any]]:
     try:
         blob = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as e:  # noqa: BLE001 — every failure is reported the same way
-        m = _UNSAFE_GLOBAL.search(str(e)) if isinstance(e, pickle.UnpicklingError) else None
-        if m and m[1].startswith("numpy"):
+        refused = refused_global(e)
+        if refused is not None and refused.startswith("numpy"):
             raise RunStateError(
                 f"{where} was written by an older emonav (format 1, pickle-based) and "
                 f"cannot be resumed safely; start a new run"
             ) from None
-        if m:
+        if refused is not None:
             raise RunStateError(
                 f"{where} is not an emonav run state: loading it would run code "
-                f"({m[1]}); refused — {fresh}"
+                f"({refused}); refused — {fresh}"
             ) from None
-        reason = str(e).splitlines()[0][:200] if str(e) else type(e).__name__
-        raise RunStateError(f"{where} is damaged or truncated ({reason}); {fresh}") from None
+        raise RunStateError(
+            f"{where} is damaged or truncated ({load_failure(e)}); {fresh}"
+        ) from None
     if not isinstance(blob, dict):
         raise RunStateError(f"{where} is not an emonav run state; {fresh}")
     found = blob.get("format")
@@ -216,14 +232,43 @@ def read_run_state(path: str | Path, fmt: str) -> tuple[Any, dict[str, Any]]:
     return state, tensors
 
 
-def check_state(where: str, fn: Callable[[], Any]) -> Any:
-    """Run `fn` (restoring from loaded state); a malformed state → `RunStateError`."""
+def check_state(where: str, fn: Callable[[], Any], changes: list[str] | None = None) -> Any:
+    """Run `fn` (restoring from loaded state); a malformed state → `RunStateError`.
+
+    `changes` (`config_changes`): the configuration fields that differ from the saved
+    run's, named in the error as a likely cause.
+    """
     try:
         return fn()
     except (KeyError, TypeError, ValueError, IndexError, AttributeError, RuntimeError) as e:
         if isinstance(e, RunStateError):
             raise
-        raise RunStateError(f"{where} is damaged or does not fit this run ({e})") from None
+        reason = f"no {e} in it" if isinstance(e, KeyError) else str(e) or type(e).__name__
+        cause = f"; the configuration differs from the saved one: {', '.join(changes or [])}"
+        raise RunStateError(
+            f"{where} is damaged or does not fit this run ({reason}){cause if changes else ''}"
+        ) from None
+
+
+def config_changes(saved: Any, current: Any, prefix: str = "") -> list[str]:
+    """The fields in which two configurations (plain dicts, nested by section) differ, as
+    "name: saved → current" (a field on one side only: "(absent)"), in field order."""
+    if saved is None:
+        return [f"{prefix or 'configuration'}: not saved"]
+    if not (isinstance(saved, dict) and isinstance(current, dict)):
+        return [] if saved == current else [f"{prefix or 'config'}: {saved!r} → {current!r}"]
+    out: list[str] = []
+    for key in list(saved) + [k for k in current if k not in saved]:
+        name = f"{prefix}{key}"
+        if key not in current:
+            out.append(f"{name}: {saved[key]!r} → (absent)")
+        elif key not in saved:
+            out.append(f"{name}: (absent) → {current[key]!r}")
+        elif isinstance(saved[key], dict) and isinstance(current[key], dict):
+            out += config_changes(saved[key], current[key], f"{name}.")
+        elif saved[key] != current[key]:
+            out.append(f"{name}: {saved[key]!r} → {current[key]!r}")
+    return out
 
 
 # ------------------------------------------------------------------------ random states

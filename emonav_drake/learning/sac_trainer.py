@@ -49,6 +49,7 @@ from emonav_drake.learning.run_state import (
     atomic_write_text,
     check_state,
     clean_stale_temp_files,
+    config_changes,
     read_run_state,
     rng_state,
     set_rng_state,
@@ -63,6 +64,18 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 TRAIN_SEED_OFFSET = 20_000_000
 CHECKPOINT = "checkpoint.pt"
+CURVE = "learning_curve.csv"
+_CURVE_HEADER = [
+    "step",
+    "episodes",
+    "SR",
+    "collision_rate",
+    "timeout_rate",
+    "NT_mean",
+    "DT",
+    "return_mean",
+    "alpha",
+]
 
 
 def make_env(
@@ -175,6 +188,7 @@ def train_sac(
     progress: bool = True,
     ray_address: str | None = None,
     parallel: bool = True,
+    resume_command: str | None = None,
 ) -> SacAgent:
     """Train (or resume) a SAC run in `out`; returns the agent.
 
@@ -186,15 +200,19 @@ def train_sac(
     (env 0's first), inserts them in that order and makes `num_envs × updates_per_step`
     updates; evaluations and checkpoints fall due when the step count crosses a multiple
     of their period, and the run ends at the first multiple of `num_envs` ≥ `total_steps`.
+    `resume_command` is the command that continues the run, quoted after Ctrl-C (default:
+    `emonav train --algo sac --resume OUT`).
 
     Raises:
         RunStateError: `resume` and `out` has no checkpoint, or one that is damaged, of
-            an older format, not ours, or does not fit `cfg`.
+            an older format, not ours, or does not fit `cfg`; or a damaged
+            `learning_curve.csv`.
         RunInterrupted: after Ctrl-C, once the checkpoint is saved.
     """
     out = Path(out)
     ckpt_path = out / CHECKPOINT
     saved: dict = {}
+    tensors: dict = {}
     if resume:
         if not ckpt_path.is_file():
             raise RunStateError(
@@ -202,6 +220,8 @@ def train_sac(
                 f"(start a new run with --out {out})"
             )
         saved, tensors = read_run_state(ckpt_path, SAC_FORMAT)  # before any work
+        rows = check_state(f"{CHECKPOINT} in {out}", lambda: int(saved["curve_rows"]))
+        _check_curve(out / CURVE, rows)
     out.mkdir(parents=True, exist_ok=True)
     for p in clean_stale_temp_files(out):
         log.info("removed %s, left by a save that was killed", p)
@@ -210,7 +230,8 @@ def train_sac(
     rng = np.random.default_rng(cfg.seed)
     envs = make_envs(cfg, ray_address, parallel)
     try:
-        return _train(out, cfg, envs, rng, saved, tensors if resume else {}, progress, stop_at)
+        hint = resume_command or f"emonav train --algo sac --resume {out} (same --config)"
+        return _train(out, cfg, envs, rng, saved, tensors, progress, stop_at, hint)
     finally:
         envs.close()
 
@@ -224,6 +245,7 @@ def _train(
     tensors: dict,
     progress: bool,
     stop_at: int | None,
+    resume_command: str,
 ) -> SacAgent:
     ckpt_path = out / CHECKPOINT
     env = envs.spec
@@ -231,13 +253,17 @@ def _train(
     agent = SacAgent(cfg, bounds)
     space = env.observation_space[env.map_key]
     replay = FrameReplayBuffer(cfg.replay_size, space.shape[1:], space.dtype.type, cfg.num_frames)
-    curve = out / "learning_curve.csv"
+    curve = out / CURVE
     n_envs = len(envs)
     if saved:
+        changes = config_changes(saved.get("config"), dc.asdict(cfg))
+        if changes:
+            log.warning(
+                "resuming with a configuration that differs from the checkpoint's: %s",
+                ", ".join(changes),
+            )
 
         def restore() -> list[_Episode]:
-            if saved["config"] != dc.asdict(cfg):
-                log.warning("resuming with a configuration that differs from the checkpoint's")
             agent.load_state_dict(tensors["agent"])
             replay.load_state_dict(saved["replay"])
             set_rng_state(rng, saved["rng"], tensors)
@@ -249,7 +275,7 @@ def _train(
                 raise ValueError(f"{len(running)} saved episodes for {n_envs} environments")
             return [_Episode.from_plain(replay, st, bounds) for st in running]
 
-        running = check_state(f"{CHECKPOINT} in {out}", restore)
+        running = check_state(f"{CHECKPOINT} in {out}", restore, changes)
         step, episodes = int(saved["step"]), int(saved["episodes"])
         eval_pending, curve_rows = bool(saved["eval_pending"]), int(saved["curve_rows"])
         saved_at = (step, eval_pending)
@@ -272,7 +298,7 @@ def _train(
             "rng": rng_plain,
             "envs": envs.state_dicts(),
             "running": [ep.to_plain() for ep in running],
-            "replay": replay.state_dict(),
+            "replay": replay.state_dict(windows=[ep.window for ep in running]),
         }
         write_run_state(ckpt_path, SAC_FORMAT, state, {"agent": agent.state_dict()} | rng_tensors)
         save_policy(
@@ -361,7 +387,7 @@ def _train(
     if interrupted:
         raise RunInterrupted(
             f"interrupted at step {step} of {cfg.total_steps}; checkpoint saved in {out}; "
-            f"continue with `emonav train --algo sac --resume {out}` (same --config)"
+            f"continue with `{resume_command}`"
         )
     return agent
 
@@ -369,6 +395,29 @@ def _train(
 def _crossed(step: int, stride: int, period: int) -> bool:
     """Whether the last `stride` steps up to `step` reached a multiple of `period`."""
     return step // period > (step - stride) // period
+
+
+def _check_curve(path: Path, rows: int) -> None:
+    """A resumed run's learning curve: UTF-8 CSV, our header and at least the `rows`
+    evaluations the checkpoint counts; else `RunStateError` naming the file."""
+    if not path.exists():
+        return
+    where = f"{path.name} in {path.parent}"
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+        table = list(csv.reader(lines))
+    except (UnicodeDecodeError, csv.Error) as e:
+        raise RunStateError(f"{where} is damaged ({e}); remove it or restore a copy") from None
+    if table[:1] != [_CURVE_HEADER]:
+        raise RunStateError(
+            f"{where} is damaged: its first line is not the header {','.join(_CURVE_HEADER)}"
+            "; remove it or restore a copy"
+        )
+    if len(table) - 1 < rows:
+        raise RunStateError(
+            f"{where} has {len(table) - 1} evaluations, {CHECKPOINT} counts {rows}: damaged "
+            "or cut; remove it or restore a copy"
+        )
 
 
 def _truncate_csv(path: Path, rows: int) -> None:
@@ -390,19 +439,7 @@ def _append_csv(path: Path, step: int, episodes: int, s: dict, agent: SacAgent) 
     with path.open("a", newline="") as f:
         w = csv.writer(f)
         if new:
-            w.writerow(
-                [
-                    "step",
-                    "episodes",
-                    "SR",
-                    "collision_rate",
-                    "timeout_rate",
-                    "NT_mean",
-                    "DT",
-                    "return_mean",
-                    "alpha",
-                ]
-            )
+            w.writerow(_CURVE_HEADER)
         w.writerow(
             [
                 step,
