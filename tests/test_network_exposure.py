@@ -50,6 +50,7 @@ def test_meshcat_on_every_interface_only_when_asked_and_with_a_warning(caplog):
     with caplog.at_level(logging.WARNING):
         meshcat = make_meshcat(live=False, host="*")
     socks = [s for s in _listening(_family()) if s[1] == meshcat.port()]
+    del meshcat  # its server closes
     assert socks and not any(_loopback(ip) for ip, _, _ in socks), socks
     assert "every interface" in caplog.text and "no authentication" in caplog.text
 
@@ -81,6 +82,7 @@ def test_local_ray_listens_on_loopback_only():
     pytest.importorskip("ray")
     from emonav_drake.ray_cluster import init_ray, ray_node_address
 
+    before = set(_listening(_family()))  # e.g. a Meshcat of an earlier test
     ray = init_ray(1, None)
     try:
 
@@ -89,7 +91,7 @@ def test_local_ray_listens_on_loopback_only():
             return 1
 
         assert ray.get(one.remote()) == 1  # a worker is up, with its own server
-        socks = _listening(_family())
+        socks = [s for s in _listening(_family()) if s not in before]
         names = {psutil.Process(pid).name() for _, _, pid in socks}
         assert {"gcs_server", "raylet"} <= names, names
         assert all(_loopback(ip) for ip, _, _ in socks), socks
