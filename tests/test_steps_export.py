@@ -83,7 +83,13 @@ def test_walk_steps_out_one_row_per_step(tmp_path, capsys):
     # open loop: the LIP starts from the measured CoM and the accumulated commanded heading
     np.testing.assert_array_equal(c["x_start"][1:], c["x"][:-1])
     np.testing.assert_allclose(c["heading_start"][1:], c["heading_des"][:-1], atol=1e-12)
-    assert np.all(np.diff(c["t"]) > 0.3) and np.all(np.diff(c["t"]) <= 0.4 + 1e-9)
+    # switches are locked to the step clock (stand_time + k T): at most the early-touchdown
+    # window (10 % of T) ahead of an instant, never behind, so they never drift
+    T, early = cfg.robot.step_time, 1.0 - cfg.walking.early_touchdown
+    lead = (
+        np.ceil((c["t"] - cfg.walking.stand_time) / T - 1e-9) * T + cfg.walking.stand_time - c["t"]
+    )
+    assert np.all(lead >= -1e-9) and np.all(lead <= early * T + 1e-9)
     # the walk's RMS in the JSON is the CSV's errors
     rms_x = math.sqrt(np.mean(c["err_x"] ** 2))
     assert summary["tracking_rms"]["x"] == pytest.approx(rms_x, abs=1e-5)

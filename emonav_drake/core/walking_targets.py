@@ -18,8 +18,10 @@ The reference motion during a step that started at `start_time` (phase time τ =
 * CoM horizontally: the ALIP trajectory from the step's start state (x_c0, ℒ_0) about
   the stance pivot (double support: between the feet, `stand_com_lead` ahead);
 * swing foot: horizontally a quintic from `swing_start` to `swing_target`, reached at
-  `swing_finish`·T; vertically `core.alip.swing_height` (apex `clearance` at T/2, lands
-  at `touchdown_speed`); its yaw a quintic reached at `swing_yaw_blend`·T.
+  `swing_finish`·D; vertically `core.alip.swing_height` (apex `clearance` at D/2, lands
+  at D with `touchdown_speed`), D the step's `duration` (T, or a little more after an
+  early touchdown: the step then ends at the step clock's next instant); its yaw a
+  quintic reached at `swing_yaw_blend`·T.
 
 Scalar Python math on purpose: the controller calls these 1000 times a second and numpy
 has a fixed cost per call that dwarfs the arithmetic of a 2-vector.
@@ -83,6 +85,9 @@ class WalkingTargets:
     Attributes:
         phase: DOUBLE_SUPPORT (standing), LEFT_STANCE or RIGHT_STANCE.
         start_time: when the step started [s].
+        duration: how long the step is planned to last [s]: until the next instant of the
+            step clock (T when the step started on time, up to 10 % more after an early
+            touchdown); the swing foot lands at `start_time + duration`.
         stance: stance ankle position [m].
         swing_start: swing ankle at lift-off [m] (standing: the other ankle).
         swing_target: swing ankle landing target from the ALIP [m].
@@ -96,6 +101,7 @@ class WalkingTargets:
 
     phase: int
     start_time: float
+    duration: float
     stance: Vec3
     swing_start: Vec3
     swing_target: Vec3
@@ -165,12 +171,13 @@ class WalkingTargets:
         """Swing ankle reference at time t (walking phases only)."""
         tm = self.timing
         T = tm.step_time
+        D = self.duration
         tau = t - self.start_time
         p0, p1 = self.swing_start, self.swing_target
         (px, py), (vx, vy), (ax, ay) = swing_horizontal_xy(
-            tau, tm.swing_finish * T, p0[0], p0[1], p1[0], p1[1]
+            tau, tm.swing_finish * D, p0[0], p0[1], p1[0], p1[1]
         )
-        z, dz, ddz = swing_height(tau, T, p0[2] - p1[2], tm.clearance, tm.touchdown_speed)
+        z, dz, ddz = swing_height(tau, D, p0[2] - p1[2], tm.clearance, tm.touchdown_speed)
         yaw = smooth_angle(tau, tm.swing_yaw_blend * T, self.swing_yaw_start, self.swing_yaw_target)
         return SwingReference((px, py, p1[2] + z), (vx, vy, dz), (ax, ay, ddz), yaw)
 

@@ -334,12 +334,15 @@ def step_records(wd: WalkingDiagram, root_context) -> list[StepRecord]:
     """Every foot switch of a simulated walk, from the step loggers in `root_context`."""
     logs = wd.step_logger.FindLog(root_context).data()
     counts = wd.count_logger.FindLog(root_context).data()[0]
+    # one record per switch: the step's last sample, which holds the command the step
+    # took up just after it started (the switch's sample still shows the previous one)
+    last_of_step = [
+        k for k in range(len(counts)) if k + 1 == len(counts) or counts[k + 1] != counts[k]
+    ]
     steps: list[StepRecord] = []
-    last = 0.0
-    for k in range(logs.shape[1]):
-        if counts[k] == last:
+    for k in last_of_step:
+        if counts[k] == 0:
             continue
-        last = counts[k]
         r = logs[:, k].tolist()
         steps.append(
             StepRecord(

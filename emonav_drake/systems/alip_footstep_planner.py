@@ -2,10 +2,12 @@
 
 Input ports:
     state (nq + nv): the Digit plant state (q, v).
-    command (2): (u_v [m/s], u_Δθ [rad]) — read at each foot switch for the step that
-        starts there (in the navigation diagram: the navigation planner's held command).
-        Out-of-bound commands are clipped with a warning (`core.navigation.check_command`);
-        NaN raises `CommandError`.
+    command (2): (u_v [m/s], u_Δθ [rad]) of the walking step in progress (in the
+        navigation diagram: the navigation planner's held command; in the walking
+        diagram: `WalkingCommandSource`). Taken up for step k at the first update after
+        the step clock's instant t_k (see "Step clock" below). Out-of-bound commands are
+        clipped with a warning (`core.navigation.check_command`); NaN raises
+        `CommandError`.
 Output ports:
     targets (abstract `core.walking_targets.WalkingTargets`): the current step's targets
         the whole-body controller tracks, world frame W (phase, step start time, stance
@@ -23,12 +25,32 @@ Output ports:
 
 Discrete state (private layout), updated by a periodic unrestricted update every
 `walking.planner_period` (default 5 ms, 200 Hz). Each update: detect touchdown (swing
-ankle at the ground after `early_touchdown`·T, or T elapsed) and switch stance;
-otherwise re-plan the swing target with the ALIP law of `core.alip` (sagittal
-ℒ_des = m H v_des, lateral ±½ m H W ℓ tanh(ℓT/2), clamped to the step limits of
-`WalkingParams`), frozen after `target_freeze_fraction`·T for a clean landing. The pivot
-is the stance ankle's ground projection; L is measured about it with
+ankle at the ground within the last (1 − `early_touchdown`)·T of the step, or the step's
+end reached) and switch stance; otherwise take up the step's command once it is there
+and re-plan the swing target with the ALIP law of `core.alip` (sagittal ℒ_des = m H
+v_des, lateral ±½ m H W ℓ tanh(ℓT/2), clamped to the step limits of `WalkingParams`),
+frozen in the last (1 − `target_freeze_fraction`)·T for a clean landing. The pivot is
+the stance ankle's ground projection; L is measured about it with
 `CalcSpatialMomentumInWorldAboutPoint`. T and g come from `RobotParams`.
+
+Step clock. Steps are locked to the instants t_k = `stand_time` + (k − 1)·T (k ≥ 1; in the
+navigation diagram `stand_time` = T, so these are the navigation planner's instants kT):
+step k is planned to end at t_{k+1}. A touchdown up to (1 − `early_touchdown`)·T early
+switches stance at once, and the new step then lasts until t_{k+1} (its `duration` is
+T plus the lead), so early touchdowns never accumulate: every switch lies in
+[t_k − (1 − early_touchdown)·T, t_k]. (Without the lock the swing foot, which lands at
+T with a downward speed, touched one update early on most steps and the switches drifted
+ahead of the planner's clock by 5 ms a step: 0.145 s after 48 steps.)
+
+In-step commands. Every update of one instant reads the pre-update state, so the switch
+at (or just before) t_k sees the command held before t_k. The step therefore starts with
+the previous step's command and takes up its own — the command held at the first update
+strictly after t_k (u_k, computed by the navigation planner at t_k from the state at
+t_k) — one update later (at t_k + `planner_period`, 2.5 % of the step at 200 Hz): the
+heading target, the swing foot's yaw target and the speed of the foot placement are
+re-targeted then. The torso and swing-yaw references are quintics that have barely left
+their start after 5–10 ms, so the re-targeting is smooth. Step k thus walks u_k, as the
+LIP does; the speed still reaches u_v at the end of the next step (the ALIP's own lag).
 """
 
 from __future__ import annotations
@@ -82,8 +104,10 @@ _COM_SWITCH = slice(23, 25)  # CoM xy at the last switch
 _PRED = slice(25, 29)  # the prediction of the end (x_s, x_l, ℒ_s, ℒ_l)
 _PREDICTED = 29  # 1 once this step's prediction is stored
 _CLIPPED = 30  # clipped commands so far
-_LOG = slice(31, 31 + N_LOG)
-_N_STATE = 31 + N_LOG
+_END = 31  # the step's planned end: the next instant of the step clock [s]
+_ADOPTED = 32  # 1 once the step's own command is taken up
+_LOG = slice(33, 33 + N_LOG)
+_N_STATE = 33 + N_LOG
 
 
 def _yaw(R: np.ndarray) -> float:
@@ -163,6 +187,7 @@ class AlipFootstepPlanner(LeafSystem):
         return WalkingTargets(
             phase=int(v[_PHASE]),
             start_time=v[_START],
+            duration=max(v[_END] - v[_START], 1e-6) if v[_PHASE] != DOUBLE_SUPPORT else self._T,
             stance=tuple(v[_STANCE]),
             swing_start=tuple(v[_SW0]),
             swing_target=tuple(v[_SW1]),
@@ -232,21 +257,27 @@ class AlipFootstepPlanner(LeafSystem):
                 state.get_mutable_discrete_state(self._xd).set_value(x)
             return
         swing = 1 - phase
-        tp = t - x[_START]
+        remaining = x[_END] - t
         p_sw, _ = self._ankle(swing)
-        touched = tp >= p.early_touchdown * T and p_sw[2] <= ANKLE_TO_SOLE + p.touchdown_tolerance
-        if touched or tp >= T - 1e-9:
+        touched = (
+            remaining <= (1.0 - p.early_touchdown) * T + 1e-9
+            and p_sw[2] <= ANKLE_TO_SOLE + p.touchdown_tolerance
+        )
+        if touched or remaining <= 1e-9:
             self._start_step(x, t, stance=swing, first=False, context=context)
         else:
-            self._plan_foot(x, tp)
+            if not x[_ADOPTED] and t > x[_END] - T + 1e-9:
+                self._take_command(x, t, context)
+            self._plan_foot(x, remaining)
         state.get_mutable_discrete_state(self._xd).set_value(x)
 
     def _frame(self, heading: float) -> tuple[np.ndarray, np.ndarray]:
         c, s = math.cos(heading), math.sin(heading)
         return np.array([c, s]), np.array([-s, c])
 
-    def _plan_foot(self, x: np.ndarray, tp: float) -> None:
-        """Re-plan the swing target from the measured ALIP state."""
+    def _plan_foot(self, x: np.ndarray, remaining: float) -> None:
+        """Re-plan the swing target from the measured ALIP state (`remaining`: time to the
+        step's planned end [s])."""
         p = self._p
         T = self._T
         stance = int(x[_PHASE])
@@ -264,12 +295,11 @@ class AlipFootstepPlanner(LeafSystem):
                 lateral_momentum_target(p.step_width, next_right, self._mass, self._H, T, self._g),
             ]
         )
-        remaining = T - tp
-        if not x[_PREDICTED] and tp >= p.prediction_fraction * T:
+        if not x[_PREDICTED] and remaining <= (1.0 - p.prediction_fraction) * T + 1e-9:
             xe, le = alip_predict(xc, lv, remaining, self._mass, self._H, self._g)
             x[_PRED] = np.concatenate([xe, le])
             x[_PREDICTED] = 1.0
-        if tp > p.target_freeze_fraction * T:
+        if remaining < (1.0 - p.target_freeze_fraction) * T - 1e-9:
             return  # freeze the target for a clean landing
         step = foot_placement(xc, lv, remaining, target, self._mass, self._H, T, self._g)
         s = float(np.clip(step[0], -p.max_step_length, p.max_step_length))
@@ -284,7 +314,8 @@ class AlipFootstepPlanner(LeafSystem):
     def _start_step(
         self, x: np.ndarray, t: float, stance: int, first: bool, context: Context
     ) -> None:
-        """Foot switch: the swing foot becomes the stance foot, read the next command."""
+        """Foot switch: the swing foot becomes the stance foot; the new step is planned to
+        end at the step clock's next instant."""
         p = self._p
         swing = 1 - stance
         p_st, _ = self._ankle(stance)
@@ -304,16 +335,9 @@ class AlipFootstepPlanner(LeafSystem):
                 err = x[_CMD][0] - v_mean
                 lim = p.speed_integral_limit
                 x[_INTEGRAL] = float(np.clip(x[_INTEGRAL] + p.speed_integral_gain * err, -lim, lim))
-        raw = self._cmd_in.Eval(context)
-        u, clipped = check_command(raw, self._robot, clip=True)
-        if clipped:
-            x[_CLIPPED] += 1
-            log.warning(
-                "AlipFootstepPlanner: command %s out of bounds at t = %.3f s, clipped to %s",
-                np.asarray(raw).tolist(),
-                t,
-                u.tolist(),
-            )
+        # until its own command arrives after the step clock's instant (`_take_command`),
+        # the step keeps the previous speed (zero before the first step) and does not turn
+        u = np.array([x[_CMD][0], 0.0])
         R_WT = self._plant.EvalBodyPoseInWorld(self._ctx, self._model.torso_body).rotation()
         head_old = x[_HEAD1]
         # Heading targets accumulate the commands (unwrapped); measured yaws are wrapped to
@@ -342,6 +366,9 @@ class AlipFootstepPlanner(LeafSystem):
         ]
         x[_PHASE] = float(stance)
         x[_START] = t
+        # the step clock: the first step ends T after stand_time, each next one T later
+        x[_END] = (p.stand_time if first else x[_END]) + self._T
+        x[_ADOPTED] = 0.0
         x[_STANCE] = p_st
         x[_SW0] = p_sw
         x[_SW1] = p_sw
@@ -355,4 +382,27 @@ class AlipFootstepPlanner(LeafSystem):
         x[_COM_SWITCH] = com[:2]
         x[_PREDICTED] = 0.0
         x[_COUNT] += 1
-        self._plan_foot(x, 0.0)
+        self._plan_foot(x, x[_END] - t)
+
+    def _take_command(self, x: np.ndarray, t: float, context: Context) -> None:
+        """The step's own command (held since the step clock's instant): re-target the
+        heading, the swing foot's yaw and the foot placement's speed of the step."""
+        raw = self._cmd_in.Eval(context)
+        u, clipped = check_command(raw, self._robot, clip=True)
+        if clipped:
+            x[_CLIPPED] += 1
+            log.warning(
+                "AlipFootstepPlanner: command %s out of bounds at t = %.3f s, clipped to %s",
+                np.asarray(raw).tolist(),
+                t,
+                u.tolist(),
+            )
+        head_new = x[_HEAD1] - x[_CMD][1] + float(u[1])  # the previous target + u_Δθ
+        x[_CMD] = u
+        x[_HEAD1] = x[_SWYAW1] = head_new
+        x[_ADOPTED] = 1.0
+        log_ = x[_LOG]
+        log_[LOG_COMMAND] = u
+        log_[LOG_HEADING_TARGET] = head_new
+        log_[LOG_SWING_YAW.stop - 1] = head_new
+        x[_LOG] = log_

@@ -2,11 +2,13 @@
 
 Input port:
     next_step (1): how many walking steps the footstep planner has started so far, n
-        (from `AlipFootstepPlanner.next_step`). The planner reads the command at its next
-        foot switch, so the output is the command of step n (0-based).
+        (from `AlipFootstepPlanner.next_step`).
 Output port:
-    command (2): (u_v [m/s], u_Δθ [rad]) for step n. A pure function of n: the same seed
-        gives the same sequence, whatever the simulation's timing.
+    command (2): (u_v [m/s], u_Δθ [rad]) of the step in progress, step n − 1 (0-based;
+        step 0's before the first step), as the navigation planner holds the command of
+        the step in progress: the footstep planner takes it up just after the step
+        starts. A pure function of n: the same seed gives the same sequence, whatever the
+        simulation's timing.
 
 Modes: "straight" (constant speed, no turn), "turn" (turning in place: zero speed and a
 constant heading change), "random" (a new uniform (u_v, u_Δθ) within the paper's bounds
@@ -82,5 +84,5 @@ class WalkingCommandSource(LeafSystem):
         return self._seq
 
     def _calc_command(self, context: Context, output: BasicVector) -> None:
-        n = int(round(self._next.Eval(context)[0]))
+        n = int(round(self._next.Eval(context)[0])) - 1  # the step in progress
         output.SetFromVector(self._seq[min(max(n, 0), len(self._seq) - 1)])
