@@ -122,3 +122,26 @@ def test_sim_rates_reports_every_systems_rate_and_wall_time_share(tmp_path, caps
         assert abs(rates[name] - hz) <= 4 / 1.2, (name, rates[name])
     assert abs(sum(shares.values()) - 1.0) < 1e-3 and shares["digit/controller"] > 0.05
     assert "wall share" in capsys.readouterr().out
+
+
+def test_a_command_turns_the_step_it_was_planned_for_on_both_plants():
+    """The timing pinned: a turn u_Δθ = 0.2 rad planned at t_5 shows in the heading
+    change of step 5 (t_5 → t_6), on the LIP plant exactly and on Digit within a few
+    centiradians, and not in steps 4 or 6 (before in-step commands Digit walked it in
+    step 6)."""
+    from emonav_drake.core.replay_planner import ReplayPlanner
+    from emonav_drake.diagrams.navigation import run_episode
+    from emonav_drake.diagrams.navigation_digit import run_digit_episode
+
+    cfg = _short_config(8)
+    commands = np.array([[0.3, 0.0]] * 8)
+    commands[5, 1] = 0.2
+    scenario = Scenario(robot_start=[-4.0, 0.0], robot_goal=[4.0, 0.0])
+    _, log = run_episode(scenario, cfg, ReplayPlanner(commands))
+    lip = np.diff([r[2] for r in log.robot])  # heading change of steps 0, 1, ...
+    np.testing.assert_allclose(lip[[4, 5, 6]], [0.0, 0.2, 0.0], atol=1e-12)
+    trace: list[dict] = []
+    run_digit_episode(scenario, cfg, ReplayPlanner(commands), trace=trace)
+    digit = np.diff([e["robot"][2] for e in trace])
+    assert abs(digit[5] - 0.2) < 0.03, digit
+    assert abs(digit[4]) < 0.03 and abs(digit[6]) < 0.03, digit
