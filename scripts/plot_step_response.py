@@ -27,7 +27,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument(
         "--traces", type=Path,
-        default=ROOT / "benchmarks/results/digit_calibration/traces_v0.jsonl",
+        default=ROOT / "benchmarks/results/digit_calibration/traces_v1.jsonl",
     )  # fmt: skip
     ap.add_argument("--model", type=Path, default=DIGIT_RESPONSE)
     ap.add_argument("--out", type=Path, default=ROOT / "docs/figures/digit_step_response.png")
@@ -37,7 +37,7 @@ def main() -> None:
     model = read_response(args.model)
     held = set(report["held_out"]["seeds"])
     lines = [json.loads(x) for x in args.traces.read_text().splitlines()]
-    episode = next(h for h in lines if h["seed"] in held and h["method"] == "sac")
+    episode = next(h for h in lines if h["seed"] in held and h["method"] in ("sac", "policy"))
     data = sr.transitions_from_trace(episode["trace"], r.step_time)
     y = sr.outcome(data.states, data.next_states)
     k = np.arange(len(data)) + 2
@@ -50,14 +50,15 @@ def main() -> None:
     ax.plot(k, y[:, 2], "k.-", label="Digit: turn over step k")
     ax.plot(k, lip0[:, 2], "C3x--", label="LIP (Eq. 1): turns by $u_{Δθ,k}$")
     ax.plot(k, fitted[:, 2], "C0o:", mfc="none", label="fitted model")
-    ax.set(xlabel="walking step k", ylabel="heading change [rad]", title="turn: one step late")
+    ax.set(xlabel="walking step k", ylabel="heading change [rad]",
+           title="turn: in the step it was planned for")  # fmt: skip
     ax.legend(fontsize=8)
     ax = axes[0, 1]
     ax.step(k, data.commands[:, 2, 0], where="post", color="0.6", label="command $u_{v,k}$")
     ax.plot(k, y[:, 3], "k.-", label="Digit: step-averaged speed $\\bar v_{k+1}$")
     ax.plot(k, lip0[:, 3], "C3x--", label="LIP: $u_{v,k}$ reached at $t_{k+1}$")
     ax.plot(k, fitted[:, 3], "C0o:", mfc="none", label="fitted model")
-    ax.set(xlabel="walking step k", ylabel="speed [m/s]", title="speed: two steps late")
+    ax.set(xlabel="walking step k", ylabel="speed [m/s]", title="speed: one step late (the ALIP's)")
     ax.legend(fontsize=8)
     ax = axes[1, 0]
     names = ["forward [cm]", "lateral [cm]", "turn [0.01 rad]", "speed [cm/s]"]
@@ -84,7 +85,8 @@ def main() -> None:
     ), None  # fmt: skip
     e_lip = sr.lip_errors(all_data, r.omega, r.step_time, 0)[:, 2]
     e_fit = sr.evaluate(model, all_data)[:, 2]
-    bins = np.linspace(-0.4, 0.4, 41)
+    lim = max(0.05, float(np.percentile(np.abs(np.concatenate([e_lip, e_fit])), 99.5)))
+    bins = np.linspace(-lim, lim, 41)
     ax.hist(e_lip, bins, color="C3", alpha=0.6, label="LIP (Eq. 1)")
     ax.hist(e_fit, bins, color="C0", alpha=0.6, label="fitted model")
     ax.set(xlabel="turn error per step [rad]", ylabel="steps", title="held-out turn errors")

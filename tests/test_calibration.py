@@ -93,16 +93,17 @@ def test_the_shipped_model_predicts_a_fresh_digit_episode_within_its_reported_er
     reported = np.array(list(shipped["held_out"]["rms_model"].values()))
     lip = np.array(list(shipped["held_out"]["rms_lip"].values()))
     out = tmp_path / "fresh.jsonl"
-    # a seed and a planner mix the model never saw (its traces: 3000000+, 3000100+)
+    # a seed and a planner the model never saw (its traces: DWA and policy, 3000000-3000019)
     collect_traces(out, "mpc", 1, 3_500_000, explore=0.3, progress=False, config=_short(30))
     h = json.loads(out.read_text())
     data = sr.transitions_from_trace(h["trace"], 0.4)
     assert len(data) >= 20
     err = sr.rms(sr.evaluate(model, data))
     # within 2x the reported held-out error (one short episode is a small sample), and far
-    # better than the LIP in heading, the error that matters most for collisions
+    # better than the LIP in the forward step and the speed: with in-step commands Digit
+    # turns as the LIP does, but reaches a commanded speed one step later (the ALIP)
     assert (err[:3] < 2.0 * reported[:3]).all(), (err, reported)
-    assert err[2] < 0.5 * lip[2]
+    assert err[0] < 0.5 * lip[0] and err[3] < 0.5 * lip[3], (err, lip)
 
 
 def test_the_routes_expert_is_a_planner_by_name():

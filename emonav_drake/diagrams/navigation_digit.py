@@ -13,15 +13,18 @@ speed, so the walking stack's tracking errors reach the crowd, the policy's obse
 (LGM, scans, ...) and the rewards — the discrepancy the paper studies.
 
 Timing. At t_k = kT the planner computes u_k from the robot, the crowd and the grid maps
-at t_k and holds it. Digit's footstep planner reads the held command at each foot switch
-for the step that starts there. The first step starts at `walking.stand_time` and later
-switches come at most T apart (earlier on an early touchdown), so Digit's steps are not
-locked to the planner's clock: a switch reads the command of the latest planner instant
-strictly before it (a switch at the same instant t_k, as at the first step, still reads
-u_{k−1}: every update of one instant reads the pre-update state). The ALIP then places
-the swing foot so that the speed reaches u_v at the end of the *next* step. Together this
-is the response delay of the full-order robot that the LIP model (which reaches u_v at
-t_{k+1}) does not have.
+at t_k and holds it; Digit walks u_k in step k, as the LIP does. Digit stands until
+`walking.stand_time` = T (the LIP's step 0), so its walking step k runs from the foot
+switch at (or up to 10 % of T before) t_k to the one at t_{k+1}: the footstep planner's
+step clock is locked to the planner's instants, and an early touchdown lengthens the next
+step rather than moving the later switches ahead. A switch reads the command held before
+t_k (every update of one instant reads the pre-update state), so the step starts with the
+previous speed and no turn and takes up u_k at the footstep planner's first update after
+t_k (t_k + 5 ms): the heading target, the swing foot's yaw and the foot placement's speed
+are re-targeted then (`systems/alip_footstep_planner.py`, "Step clock", "In-step
+commands"). The ALIP places the swing foot so that the speed reaches u_v at the end of the
+*next* step: the one-step speed response of the ALIP itself, which the LIP model (reaching
+u_v at t_{k+1}) does not have. The heading change of step k follows u_Δθ,k.
 
 A fall (the station's `FallMonitor`) ends the episode with the outcome "fall": an
 outcome, never an exception.
