@@ -42,7 +42,7 @@ def test_mass_joints_and_limits(arms):
     m = _model(arms)
     plant = m.plant
     assert 44.0 <= m.total_mass <= 50.0
-    assert plant.time_step() == pytest.approx(0.001)
+    assert plant.time_step() == pytest.approx(WalkingParams().time_step)
     n_arm = 8 if arms == "held" else 0
     assert plant.num_actuators() == 12 + n_arm
     assert plant.num_velocities() == 6 + 12 + n_arm

@@ -126,7 +126,7 @@ def test_a_knee_on_the_ground_is_a_fall_even_with_the_torso_high():
 
 
 def test_a_slower_controller_holds_its_torque_between_ticks():
-    cfg = load_config(data="walking: {controller_period: 0.002}\n")
+    cfg = load_config(data="walking: {controller_period: 0.008}\n")  # every 2nd plant step
     r = run_walk(2.0, seed=5, config=cfg, record_timing=True)
     assert not r.fell
-    assert len(r.tick_seconds) == pytest.approx(1000, abs=2)  # 500 Hz for 2 s
+    assert len(r.tick_seconds) == pytest.approx(250, abs=2)  # 125 Hz for 2 s
