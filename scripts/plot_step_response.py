@@ -27,7 +27,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument(
         "--traces", type=Path,
-        default=ROOT / "benchmarks/results/digit_calibration/traces_v1.jsonl",
+        default=ROOT / "benchmarks/results/digit_calibration/traces_v2.jsonl",
     )  # fmt: skip
     ap.add_argument("--model", type=Path, default=DIGIT_RESPONSE)
     ap.add_argument("--out", type=Path, default=ROOT / "docs/figures/digit_step_response.png")

@@ -1,11 +1,11 @@
 """The Digit station: the full-order walking robot as one sub-diagram.
 
     command ──►┌──────────────────────────────────────────────────────────────┐
-    (u_v, u_Δθ)│ AlipFootstepPlanner (200 Hz) ─targets─► PassivityController  │
-               │        ▲                                 (1 kHz) │ torques   │
+    (u_v, u_Δθ)│ AlipFootstepPlanner (50 Hz)  ─targets─► PassivityController  │
+               │        ▲                                 (250 Hz) │ torques   │
                │        │ state                                   ▼           │
-               │ Digit MultibodyPlant (SAP, 1 ms) ──► DigitComState ──────────┼──► robot_state
-               │        └──────────────────────────► FallMonitor (200 Hz) ────┼──► fall
+               │ Digit MultibodyPlant (SAP, 4 ms) ──► DigitComState ──────────┼──► robot_state
+               │        └──────────────────────────► FallMonitor (125 Hz) ────┼──► fall
                └──────────────────────────────────────────────────────────────┘
 
 Input port:

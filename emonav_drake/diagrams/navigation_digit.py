@@ -5,8 +5,8 @@ MPC or a learned policy) and episode monitor — around the Digit station
 (`diagrams/digit_station.py`) instead of the LIP robot:
 
     NavigationPlanner (2.5 Hz, holds u_k) ─command─► DigitStation ──► robot_state, fall
-       ▲  robot_state, crowd, lgm_stack               (ALIP 200 Hz, controller 1 kHz,
-       └──────────────────────────────────────────────  plant 1 ms, fall check 200 Hz)
+       ▲  robot_state, crowd, lgm_stack               (ALIP 50 Hz, controller 250 Hz,
+       └──────────────────────────────────────────────  plant 4 ms, fall check 125 Hz)
 
 The robot state the navigation stack sees is Digit's CoM, torso yaw and sagittal CoM
 speed, so the walking stack's tracking errors reach the crowd, the policy's observation
@@ -20,11 +20,12 @@ step clock is locked to the planner's instants, and an early touchdown lengthens
 step rather than moving the later switches ahead. A switch reads the command held before
 t_k (every update of one instant reads the pre-update state), so the step starts with the
 previous speed and no turn and takes up u_k at the footstep planner's first update after
-t_k (t_k + 5 ms): the heading target, the swing foot's yaw and the foot placement's speed
-are re-targeted then (`systems/alip_footstep_planner.py`, "Step clock", "In-step
-commands"). The ALIP places the swing foot so that the speed reaches u_v at the end of the
-*next* step: the one-step speed response of the ALIP itself, which the LIP model (reaching
-u_v at t_{k+1}) does not have. The heading change of step k follows u_Δθ,k.
+t_k (t_k + `walking.planner_period`, 20 ms by default): the heading target, the swing
+foot's yaw and the foot placement's speed are re-targeted then
+(`systems/alip_footstep_planner.py`, "Step clock", "In-step commands"). The ALIP places
+the swing foot so that the speed reaches u_v at the end of the *next* step: the one-step
+speed response of the ALIP itself, which the LIP model (reaching u_v at t_{k+1}) does not
+have. The heading change of step k follows u_Δθ,k.
 
 A fall (the station's `FallMonitor`) ends the episode with the outcome "fall": an
 outcome, never an exception.

@@ -24,7 +24,7 @@ Output ports:
         (start, target). `LOG_*` below index it.
 
 Discrete state (private layout), updated by a periodic unrestricted update every
-`walking.planner_period` (default 5 ms, 200 Hz). Each update: detect touchdown (swing
+`walking.planner_period` (default 20 ms, 50 Hz). Each update: detect touchdown (swing
 ankle at the ground within the last (1 − `early_touchdown`)·T of the step, or the step's
 end reached) and switch stance; otherwise take up the step's command once it is there
 and re-plan the swing target with the ALIP law of `core.alip` (sagittal ℒ_des = m H
@@ -44,13 +44,13 @@ ahead of the planner's clock by 5 ms a step: 0.145 s after 48 steps.)
 
 In-step commands. Every update of one instant reads the pre-update state, so the switch
 at (or just before) t_k sees the command held before t_k. The step therefore starts with
-the previous step's command and takes up its own — the command held at the first update
-strictly after t_k (u_k, computed by the navigation planner at t_k from the state at
-t_k) — one update later (at t_k + `planner_period`, 2.5 % of the step at 200 Hz): the
-heading target, the swing foot's yaw target and the speed of the foot placement are
-re-targeted then. The torso and swing-yaw references are quintics that have barely left
-their start after 5–10 ms, so the re-targeting is smooth. Step k thus walks u_k, as the
-LIP does; the speed still reaches u_v at the end of the next step (the ALIP's own lag).
+the previous speed and no turn, and takes up its own command — the one held at the first
+update strictly after t_k: u_k, computed by the navigation planner at t_k from the state
+at t_k — one update later (t_k + `planner_period`: 20 ms, 5 % of the step, at the default
+50 Hz). The heading target, the swing foot's yaw target and the speed of the foot
+placement are re-targeted then; the torso and swing-yaw references are quintics that have
+barely left their start by then, so the re-targeting is smooth. Step k thus walks u_k, as
+the LIP does; the speed still reaches u_v at the end of the next step (the ALIP's own lag).
 """
 
 from __future__ import annotations
