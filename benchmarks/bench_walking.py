@@ -1,10 +1,12 @@
 """Closed-loop walking throughput: real-time factor and controller tick, on one core.
 
     .venv/bin/python benchmarks/bench_walking.py [--seconds 10] [--repeats 3] [--core N]
-        [--controller-hz 1000] [--planner-hz 200]
+        [--config F.yaml] [--controller-hz HZ] [--planner-hz HZ]
 
-Runs the full walking diagram (Digit plant at 1 ms with SAP + ALIP planner at 200 Hz +
-passivity controller at 1 kHz by default + per-step random commands, no Meshcat) `--repeats` times
+Runs the full walking diagram (the configured Digit stack — by default the plant at 4 ms
+with SAP, the ALIP planner at 50 Hz, the passivity controller at 250 Hz;
+`--config emonav_drake/configs/walking_1ms.yaml` for the 1 ms / 200 Hz / 1 kHz one — with
+per-step random commands, no Meshcat) `--repeats` times
 pinned to one CPU core, and prints per run and as medians: the real-time factor
 (simulated / wall seconds) and the controller's median tick (one `actuation` output
 evaluation, i.e. all plant queries + the law). Budgets (docs/facts.md): real-time factor
@@ -28,13 +30,18 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=10.0, help="simulated seconds per run")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--core", type=int, default=None, help="CPU to pin to (default: last)")
-    ap.add_argument("--controller-hz", type=float, default=1000.0, help="controller rate")
-    ap.add_argument("--planner-hz", type=float, default=200.0, help="footstep-planner rate")
+    ap.add_argument("--config", default=None, help="YAML configuration (default: the defaults)")
+    ap.add_argument("--controller-hz", type=float, default=None, help="controller rate")
+    ap.add_argument("--planner-hz", type=float, default=None, help="footstep-planner rate")
     args = ap.parse_args()
-    cfg = load_config()
-    cfg.walking.controller_period = 1.0 / args.controller_hz
-    cfg.walking.planner_period = 1.0 / args.planner_hz
+    cfg = load_config(args.config) if args.config else load_config()
+    if args.controller_hz:
+        cfg.walking.controller_period = 1.0 / args.controller_hz
+    if args.planner_hz:
+        cfg.walking.planner_period = 1.0 / args.planner_hz
     cfg.validate()
+    args.controller_hz = 1.0 / cfg.walking.controller_period
+    args.planner_hz = 1.0 / cfg.walking.planner_period
     core = args.core if args.core is not None else max(os.sched_getaffinity(0))
     os.sched_setaffinity(0, {core})
     rtfs, ticks, p90 = [], [], []

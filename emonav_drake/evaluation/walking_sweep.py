@@ -31,10 +31,13 @@ def run_one(
     seconds: float,
     config: EmoNavConfig | None = None,
 ) -> dict:
-    """One walk with the given periods [s]; returns its JSON row."""
+    """One walk with the given periods [s]; returns its JSON row. The sweep's plant is the
+    1 ms one of `configs/walking_1ms.yaml` unless `config` says otherwise (the default's
+    4 ms step would forbid the finer rates)."""
+    from emonav_drake.configs import CONFIG_DIR
     from emonav_drake.diagrams.walking import run_walk
 
-    cfg = config if config is not None else load_config()
+    cfg = config if config is not None else load_config(CONFIG_DIR / "walking_1ms.yaml")
     wp = dc.replace(cfg.walking, controller_period=controller_period, planner_period=planner_period)
     cfg = dc.replace(cfg, walking=wp).validate()
     r = run_walk(seconds, seed=seed, command="random", config=cfg)
