@@ -22,26 +22,10 @@ import pytest
 
 from emonav_drake.cli import main
 from emonav_drake.evaluation.benchmark import BenchmarkSettingsError, load_run, read_trials
+from tests.cli_errors import assert_user_error, run
 
 TINY = "episode: {max_steps: 2}\n"
 BIG_SEED = 2**64  # one beyond 64 bits
-
-
-def run(capsys, *argv):
-    """main(argv) → (exit code, stderr)."""
-    code = main([str(a) for a in argv])
-    return code, capsys.readouterr().err
-
-
-def assert_user_error(code, err, *culprits):
-    """Exit 2, exactly one `emonav: error:` line naming every culprit, no traceback."""
-    assert code == 2, err
-    assert "Traceback" not in err
-    lines = [line for line in err.splitlines() if line.startswith("emonav: error: ")]
-    assert len(lines) == 1, err
-    for culprit in culprits:
-        assert culprit in lines[0], (culprit, lines[0])
-    return lines[0]
 
 
 def emonav(*argv, timeout=120):

@@ -35,24 +35,8 @@ from emonav_drake.learning.run_state import (
 )
 from emonav_drake.learning.sac_trainer import train_sac
 from emonav_drake.params import EmoNavConfig
+from tests.cli_errors import assert_user_error, run
 from tests.state_equality import assert_equal_state
-
-
-def run(capsys, *argv):
-    """main(argv) → (exit code, stderr)."""
-    code = main([str(a) for a in argv])
-    return code, capsys.readouterr().err
-
-
-def assert_user_error(code, err, *culprits):
-    """Exit 2, exactly one `emonav: error:` line naming every culprit, no traceback."""
-    assert code == 2, err
-    assert "Traceback" not in err
-    lines = [line for line in err.splitlines() if line.startswith("emonav: error: ")]
-    assert len(lines) == 1, err
-    for culprit in culprits:
-        assert culprit in lines[0], (culprit, lines[0])
-    return lines[0]
 
 
 def _forbid(monkeypatch, module, name):

@@ -22,6 +22,7 @@ from emonav_drake.atomic_io import atomic_output, write_json
 from emonav_drake.cli import main
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.policy import DEFAULT_POLICY
+from tests.cli_errors import assert_user_error, run
 
 TINY = "episode: {max_steps: 2}\n"
 
@@ -32,23 +33,6 @@ def tiny(tmp_path):
     path = tmp_path / "tiny.yaml"
     path.write_text(TINY)
     return path
-
-
-def run(capsys, *argv):
-    """main(argv) → (exit code, stderr)."""
-    code = main([str(a) for a in argv])
-    return code, capsys.readouterr().err
-
-
-def assert_user_error(code, err, *culprits):
-    """Exit 2, exactly one `emonav: error:` line naming every culprit, no traceback."""
-    assert code == 2, err
-    assert "Traceback" not in err
-    lines = [line for line in err.splitlines() if line.startswith("emonav: error: ")]
-    assert len(lines) == 1, err
-    for culprit in culprits:
-        assert culprit in lines[0], (culprit, lines[0])
-    return lines[0]
 
 
 def assert_nothing_left(folder, *targets):
