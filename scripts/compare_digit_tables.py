@@ -1,0 +1,57 @@
+"""Digit Table II before and after the new walking stack: per method, the old run against
+benchmarks/results/digit_table2_v2 on the seeds both ran (Wilson intervals, McNemar exact).
+
+    python scripts/compare_digit_tables.py
+
+Prints a Markdown table (quoted in docs/results.md).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from emonav_drake.evaluation.benchmark import read_trials
+from emonav_drake.evaluation.tables import format_p, mcnemar_exact, wilson_interval
+
+RESULTS = Path(__file__).resolve().parent.parent / "benchmarks" / "results"
+NEW = "digit_table2_v2"
+# (label, old run, its method name, the method name in the new run)
+PAIRS = (
+    ("shipped policy (LIP-trained)", "digit_table2", "sac", "policy"),
+    ("emobipednav_digit", "digit_table3", "emobipednav_digit", "emobipednav_digit"),
+    ("mpc", "digit_table2", "mpc", "mpc"),
+    ("dwa", "digit_table2", "dwa", "dwa"),
+    ("dwa_digit", "digit_route8", "dwa_digit", "dwa_digit"),
+)
+
+
+def _successes(run: str, method: str) -> dict[int, bool]:
+    trials = read_trials(RESULTS / run / "trials.jsonl")
+    return {t["seed"]: t["record"]["outcome"] == "success" for t in trials if t["method"] == method}
+
+
+def _sr(k: int, n: int) -> str:
+    lo, hi = wilson_interval(k, n)
+    return f"{k / n:.3f} [{lo:.3f}, {hi:.3f}]"
+
+
+def main() -> None:
+    print(
+        "| method | seeds (n) | old SR [95 % CI] (run) | new SR [95 % CI] | old only | new only |"
+    )
+    print("|---|---|---|---|---|---|")
+    for label, run, old_method, new_method in PAIRS:
+        old, new = _successes(run, old_method), _successes(NEW, new_method)
+        seeds = sorted(set(old) & set(new))
+        n = len(seeds)
+        k_old, k_new = sum(old[s] for s in seeds), sum(new[s] for s in seeds)
+        b = sum(old[s] and not new[s] for s in seeds)
+        c = sum(new[s] and not old[s] for s in seeds)
+        print(
+            f"| {label} | {seeds[0]}–{seeds[-1]} ({n}) | {_sr(k_old, n)} ({run}) | "
+            f"{_sr(k_new, n)} | {b} | {c} (McNemar p = {format_p(mcnemar_exact(b, c))}) |"
+        )
+
+
+if __name__ == "__main__":
+    main()
