@@ -401,8 +401,6 @@ class AlipFootstepPlanner(LeafSystem):
         x[_CMD] = u
         x[_HEAD1] = x[_SWYAW1] = head_new
         x[_ADOPTED] = 1.0
-        log_ = x[_LOG]
-        log_[LOG_COMMAND] = u
-        log_[LOG_HEADING_TARGET] = head_new
-        log_[LOG_SWING_YAW.stop - 1] = head_new
-        x[_LOG] = log_
+        step_log = x[_LOG]  # a view: the step's log entry, now with its own command
+        step_log[LOG_COMMAND] = u
+        step_log[LOG_HEADING_TARGET] = step_log[LOG_SWING_YAW.stop - 1] = head_new
