@@ -205,8 +205,10 @@ class WalkingParams:
     lambda_height: float = 10.0  # torso height [1/s]
     lambda_horizontal: float = 2.0  # CoM horizontal vs the LIP (ankle actuation) [1/s]
     lambda_swing: float = 20.0  # swing foot position and orientation [1/s]
-    # K_D per leg joint: hip roll, hip yaw, hip pitch, knee, toe pitch, toe roll.
-    kd_leg: list[float] = dc.field(default_factory=lambda: [60.0, 20.0, 60.0, 60.0, 6.0, 6.0])
+    # K_D per leg joint: hip roll, hip yaw, hip pitch, knee, toe pitch, toe roll. Hip yaw 40
+    # (was 20 until December 2026) halves the torso-yaw sway that alternates with the stance
+    # foot; 60 and more slows the first turn from standing (docs/walking.md, "Gains").
+    kd_leg: list[float] = dc.field(default_factory=lambda: [60.0, 40.0, 60.0, 60.0, 6.0, 6.0])
     kd_arm: float = 20.0  # arms held by PD when not welded [N·m·s/rad]
     kp_arm: float = 200.0  # [N·m/rad]
     ankle_torque_fraction: float = 0.8  # stance toe torque bound, fraction of its limit
