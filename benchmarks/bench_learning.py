@@ -26,9 +26,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from emonav_drake.learning.config import DaggerConfig, SacConfig  # noqa: E402
 from emonav_drake.learning.dagger import Demonstrations, FrameStore, Student  # noqa: E402
-from emonav_drake.learning.policy import DEFAULT_POLICY, PolicyPlanner  # noqa: E402
 from emonav_drake.learning.sac import SacAgent  # noqa: E402
 from emonav_drake.params import EmoNavConfig  # noqa: E402
+from emonav_drake.planners.policy import DEFAULT_POLICY, PolicyPlanner  # noqa: E402
 
 
 def batch(b: int, size: int = 100, frames: int = 9) -> dict[str, torch.Tensor]:

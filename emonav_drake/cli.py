@@ -33,9 +33,9 @@ from emonav_drake.atomic_io import (
     write_json,
 )
 from emonav_drake.errors import RunInterrupted
-from emonav_drake.learning.variants import is_learned
 from emonav_drake.params import ConfigError, EmoNavConfig, load_config
 from emonav_drake.planners import PLANNERS
+from emonav_drake.planners.variants import is_learned
 
 PLANNER_CHOICES = list(PLANNERS)
 
@@ -112,7 +112,7 @@ def add_meshcat_host(p: argparse.ArgumentParser) -> None:
 
 def meshcat_host(args: argparse.Namespace) -> str:
     """The Meshcat host of `--meshcat-host` (checked: only with `--meshcat`, not empty)."""
-    from emonav_drake.meshcat_viewing import LOOPBACK_HOST
+    from emonav_drake.diagrams.meshcat_viewing import LOOPBACK_HOST
 
     if args.meshcat_host is None:
         return LOOPBACK_HOST
@@ -202,7 +202,7 @@ def _check_planner_flags(args: argparse.Namespace) -> None:
                 f"not {args.planner}"
             )
         return
-    from emonav_drake.learning.policy import resolve_device
+    from emonav_drake.planners.policy import resolve_device
 
     resolve_device(args.device)
 
@@ -239,7 +239,11 @@ def cmd_sim(args: argparse.Namespace) -> int:
         print(f"planner {args.planner}: {planner.describe()}")
     meshcat = caption = None
     if args.meshcat or args.record:
-        from emonav_drake.meshcat_viewing import ReplayCaption, make_meshcat, start_live_view
+        from emonav_drake.diagrams.meshcat_viewing import (
+            ReplayCaption,
+            make_meshcat,
+            start_live_view,
+        )
         from emonav_drake.systems.navigation_meshcat import set_overview_camera
 
         # record only: no "listening at" line
@@ -251,7 +255,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
             start_live_view(meshcat, wait=not args.no_wait, caption=caption)
     rates = None
     if args.rates:
-        from emonav_drake.evaluation.rates import RateMeasurement
+        from emonav_drake.diagrams.rates import RateMeasurement
 
         rates = RateMeasurement()
     trace: list[dict] = []  # Digit's per-step log: the trajectory of --json
@@ -322,7 +326,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
         n = write_steps_csv(args.steps_out, table)
         print(f"{n} steps written to {args.steps_out}")
     if caption is not None:  # live: the outcome in Meshcat, served until Ctrl-C
-        from emonav_drake.meshcat_viewing import finish_live_view
+        from emonav_drake.diagrams.meshcat_viewing import finish_live_view
 
         caption.set_outcome(record)
         finish_live_view(meshcat, keep_serving=not args.no_wait, caption=caption)
@@ -574,7 +578,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     g.set_defaults(func=cmd_lgm)
 
-    from emonav_drake.learning.cli_train import add_export_parser, add_train_parser
+    from emonav_drake.cli_train import add_export_parser, add_train_parser
 
     add_train_parser(sub)
     add_export_parser(sub)
@@ -590,7 +594,7 @@ def build_parser() -> argparse.ArgumentParser:
     from emonav_drake.cli_benchmark import add_benchmark_parser
 
     add_benchmark_parser(sub)
-    from emonav_drake.learning.cli_calibrate import add_calibrate_parser
+    from emonav_drake.cli_calibrate import add_calibrate_parser
 
     add_calibrate_parser(sub)  # also `emonav digit-rounds`
     for name, parser in sub.choices.items():

@@ -19,7 +19,7 @@ import sys
 from pathlib import Path
 
 from emonav_drake.cli import SeedArg
-from emonav_drake.evaluation.benchmark import MAX_TRIALS
+from emonav_drake.diagrams.trials import MAX_TRIALS
 from emonav_drake.params import ConfigError, EmoNavConfig
 
 
@@ -56,7 +56,8 @@ def _emotion_estimate_yaml(path: Path | None) -> str | None:
 def cmd_benchmark(args: argparse.Namespace) -> int:
     """Run or continue a benchmark; print where the tables are."""
     from emonav_drake.atomic_io import check_output_dir
-    from emonav_drake.evaluation.benchmark import parse_methods, run_benchmark
+    from emonav_drake.diagrams.trials import parse_methods
+    from emonav_drake.evaluation.benchmark import run_benchmark
 
     # every flag checked before the first trial (planners are built in run_benchmark)
     check_output_dir(args.out, "--out")

@@ -116,7 +116,7 @@ def cmd_walk(args: argparse.Namespace) -> int:
 
     meshcat = None
     if args.meshcat or args.record:
-        from emonav_drake.meshcat_viewing import make_meshcat, start_live_view
+        from emonav_drake.diagrams.meshcat_viewing import make_meshcat, start_live_view
 
         # record only: no "listening at" line
         meshcat = make_meshcat(live=args.meshcat, host=meshcat_host(args))
@@ -153,7 +153,7 @@ def cmd_walk(args: argparse.Namespace) -> int:
         n = write_steps_csv(args.steps_out, result.tracking(cfg))
         print(f"{n} steps written to {args.steps_out}")
     if args.meshcat:  # the last pose stays on screen until Ctrl-C
-        from emonav_drake.meshcat_viewing import finish_live_view
+        from emonav_drake.diagrams.meshcat_viewing import finish_live_view
 
         finish_live_view(meshcat, keep_serving=not args.no_wait)
     return 0

@@ -17,8 +17,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from emonav_drake.core import step_response as sr  # noqa: E402
-from emonav_drake.learning.calibration import DIGIT_RESPONSE, read_response  # noqa: E402
 from emonav_drake.params import EmoNavConfig  # noqa: E402
+from emonav_drake.planners.model_aware import DIGIT_RESPONSE, read_response  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 

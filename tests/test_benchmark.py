@@ -15,16 +15,13 @@ import pytest
 
 from emonav_drake.cli import main
 from emonav_drake.configs import SETTINGS, load_setting, setting_path
+from emonav_drake.diagrams.trials import BenchmarkSpec, MethodSpec, TrialRunner, parse_methods
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.evaluation import tables
 from emonav_drake.evaluation.benchmark import (
     BenchmarkSettingsError,
-    BenchmarkSpec,
-    MethodSpec,
-    TrialRunner,
     comparable,
     load_run,
-    parse_methods,
     read_trials,
     run_benchmark,
 )

@@ -13,14 +13,9 @@ import pytest
 
 from emonav_drake.core import step_response as sr
 from emonav_drake.core.lip import LipState
-from emonav_drake.learning.calibration import (
-    DIGIT_RESPONSE,
-    collect_traces,
-    fit_response,
-    load_response,
-    read_response,
-)
+from emonav_drake.learning.calibration import collect_traces, fit_response
 from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.planners.model_aware import DIGIT_RESPONSE, load_response, read_response
 
 
 def _short(steps: int) -> EmoNavConfig:
@@ -107,11 +102,11 @@ def test_the_shipped_model_predicts_a_fresh_digit_episode_within_its_reported_er
 
 
 def test_the_routes_expert_is_a_planner_by_name():
-    from emonav_drake.evaluation.benchmark import parse_methods
+    from emonav_drake.diagrams.trials import parse_methods
     from emonav_drake.learning.config import DaggerConfig
-    from emonav_drake.learning.variants import variant
     from emonav_drake.params import ConfigError, EmoNavConfig, load_typed_yaml
     from emonav_drake.planners import make_planner
+    from emonav_drake.planners.variants import variant
 
     route = load_typed_yaml(DaggerConfig, path=variant("emobipednav_digit").config)
     expert = make_planner("dwa_digit", EmoNavConfig())

@@ -7,9 +7,9 @@ import numpy as np
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.dagger import train_dagger
 from emonav_drake.learning.digit_dagger import DigitRoundsConfig, run_digit_rounds
-from emonav_drake.learning.policy import PolicyPlanner
-from emonav_drake.learning.variants import variant
 from emonav_drake.params import EmoNavConfig, load_typed_yaml
+from emonav_drake.planners.policy import PolicyPlanner
+from emonav_drake.planners.variants import variant
 
 
 def test_a_tiny_digit_round_writes_a_loadable_policy(tmp_path):

@@ -9,11 +9,11 @@ from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.learning.config import DaggerConfig, SacConfig
 from emonav_drake.learning.dagger import Demonstrations, FrameStore, Student, run_episode_collect
-from emonav_drake.learning.networks import Actor, Critic, LgmEncoder
-from emonav_drake.learning.policy import PolicyError, PolicyPlanner, load_policy, save_policy
 from emonav_drake.learning.sac import SacAgent
 from emonav_drake.learning.sac_trainer import train_sac
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.networks import Actor, Critic, LgmEncoder
+from emonav_drake.planners.policy import PolicyError, PolicyPlanner, load_policy, save_policy
 
 
 def n_params(m):
@@ -208,7 +208,7 @@ def test_shipped_policy_navigates(tmp_path):
 
 def test_torchscript_export_matches_the_checkpoint(tmp_path):
     from emonav_drake.cli import main
-    from emonav_drake.learning.policy import DEFAULT_POLICY
+    from emonav_drake.planners.policy import DEFAULT_POLICY
 
     out = tmp_path / "policy.ts"
     assert main(["export", "--out", str(out)]) == 0
@@ -251,8 +251,8 @@ def test_planner_names_say_what_the_policy_is(tmp_path, capsys):
     """`policy` runs the shipped DAgger student and says so; `sac` is kept for SAC actors:
     without a checkpoint, or with a DAgger student's, it is refused naming `policy`."""
     from emonav_drake.cli import main
-    from emonav_drake.evaluation.benchmark import parse_methods
-    from emonav_drake.learning.policy import DEFAULT_POLICY, describe_policy, load_policy
+    from emonav_drake.diagrams.trials import parse_methods
+    from emonav_drake.planners.policy import DEFAULT_POLICY, describe_policy, load_policy
 
     _, meta = load_policy(DEFAULT_POLICY, "cpu")
     assert describe_policy(meta).startswith("DAgger student")

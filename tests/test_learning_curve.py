@@ -7,8 +7,9 @@ from pathlib import Path
 
 import pytest
 
+from emonav_drake.diagrams.trials import parse_methods
 from emonav_drake.evaluation import tables
-from emonav_drake.evaluation.benchmark import load_run, parse_methods, run_benchmark
+from emonav_drake.evaluation.benchmark import load_run, run_benchmark
 from emonav_drake.evaluation.learning_curve import (
     CurveError,
     curve_markdown,

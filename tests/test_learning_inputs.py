@@ -22,7 +22,6 @@ from emonav_drake.learning import dagger as dagger_mod
 from emonav_drake.learning.config import DaggerConfig, SacConfig
 from emonav_drake.learning.dagger import read_dagger_state, train_dagger
 from emonav_drake.learning.env import EmoNavLIPEnv
-from emonav_drake.learning.policy import PolicyError, load_policy
 from emonav_drake.learning.replay import FrameReplayBuffer
 from emonav_drake.learning.run_state import (
     DAGGER_FORMAT,
@@ -35,6 +34,7 @@ from emonav_drake.learning.run_state import (
 )
 from emonav_drake.learning.sac_trainer import train_sac
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.policy import PolicyError, load_policy
 from tests.cli_errors import assert_user_error, run
 from tests.state_equality import assert_equal_state
 
@@ -505,7 +505,7 @@ def test_a_policy_that_would_run_code_is_refused_in_one_short_line(tmp_path, cap
 
 
 def test_a_truncated_policy_says_why_in_one_short_line(tmp_path):
-    from emonav_drake.learning.policy import DEFAULT_POLICY
+    from emonav_drake.planners.policy import DEFAULT_POLICY
 
     cut = tmp_path / "cut.pt"
     cut.write_bytes(DEFAULT_POLICY.read_bytes()[:5000])

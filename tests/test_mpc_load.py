@@ -14,7 +14,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-from emonav_drake.evaluation.benchmark import comparable, parse_methods, read_trials, run_benchmark
+from emonav_drake.diagrams.trials import parse_methods
+from emonav_drake.evaluation.benchmark import comparable, read_trials, run_benchmark
 from emonav_drake.params import load_config
 from tests.machine_load import cpu_hogs, stalls
 

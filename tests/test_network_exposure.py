@@ -14,7 +14,7 @@ from pathlib import Path
 import psutil
 import pytest
 
-from emonav_drake.meshcat_viewing import is_loopback_host, make_meshcat
+from emonav_drake.diagrams.meshcat_viewing import is_loopback_host, make_meshcat
 
 PACKAGE = Path(__file__).resolve().parents[1] / "emonav_drake"
 
@@ -74,13 +74,13 @@ def test_every_meshcat_the_package_starts_goes_through_make_meshcat():
                 and node.func.id in ("Meshcat", "StartMeshcat")
             ):
                 offenders.append(f"{path.relative_to(PACKAGE)}:{node.lineno}")
-    allowed = {"meshcat_viewing.py"}
+    allowed = {"diagrams/meshcat_viewing.py"}
     assert [o for o in offenders if o.split(":")[0] not in allowed] == []
 
 
 def test_local_ray_listens_on_loopback_only():
     pytest.importorskip("ray")
-    from emonav_drake.ray_cluster import init_ray, ray_node_address
+    from emonav_drake.parallel import init_ray, ray_node_address
 
     before = set(_listening(_family()))  # e.g. a Meshcat of an earlier test
     ray = init_ray(1, None)

@@ -21,7 +21,7 @@ import torch
 from emonav_drake.atomic_io import atomic_output, write_json
 from emonav_drake.cli import main
 from emonav_drake.errors import RunInterrupted
-from emonav_drake.learning.policy import DEFAULT_POLICY
+from emonav_drake.planners.policy import DEFAULT_POLICY
 from tests.cli_errors import assert_user_error, run
 
 TINY = "episode: {max_steps: 2}\n"
@@ -168,7 +168,7 @@ def test_policy_file_missing_a_field(tmp_path, capsys, tiny, field, command):
 def test_checkpoint_whose_observation_does_not_fit_its_encoder_fails_at_load(
     tmp_path, capsys, key, value, named
 ):
-    from emonav_drake.learning.policy import PolicyError, load_policy
+    from emonav_drake.planners.policy import PolicyError, load_policy
 
     path = _broken_policy(tmp_path, lambda b: b["observation"].__setitem__(key, value))
     with pytest.raises(PolicyError, match=named.replace(".", r"\.")):

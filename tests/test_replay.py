@@ -30,13 +30,13 @@ from pydrake.systems.analysis import Simulator
 
 from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.scenario import sample_scenario
-from emonav_drake.diagrams.navigation import build_navigation_diagram
-from emonav_drake.meshcat_viewing import (
+from emonav_drake.diagrams.meshcat_viewing import (
     ReplayCaption,
     make_meshcat,
     wait_for_browser,
     write_replay_html,
 )
+from emonav_drake.diagrams.navigation import build_navigation_diagram
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.systems.navigation_meshcat import (
     FOOTSTEPS_RECENT,

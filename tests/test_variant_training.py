@@ -13,9 +13,9 @@ import pytest
 
 from emonav_drake.cli import main
 from emonav_drake.learning.config import DaggerConfig
-from emonav_drake.learning.policy import load_policy
-from emonav_drake.learning.variants import VARIANTS, shipped_checkpoint, variant
 from emonav_drake.params import ConfigError, load_typed_yaml
+from emonav_drake.planners.policy import load_policy
+from emonav_drake.planners.variants import VARIANTS, shipped_checkpoint, variant
 
 
 @pytest.fixture(scope="module")

@@ -120,3 +120,11 @@ def format_summary(s: dict) -> str:
         f"{s['timeout_rate']:.3f}  {fall}NT {nt} s  DT {s['DT']}  "
         f"IDT [{idt[0]}; {idt[1]}, {idt[2]}, {idt[3]}]  ({s['episodes']} episodes)"
     )
+
+
+def record_from_json(d: dict) -> EpisodeRecord:
+    """An `EpisodeRecord` back from its `to_json()` (null distance → inf)."""
+    d = dict(d)
+    if d.get("min_ped_distance") is None:
+        d["min_ped_distance"] = math.inf
+    return EpisodeRecord(**d)

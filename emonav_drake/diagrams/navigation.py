@@ -49,7 +49,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
-from emonav_drake.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
+from emonav_drake.diagrams.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.systems.crowd_system import CrowdSystem
@@ -61,7 +61,7 @@ from emonav_drake.systems.navigation_meshcat import NavigationMeshcatVisualizer
 from emonav_drake.systems.navigation_planner import NavigationPlanner, Planner
 
 if TYPE_CHECKING:
-    from emonav_drake.evaluation.rates import RateMeasurement
+    from emonav_drake.diagrams.rates import RateMeasurement
 
 log = logging.getLogger(__name__)
 
@@ -219,7 +219,7 @@ def run_episode(
     Returns the episode's record (outcome, metrics) and the per-step log. With
     `record_html` the run is recorded in Meshcat and written as a self-contained HTML
     replay (a Meshcat is created if none is given). With `rates`, the simulation runs
-    under the profiler of `evaluation.rates` and the per-system rates and wall-time shares
+    under the profiler of `diagrams.rates` and the per-system rates and wall-time shares
     are left in `rates.report`. The planner's memory starts from
     `planner.initial_memory()` in the new diagram's Context (no `reset()` needed).
     """

@@ -43,9 +43,9 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
+from emonav_drake.diagrams.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
 from emonav_drake.diagrams.navigation import AddNavigationStack
-from emonav_drake.evaluation.rates import RateMeasurement
-from emonav_drake.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
+from emonav_drake.diagrams.rates import RateMeasurement
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.episode_monitor import EpisodeMonitor
@@ -144,7 +144,7 @@ def run_digit_episode(
     """Simulate one navigation episode with the full-order Digit; returns its record
     (outcome success | collision | timeout | fall).
 
-    With `rates`, the simulation runs under the profiler of `evaluation.rates` and the
+    With `rates`, the simulation runs under the profiler of `diagrams.rates` and the
     per-system rates and wall-time shares are left in `rates.report`. With `trace`, the
     robot state and held command at every planner instant are appended to it
     (`simulate_digit_episode`)."""

@@ -32,7 +32,7 @@ from emonav_drake.core.tracking import COLUMNS as TRACKING_COLUMNS
 from emonav_drake.core.tracking import column as tracking_column
 from emonav_drake.core.tracking import step_tracking
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
-from emonav_drake.meshcat_viewing import make_meshcat
+from emonav_drake.diagrams.meshcat_viewing import make_meshcat
 from emonav_drake.params import EmoNavConfig, load_config
 from emonav_drake.systems.alip_footstep_planner import (
     LOG_COM,

@@ -42,16 +42,12 @@ different orders and on fresh planners). Torch runs one thread per process in bo
 from __future__ import annotations
 
 import contextlib
-import copy
 import dataclasses as dc
 import datetime
-import hashlib
 import json
 import logging
 import math
 import os
-import subprocess
-import tempfile
 import time
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
@@ -66,12 +62,18 @@ from emonav_drake.atomic_io import (
 )
 from emonav_drake.core.metrics import COLLISION, FALL, SUCCESS, TIMEOUT, EpisodeRecord
 from emonav_drake.core.scenario import MAX_SEED
+from emonav_drake.diagrams.trials import (
+    MAX_TRIALS,
+    BenchmarkSpec,
+    MethodSpec,
+    TrialRunner,
+    run_serial,
+    run_trials,
+)
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.evaluation import tables
-from emonav_drake.learning.variants import VARIANTS, is_learned, shipped_checkpoint
 from emonav_drake.params import ConfigError, EmoNavConfig, dump_config, load_config
-from emonav_drake.planners import MODEL_PLANNERS
-from emonav_drake.ray_cluster import init_ray
+from emonav_drake.provenance import package_identity, sha256_bytes
 
 log = logging.getLogger(__name__)
 
@@ -81,299 +83,13 @@ TABLES_FILE = "tables.md"
 TABLE_CSV_FILES = ("table2.csv", "table3.csv", "social.csv", "pairwise.csv")
 RUN_FILES = (SETTINGS_FILE, TRIALS_FILE, TABLES_FILE, *TABLE_CSV_FILES)
 FORMAT = 1
-# --trials at most (per method): every scenario is sampled (~0.2 ms per seed, ~20 s at the
-# maximum) and every (method, seed) task listed before the first trial.
-MAX_TRIALS = 100_000
 OUTCOMES = (SUCCESS, COLLISION, TIMEOUT, FALL)
-IN_FLIGHT_PER_WORKER = 2
 
 
 class BenchmarkSettingsError(ConfigError):
     """A run directory holds a benchmark with other settings (or is damaged)."""
 
 
-# --------------------------------------------------------------------------- specs
-@dc.dataclass
-class MethodSpec:
-    """One compared method: a planner kind and, for learned policies, the checkpoint."""
-
-    name: str
-    planner: str  # dwa | mpc | policy (a learned policy; "sac" in runs before the rename)
-    checkpoint: str | None = None  # path of a learned policy's checkpoint
-    checkpoint_sha256: str | None = None
-    observation: str = "state"  # what the method sees: "state" (DWA, MPC) or the grid kind
-
-
-@dc.dataclass
-class BenchmarkSpec:
-    """What a worker needs to run any trial of the benchmark."""
-
-    methods: list[MethodSpec]
-    plant: str
-    config_yaml: str
-    emotion_estimate_yaml: str | None = None
-
-    def method(self, name: str) -> MethodSpec:
-        for m in self.methods:
-            if m.name == name:
-                return m
-        raise KeyError(name)
-
-
-def sha256_bytes(data: bytes) -> str:
-    return hashlib.sha256(data).hexdigest()
-
-
-def sha256_file(path: str | Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
-
-
-def parse_methods(
-    planners: str | Sequence[str], checkpoints: Sequence[str] = ()
-) -> list[MethodSpec]:
-    """`--planners policy,mpc,dwa` and `--checkpoint NAME=PATH …` → the methods (validated).
-
-    A method is `dwa`, `mpc`, `policy` (the shipped policy unless a checkpoint is given),
-    `sac` (a SAC-trained checkpoint, given with `--checkpoint sac=PATH`), a
-    variant of `learning/variants.py` (its shipped policy unless a checkpoint is given) or
-    any other name given a checkpoint with `--checkpoint NAME=PATH` (another learned policy).
-    """
-    names = planners.split(",") if isinstance(planners, str) else list(planners)
-    names = [n.strip() for n in names]
-    if not names or any(not n for n in names):
-        raise ConfigError(f"--planners {','.join(names)!r}: give a comma-separated list of methods")
-    dup = sorted({n for n in names if names.count(n) > 1})
-    if dup:
-        raise ConfigError(f"--planners: {dup[0]} is listed twice")
-    ckpt: dict[str, Path] = {}
-    for item in checkpoints:
-        name, sep, path = item.partition("=")
-        name = name.strip()
-        if not sep or not name or not path:
-            raise ConfigError(
-                f"--checkpoint {item!r}: expected NAME=PATH (e.g. policy=runs/x/policy.pt)"
-            )
-        if name in ckpt:
-            raise ConfigError(f"--checkpoint {name}: given twice")
-        if name not in names:
-            raise ConfigError(
-                f"--checkpoint {name}=…: {name} is not among --planners ({','.join(names)})"
-            )
-        if name in MODEL_PLANNERS:
-            raise ConfigError(f"--checkpoint {name}=…: only learned policies take a checkpoint")
-        p = Path(path)
-        if not p.is_file():
-            raise ConfigError(f"--checkpoint {name}={path}: no such file")
-        ckpt[name] = p
-    methods = []
-    for n in names:
-        if n in MODEL_PLANNERS:
-            methods.append(MethodSpec(n, n))
-        elif is_learned(n) or n in ckpt:
-            path = ckpt.get(n)
-            if path is None and n == "policy":
-                from emonav_drake.learning.policy import DEFAULT_POLICY
-
-                path = DEFAULT_POLICY
-            elif path is None and n == "sac":
-                raise ConfigError(
-                    "--planners sac: a SAC-trained checkpoint is needed (--checkpoint "
-                    "sac=PATH); the shipped policy is a DAgger student: use policy"
-                )
-            elif path is None:
-                path = shipped_checkpoint(n)
-            if n == "sac":
-                _check_sac_actor(path)
-            methods.append(MethodSpec(n, "policy", str(path), sha256_file(path)))
-        else:
-            raise ConfigError(
-                f"--planners: unknown method {n!r}; use {', '.join(MODEL_PLANNERS)}, policy, "
-                f"sac, a variant "
-                f"({', '.join(VARIANTS)}), or name a learned policy with --checkpoint {n}=PATH"
-            )
-    return methods
-
-
-def _check_sac_actor(path: str | Path) -> None:
-    """The method called `sac` must be a SAC actor, not a DAgger student under that label."""
-    from emonav_drake.learning.policy import describe_policy, load_policy, policy_kind
-
-    _, meta = load_policy(Path(path), "cpu")
-    if policy_kind(meta) != "sac":
-        raise ConfigError(
-            f"--checkpoint sac={path}: not a SAC actor but a {describe_policy(meta)}; "
-            "give it another method name (e.g. policy)"
-        )
-
-
-# --------------------------------------------------------------------------- trials
-class TrialRunner:
-    """Runs trials in one process; each method's planner is built once and reused.
-
-    Args:
-        spec: the benchmark (methods, plant, configuration YAML, emotion estimate).
-        blobs: checkpoint bytes by method name, used where the checkpoint's path does not
-            exist here (a worker on another machine) or holds another file.
-    """
-
-    def __init__(self, spec: BenchmarkSpec, blobs: dict[str, bytes] | None = None) -> None:
-        self.spec = spec
-        self.config = load_config(data=spec.config_yaml)
-        self.estimate = None
-        if spec.emotion_estimate_yaml is not None:
-            from emonav_drake.params import load_typed_yaml
-            from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
-
-            self.estimate = load_typed_yaml(
-                EmotionEstimateParams, data=spec.emotion_estimate_yaml
-            ).validate()
-        self._blobs = blobs or {}
-        self._tmp: tempfile.TemporaryDirectory | None = None
-        self._planners: dict[str, tuple[Any, EmoNavConfig, str]] = {}
-
-    def _checkpoint_path(self, m: MethodSpec) -> str | None:
-        if m.checkpoint is None:
-            return None
-        p = Path(m.checkpoint)
-        if p.is_file() and (m.checkpoint_sha256 is None or sha256_file(p) == m.checkpoint_sha256):
-            return str(p)
-        if m.name not in self._blobs:
-            raise ConfigError(f"checkpoint of {m.name}: {p} is missing or differs on this worker")
-        if self._tmp is None:
-            self._tmp = tempfile.TemporaryDirectory(prefix="emonav-bench-")
-        q = Path(self._tmp.name) / f"{m.name}-{p.name}"
-        q.write_bytes(self._blobs[m.name])
-        return str(q)
-
-    def planner(self, name: str) -> tuple[Any, EmoNavConfig, str]:
-        """(planner, its configuration, grid kind) of a method, built on first use."""
-        if name not in self._planners:
-            from emonav_drake.planners import configure_for, make_planner
-
-            m = self.spec.method(name)
-            cfg = copy.deepcopy(self.config)  # a policy adapts the grid-map settings
-            # a learned method is whatever its checkpoint holds ("sac" in older runs)
-            kind = "policy" if m.checkpoint is not None else m.planner
-            planner = make_planner(kind, cfg, checkpoint=self._checkpoint_path(m))
-            self._planners[name] = (planner, cfg, configure_for(planner, cfg))
-        return self._planners[name]
-
-    def observation(self, name: str) -> str:
-        """What the method observes: "state" (privileged crowd state) or its grid kind."""
-        planner, _, kind = self.planner(name)
-        return kind.upper() if hasattr(planner, "expected_shape") else "state"
-
-    def replay(self, method: str, seed: int):
-        """Re-simulate one LIP trial: (scenario, `EpisodeRecord`, `StepLog`) — for plots."""
-        from emonav_drake.core.scenario import sample_scenario
-        from emonav_drake.diagrams.navigation import run_episode
-
-        if self.spec.plant != "lip":
-            raise ConfigError("replay draws LIP trials only (the Digit run keeps no step log)")
-        planner, cfg, grid_kind = self.planner(method)
-        scenario = sample_scenario(seed, self.config)
-        record, step_log = run_episode(
-            scenario,
-            cfg,
-            planner,
-            goal_radius=cfg.episode.eval_goal_radius,
-            grid_kind=grid_kind,
-            emotion_estimate=self.estimate,
-        )
-        return scenario, record, step_log
-
-    def run(self, method: str, seed: int) -> dict:
-        """One trial: method `method` on the scenario of `seed`; the `trials.jsonl` line."""
-        from emonav_drake.core.scenario import sample_scenario
-        from emonav_drake.diagrams.evaluation_episode import run_evaluation_episode
-
-        planner, cfg, grid_kind = self.planner(method)
-        scenario = sample_scenario(seed, self.config)
-        t0 = time.perf_counter()
-        record = run_evaluation_episode(
-            self.spec.plant, scenario, cfg, planner, grid_kind, self.estimate
-        )
-        wall = time.perf_counter() - t0
-        rec = record.to_json()
-        rec["seed"] = seed
-        return {
-            "method": method,
-            "seed": seed,
-            "plant": self.spec.plant,
-            "record": json_safe(rec),
-            "wall_seconds": round(wall, 4),
-        }
-
-
-class RayTrialWorker:
-    """The Ray actor: one `TrialRunner` per worker process (planners built once). Other
-    per-episode jobs on Digit subclass it and override `run` (`learning/calibration.py`,
-    `learning/digit_dagger.py`)."""
-
-    def __init__(self, spec: BenchmarkSpec, blobs: dict[str, bytes]) -> None:
-        import torch
-
-        torch.set_num_threads(1)  # one core per worker: no oversubscription
-        logging.getLogger("drake").setLevel(logging.WARNING)
-        self.runner = TrialRunner(spec, blobs)
-
-    def identity(self) -> dict:
-        return package_identity(with_commit=False)
-
-    def run(self, method: str, seed: int) -> dict:
-        return self.runner.run(method, seed)
-
-
-# --------------------------------------------------------------------------- identity
-_PACKAGE_DIR = Path(__file__).resolve().parent.parent
-
-
-def code_hash() -> str:
-    """sha256 over the package's Python sources (relative path and bytes, sorted)."""
-    h = hashlib.sha256()
-    for p in sorted(_PACKAGE_DIR.rglob("*.py")):
-        if "__pycache__" in p.parts:
-            continue
-        h.update(str(p.relative_to(_PACKAGE_DIR)).encode() + b"\0")
-        h.update(p.read_bytes() + b"\0")
-    return h.hexdigest()
-
-
-def _git(*args: str) -> str | None:
-    root = _PACKAGE_DIR.parent
-    if not (root / ".git").exists():
-        return None
-    try:
-        out = subprocess.run(
-            ["git", "-C", str(root), *args], capture_output=True, text=True, timeout=10
-        )
-    except (OSError, subprocess.SubprocessError):
-        return None
-    return out.stdout.strip() if out.returncode == 0 else None
-
-
-def package_identity(with_commit: bool = True) -> dict:
-    """Version, git commit (if a checkout) and whether the package differs from it, code hash."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        ver = version("emonav_drake")
-    except PackageNotFoundError:
-        ver = "unknown"
-    out: dict[str, Any] = {"version": ver}
-    if with_commit:
-        out["commit"] = _git("rev-parse", "HEAD")
-        status = _git("status", "--porcelain", "--", "emonav_drake")
-        out["dirty"] = None if status is None else bool(status)
-    out["code_sha256"] = code_hash()
-    return out
-
-
-# --------------------------------------------------------------------------- settings
 def setting_label(config: EmoNavConfig, name: str | None) -> str:
     """E.g. "var_dd [0.2, 0.35, 0.5] m" (+ ", time-varying"): the DD column of Table III."""
     r = config.reward
@@ -857,92 +573,6 @@ class _Progress:
         self.bar.close()
 
 
-def _run_serial(
-    spec: BenchmarkSpec,
-    tasks: list[tuple[str, int]],
-    on_result: Callable[[dict], None],
-) -> None:
-    import torch
-
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)  # as in a Ray worker: identical arithmetic, no oversubscription
-    try:
-        runner = TrialRunner(spec)
-        for method, seed in tasks:
-            on_result(runner.run(method, seed))
-    finally:
-        torch.set_num_threads(threads)
-
-
-def run_on_ray(
-    spec: BenchmarkSpec,
-    tasks: list[tuple[str, int]],
-    on_result: Callable[[dict], None],
-    workers: int | None,
-    address: str | None,
-    worker_cls: type | None = None,
-) -> None:
-    """Run `worker.run(method, seed)` for every task on Ray actors, `on_result` in the
-    order they finish. `worker_cls(spec, blobs)` (default: the benchmark's trial worker)
-    must offer `identity()` and `run(method, seed) -> dict`; the checkpoints of learned
-    methods reach workers on other machines as bytes."""
-    worker_cls = worker_cls or RayTrialWorker
-    ray = init_ray(workers or 1, address)
-    try:
-        if workers is None:  # a cluster: one worker per CPU it has
-            workers = max(1, int(ray.cluster_resources().get("CPU", 1)))
-        workers = max(1, min(workers, len(tasks)))
-        if address:
-            # workers may be on other machines: ship the checkpoints (through the object
-            # store; an actor restarted after a crash could not get them back, so none is:
-            # a crash stops the run, and the same command continues it)
-            blobs = {
-                m.name: Path(m.checkpoint).read_bytes()
-                for m in spec.methods
-                if m.checkpoint is not None
-            }
-            actor_cls = ray.remote(num_cpus=1)(worker_cls)
-            blobs_ref = ray.put(blobs)
-            actors = [actor_cls.remote(spec, blobs_ref) for _ in range(workers)]
-        else:
-            # local workers read the checkpoints from their paths (hashes checked); a worker
-            # that dies is restarted and its trials retried (they are deterministic)
-            actor_cls = ray.remote(num_cpus=1, max_restarts=2, max_task_retries=2)(worker_cls)
-            actors = [actor_cls.remote(spec, {}) for _ in range(workers)]
-        mine = package_identity(with_commit=False)["code_sha256"]
-        for ident in ray.get([a.identity.remote() for a in actors]):
-            if ident["code_sha256"] != mine:
-                raise ConfigError(
-                    "a Ray worker runs other emonav_drake code than this driver (code hash "
-                    f"{ident['code_sha256'][:12]} vs {mine[:12]}); install the same version"
-                )
-        queue = list(reversed(tasks))
-        pending: dict[Any, Any] = {}
-
-        def submit(actor) -> None:
-            if queue:
-                method, seed = queue.pop()
-                pending[actor.run.remote(method, seed)] = actor
-
-        for _ in range(IN_FLIGHT_PER_WORKER):
-            for a in actors:
-                submit(a)
-        while pending:
-            ready, _ = ray.wait(list(pending), num_returns=1)
-            for ref in ready:
-                actor = pending.pop(ref)
-                try:
-                    result = ray.get(ref)
-                except ray.exceptions.RayTaskError as e:
-                    cause = getattr(e, "cause", None)
-                    raise (cause if isinstance(cause, Exception) else e) from None
-                on_result(result)
-                submit(actor)
-    finally:
-        with contextlib.suppress(Exception):
-            ray.shutdown()
-
-
 def run_benchmark(
     out: str | Path,
     methods: Sequence[MethodSpec],
@@ -1034,9 +664,9 @@ def run_benchmark(
         try:
             if tasks:
                 if workers == 1 and not ray_address:
-                    _run_serial(spec, tasks, on_result)
+                    run_serial(spec, tasks, on_result)
                 else:
-                    run_on_ray(spec, tasks, on_result, workers, ray_address)
+                    run_trials(spec, tasks, on_result, workers, ray_address)
         except KeyboardInterrupt:
             bar.close()
             md = rd.write_tables(settings, all_trials, interrupted=True)

@@ -103,13 +103,9 @@ def diagnose_run(
     from tqdm import tqdm
 
     from emonav_drake.atomic_io import write_json, write_text_atomic
-    from emonav_drake.evaluation.benchmark import (
-        SETTINGS_FILE,
-        TrialRunner,
-        load_run,
-        spec_from_settings,
-    )
-    from emonav_drake.learning.calibration import load_response
+    from emonav_drake.diagrams.trials import TrialRunner
+    from emonav_drake.evaluation.benchmark import SETTINGS_FILE, load_run, spec_from_settings
+    from emonav_drake.planners.model_aware import load_response
 
     settings, trials = load_run(run_dir)
     where = Path(run_dir) / SETTINGS_FILE

@@ -23,7 +23,7 @@ import itertools
 import math
 from collections.abc import Iterable, Sequence
 
-from emonav_drake.core.metrics import SUCCESS, EpisodeRecord, summarize
+from emonav_drake.core.metrics import SUCCESS, record_from_json, summarize
 
 ALPHA = 0.05
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
@@ -52,14 +52,6 @@ def mcnemar_exact(b: int, c: int) -> float:
     k = min(b, c)
     tail = sum(math.comb(n, i) for i in range(k + 1)) / 2.0**n
     return min(1.0, 2.0 * tail)
-
-
-def record_from_json(d: dict) -> EpisodeRecord:
-    """An `EpisodeRecord` back from its `to_json()` (null distance → inf)."""
-    d = dict(d)
-    if d.get("min_ped_distance") is None:
-        d["min_ped_distance"] = math.inf
-    return EpisodeRecord(**d)
 
 
 def method_order(trials: Iterable[dict], methods: Sequence[str] | None = None) -> list[str]:

@@ -26,41 +26,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.params import ConfigError, EmoNavConfig
-
-DIGIT_RESPONSE = Path(__file__).resolve().parent.parent / "data" / "digit_response.json"
-
-
-def read_response(path: str | Path) -> StepResponseModel:
-    """A step-response model JSON (`ConfigError` naming the file and what is wrong)."""
-    path = Path(path)
-    if not path.is_file():
-        raise ConfigError(f"step-response model {path}: no such file")
-    try:
-        data = json.loads(path.read_text())
-        return StepResponseModel.from_plain(data.get("model", data))
-    except (ValueError, KeyError, TypeError, AttributeError) as e:
-        raise ConfigError(f"step-response model {path}: {e}") from None
-
-
-def load_response(spec: str) -> StepResponseModel | None:
-    """ "" → None (the LIP); "digit" → the shipped Digit model; else a model file."""
-    if not spec:
-        return None
-    return read_response(DIGIT_RESPONSE if spec == "digit" else spec)
-
-
-def model_aware_expert(config: EmoNavConfig, margin: float, response: str = "digit"):
-    """The expert of the routes that learn a robot's dynamics: DWA with collision margin
-    `margin` [m] planning with the step-response model `response` (`load_response`)."""
-    import copy
-
-    from emonav_drake.core.dwa import DwaPlanner
-
-    expert_cfg = copy.deepcopy(config)
-    expert_cfg.dwa.safety_margin = margin
-    return DwaPlanner(expert_cfg, response=load_response(response))
 
 
 # ------------------------------------------------------------------------ collection
@@ -128,9 +94,9 @@ def _trace_episode(runner, method: str, seed: int, explore: float) -> dict:
 
 def _trace_worker(explore: float) -> type:
     """The Ray actor class of `collect_traces`: one traced episode per task."""
-    from emonav_drake.evaluation.benchmark import RayTrialWorker
+    from emonav_drake.diagrams.trials import TrialWorker
 
-    class TraceWorker(RayTrialWorker):
+    class TraceWorker(TrialWorker):
         def run(self, method: str, seed: int) -> dict:
             return _trace_episode(self.runner, method, seed, explore)
 
@@ -158,12 +124,12 @@ def collect_traces(
 
     from emonav_drake.atomic_io import write_text_atomic
     from emonav_drake.core.scenario import MAX_SEED
-    from emonav_drake.evaluation.benchmark import (
+    from emonav_drake.diagrams.trials import (
         MAX_TRIALS,
         BenchmarkSpec,
         TrialRunner,
         parse_methods,
-        run_on_ray,
+        run_trials,
     )
     from emonav_drake.params import dump_config
 
@@ -202,7 +168,7 @@ def collect_traces(
         for method, seed in tasks:
             keep(_trace_episode(runner, method, seed, explore))
     elif tasks:
-        run_on_ray(spec, tasks, keep, workers, ray_address, worker_cls=_trace_worker(explore))
+        run_trials(spec, tasks, keep, workers, ray_address, worker_cls=_trace_worker(explore))
     bar.close()
     lines = sorted(have + new, key=lambda h: (h["method"], h["seed"]))
     write_text_atomic(out, "".join(json.dumps(h) + "\n" for h in lines))

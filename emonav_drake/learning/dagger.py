@@ -60,17 +60,7 @@ from emonav_drake.core.navigation import (
 from emonav_drake.core.scenario import Scenario, sample_scenario
 from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.errors import RunInterrupted
-from emonav_drake.learning.calibration import model_aware_expert
 from emonav_drake.learning.config import DaggerConfig
-from emonav_drake.learning.networks import CategoricalPolicy
-from emonav_drake.learning.policy import (
-    DEFAULT_POLICY,
-    build_encoder,
-    encoder_spec,
-    load_policy,
-    save_policy,
-    vector_state,
-)
 from emonav_drake.learning.run_state import (
     DAGGER_FORMAT,
     InterruptGuard,
@@ -85,6 +75,16 @@ from emonav_drake.learning.run_state import (
     write_run_state,
 )
 from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.planners.model_aware import model_aware_expert
+from emonav_drake.planners.networks import CategoricalPolicy
+from emonav_drake.planners.policy import (
+    DEFAULT_POLICY,
+    build_encoder,
+    encoder_spec,
+    load_policy,
+    save_policy,
+    vector_state,
+)
 
 log = logging.getLogger(__name__)
 STATE_FILE = "dagger_state.pt"

@@ -34,8 +34,8 @@ from pathlib import Path
 import numpy as np
 
 from emonav_drake.core.dwa import DwaPlanner
-from emonav_drake.learning.policy import vector_state
 from emonav_drake.params import ConfigError
+from emonav_drake.planners.policy import vector_state
 
 log = logging.getLogger(__name__)
 DIGIT_ROUNDS_FORMAT = "emonav-digit-dagger/1"
@@ -83,9 +83,9 @@ class LabellingPlanner:
 
 def _round_worker(beta: float, expert_margin: float) -> type:
     """The Ray actor class of `collect_round`: one labelled Digit episode per task."""
-    from emonav_drake.evaluation.benchmark import RayTrialWorker
+    from emonav_drake.diagrams.trials import TrialWorker
 
-    class RoundWorker(RayTrialWorker):
+    class RoundWorker(TrialWorker):
         def run(self, method: str, seed: int) -> dict:
             return _labelled_episode(self.runner, method, seed, beta, expert_margin)
 
@@ -96,7 +96,7 @@ def _labelled_episode(runner, method: str, seed: int, beta: float, margin: float
     """One Digit episode of the student (`runner`'s method) labelled by the expert."""
     from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
-    from emonav_drake.learning.calibration import model_aware_expert
+    from emonav_drake.planners.model_aware import model_aware_expert
 
     student, cfg, grid_kind = runner.planner(method)
     expert = model_aware_expert(cfg, margin)
@@ -133,7 +133,7 @@ class DigitRoundsConfig:
     def validate(self) -> DigitRoundsConfig:
         """Raise `ConfigError` naming the flag (or field) of a value out of range."""
         from emonav_drake.core.scenario import MAX_SEED
-        from emonav_drake.evaluation.benchmark import MAX_TRIALS
+        from emonav_drake.diagrams.trials import MAX_TRIALS
 
         for name in ("rounds", "episodes", "grad_steps", "batch_size"):
             value = getattr(self, name)
@@ -172,14 +172,9 @@ def collect_round(
     env_config=None,
 ) -> list[dict]:
     """The labelled Digit episodes of round `rnd`, sorted by seed (serial = parallel)."""
-    from emonav_drake.evaluation.benchmark import (
-        BenchmarkSpec,
-        MethodSpec,
-        TrialRunner,
-        run_on_ray,
-        sha256_file,
-    )
+    from emonav_drake.diagrams.trials import BenchmarkSpec, MethodSpec, TrialRunner, run_trials
     from emonav_drake.params import EmoNavConfig, dump_config
+    from emonav_drake.provenance import sha256_file
 
     spec = BenchmarkSpec(
         [MethodSpec("student", "policy", str(policy), sha256_file(policy))],
@@ -195,7 +190,7 @@ def collect_round(
         runner = TrialRunner(spec)
         results = [_labelled_episode(runner, m, s, beta, cfg.expert_margin) for m, s in tasks]
     else:
-        run_on_ray(spec, tasks, results.append, workers, ray_address, worker_cls=worker_cls)
+        run_trials(spec, tasks, results.append, workers, ray_address, worker_cls=worker_cls)
     return sorted(results, key=lambda r: r["seed"])
 
 
@@ -238,7 +233,6 @@ def run_digit_rounds(
         Student,
         read_dagger_state,
     )
-    from emonav_drake.learning.policy import save_policy
     from emonav_drake.learning.run_state import (
         check_state,
         config_changes,
@@ -246,6 +240,7 @@ def run_digit_rounds(
         write_run_state,
     )
     from emonav_drake.params import EmoNavConfig
+    from emonav_drake.planners.policy import save_policy
 
     cfg.validate()
     out, source = Path(out), Path(source)
@@ -346,7 +341,7 @@ def run_digit_rounds(
 
 def _policy_meta(path: Path) -> dict:
     """The metadata of the policy the rounds start from (network, observation, commands)."""
-    from emonav_drake.learning.policy import load_policy
+    from emonav_drake.planners.policy import load_policy
 
     _, meta = load_policy(path)
     return {k: v for k, v in meta.items() if k not in ("state_dict", "format", "provenance")}

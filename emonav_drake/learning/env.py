@@ -25,16 +25,11 @@ import numpy as np
 from gymnasium import spaces
 
 from emonav_drake.core.navigation import NavigationWorld, PlannerInput
+from emonav_drake.core.observations import map_key
 from emonav_drake.core.scenario import Scenario, sample_scenario
 from emonav_drake.params import EmoNavConfig, load_config
 
 _BIT_GENERATORS = ("PCG64", "PCG64DXSM", "MT19937", "Philox", "SFC64")
-
-
-def map_key(grid_kind: str) -> str:
-    """The map observation's key: "lgm" for grid maps (LGM or OGM), "scan" for scans,
-    "image" for the DRL-VO* image."""
-    return {"scan": "scan", "drlvo": "image"}.get(grid_kind, "lgm")
 
 
 def navigation_spaces(config: EmoNavConfig, grid_kind: str) -> tuple[spaces.Dict, spaces.Box]:

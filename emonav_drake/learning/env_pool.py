@@ -14,18 +14,41 @@ from __future__ import annotations
 import contextlib
 import dataclasses as dc
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from emonav_drake.learning.config import SacConfig
+from emonav_drake.learning.env import EmoNavLIPEnv
+from emonav_drake.parallel import Worker, init_ray, ray_get, start_actors
+from emonav_drake.params import EmoNavConfig
+
+if TYPE_CHECKING:
+    from emonav_drake.learning.digit_env import EmoNavDigitEnv
 
 StepResult = tuple[dict, float, bool, bool, dict]
 
 
-def _make(cfg_plain: dict, goal_radius: float | None):
-    from emonav_drake.learning.sac_trainer import make_env
+def make_env(
+    cfg: SacConfig, env_cfg: EmoNavConfig | None = None, goal_radius: float | None = None
+) -> EmoNavLIPEnv | EmoNavDigitEnv:
+    """The training environment of `cfg.plant` (`EmoNavLIP-v0` or `EmoNavDigit-v0`) for
+    the configured observation variant."""
+    env_cfg = env_cfg or EmoNavConfig()
+    env_cfg.lidar.num_frames = cfg.num_frames
+    env_cfg.lidar.grid_size = cfg.grid_size
+    if cfg.plant == "digit":
+        from emonav_drake.learning.digit_env import EmoNavDigitEnv as env_class
+    else:
+        env_class = EmoNavLIPEnv
+    return env_class(
+        env_cfg,
+        grid_kind=cfg.grid_kind,
+        goal_radius=cfg.goal_radius if goal_radius is None else goal_radius,
+    )
 
+
+def _make(cfg_plain: dict, goal_radius: float | None):
     return make_env(SacConfig(**cfg_plain), goal_radius=goal_radius)
 
 
@@ -59,22 +82,12 @@ class LocalEnvs:
         """Nothing to release."""
 
 
-class _EnvActor:
+class _EnvActor(Worker):
     """One training environment in a Ray actor."""
 
     def __init__(self, cfg_plain: dict, goal_radius: float | None) -> None:
-        import logging
-
-        import torch
-
-        torch.set_num_threads(1)
-        logging.getLogger("drake").setLevel(logging.WARNING)
+        super().__init__()
         self.env = _make(cfg_plain, goal_radius)
-
-    def identity(self) -> str:
-        from emonav_drake.evaluation.benchmark import code_hash
-
-        return code_hash()
 
     def reset(self, seed: int) -> dict:
         return self.env.reset(seed=seed)[0]
@@ -106,33 +119,16 @@ class RayEnvs:
         goal_radius: float | None = None,
         address: str | None = None,
     ) -> None:
-        from emonav_drake.evaluation.benchmark import code_hash
-        from emonav_drake.params import ConfigError
-        from emonav_drake.ray_cluster import init_ray
-
         self.ray = init_ray(n, address)
         plain = dc.asdict(cfg)
-        actor_cls = self.ray.remote(num_cpus=1)(_EnvActor)
-        self.actors = [actor_cls.remote(plain, goal_radius) for _ in range(n)]
-        mine = code_hash()
-        for ident in self.ray.get([a.identity.remote() for a in self.actors]):
-            if ident != mine:
-                self.close()
-                raise ConfigError(
-                    f"a Ray worker runs other emonav_drake code than this driver (code hash "
-                    f"{ident[:12]} vs {mine[:12]}); install the same version"
-                )
+        self.actors = start_actors(self.ray, _EnvActor, n, (plain, goal_radius))
         self.spec = _make(plain, goal_radius)  # spaces and limits (never stepped)
 
     def __len__(self) -> int:
         return len(self.actors)
 
     def _get(self, refs: list[Any]) -> list[Any]:
-        try:
-            return self.ray.get(refs)
-        except self.ray.exceptions.RayTaskError as e:
-            cause = getattr(e, "cause", None)
-            raise (cause if isinstance(cause, Exception) else e) from None
+        return ray_get(self.ray, refs)
 
     def reset(self, i: int, seed: int) -> dict:
         return _writable(self._get([self.actors[i].reset.remote(seed)])[0])

@@ -33,7 +33,6 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import pickle  # only for its exception class: nothing is unpickled with it
 import random
 import re
 import signal
@@ -46,6 +45,7 @@ import numpy as np
 import torch
 
 from emonav_drake.atomic_io import atomic_write, process_alive
+from emonav_drake.torch_load import load_failure, refused_global
 
 SAC_FORMAT = "emonav-sac-checkpoint/2"
 DAGGER_FORMAT = "emonav-dagger-state/2"
@@ -56,7 +56,6 @@ _TMP = re.compile(r"^(?P<name>.+)\.emonav-(?P<pid>\d+)\.tmp$")
 _LEGACY_TMP = re.compile(
     r"^(checkpoint\.pt|dagger_state\.pt|policy(_round\d+)?\.pt)[a-z0-9_]{8}\.tmp$"
 )
-_UNSAFE_GLOBAL = re.compile(r"\bGLOBAL ([\w.]+)")  # in weights_only errors
 
 
 class RunStateError(ValueError):
@@ -163,21 +162,6 @@ def clean_stale_temp_files(directory: str | Path) -> list[Path]:
                 p.unlink()
                 removed.append(p)
     return removed
-
-
-def refused_global(e: BaseException) -> str | None:
-    """The Python global (e.g. "posix.system") whose loading made
-    `torch.load(weights_only=True)` fail, or None if it failed for another reason."""
-    if not isinstance(e, pickle.UnpicklingError):
-        return None
-    m = _UNSAFE_GLOBAL.search(str(e))
-    return m[1] if m else None
-
-
-def load_failure(e: BaseException) -> str:
-    """Why a `torch.load` failed, in one short line (its message's first line)."""
-    text = str(e).strip()
-    return text.splitlines()[0][:200] if text else type(e).__name__
 
 
 def write_run_state(path: str | Path, fmt: str, state: Any, tensors: dict[str, Any]) -> None:

@@ -23,7 +23,7 @@ import torch
 from torch.nn import functional as F
 
 from emonav_drake.learning.config import SacConfig
-from emonav_drake.learning.networks import (
+from emonav_drake.planners.networks import (
     Actor,
     Critic,
     LgmEncoder,

@@ -12,7 +12,7 @@ The run directory (`out`):
   python `random`, torch CPU and CUDA) and the counters. Format `emonav-sac-checkpoint/2`
   (`learning/run_state.py`): plain data as JSON plus arrays and tensors, read with
   `torch.load(weights_only=True)`, so loading it never runs code. Written atomically.
-* `policy.pt` — the current actor as a policy checkpoint (`learning/policy.py`).
+* `policy.pt` — the current actor as a policy checkpoint (`planners/policy.py`).
 * `learning_curve.csv`, `tensorboard/` — the evaluations.
 
 `--resume DIR` continues exactly where the run stopped: the final weights are
@@ -34,13 +34,11 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from emonav_drake.core.metrics import summarize
+from emonav_drake.core.metrics import record_from_json, summarize
 from emonav_drake.errors import RunInterrupted
-from emonav_drake.evaluation.tables import record_from_json
 from emonav_drake.learning.config import SacConfig
 from emonav_drake.learning.env import EmoNavLIPEnv
-from emonav_drake.learning.env_pool import EnvPool, make_envs
-from emonav_drake.learning.policy import encoder_spec, save_policy, vector_state
+from emonav_drake.learning.env_pool import EnvPool, make_env, make_envs
 from emonav_drake.learning.replay import FrameReplayBuffer
 from emonav_drake.learning.run_state import (
     SAC_FORMAT,
@@ -57,6 +55,7 @@ from emonav_drake.learning.run_state import (
 )
 from emonav_drake.learning.sac import SacAgent
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.policy import encoder_spec, save_policy, vector_state
 
 if TYPE_CHECKING:
     from emonav_drake.learning.digit_env import EmoNavDigitEnv
@@ -76,25 +75,6 @@ _CURVE_HEADER = [
     "return_mean",
     "alpha",
 ]
-
-
-def make_env(
-    cfg: SacConfig, env_cfg: EmoNavConfig | None = None, goal_radius: float | None = None
-) -> EmoNavLIPEnv | EmoNavDigitEnv:
-    """The training environment of `cfg.plant` (`EmoNavLIP-v0` or `EmoNavDigit-v0`) for
-    the configured observation variant."""
-    env_cfg = env_cfg or EmoNavConfig()
-    env_cfg.lidar.num_frames = cfg.num_frames
-    env_cfg.lidar.grid_size = cfg.grid_size
-    if cfg.plant == "digit":
-        from emonav_drake.learning.digit_env import EmoNavDigitEnv as env_class
-    else:
-        env_class = EmoNavLIPEnv
-    return env_class(
-        env_cfg,
-        grid_kind=cfg.grid_kind,
-        goal_radius=cfg.goal_radius if goal_radius is None else goal_radius,
-    )
 
 
 class _Episode:

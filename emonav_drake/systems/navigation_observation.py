@@ -38,7 +38,7 @@ class NavigationObservation(LeafSystem):
 
     def __init__(self, goal_xy: np.ndarray, config: EmoNavConfig, grid_kind: str) -> None:
         super().__init__()
-        from emonav_drake.learning.env import map_key
+        from emonav_drake.core.observations import map_key
 
         self._goal = np.asarray(goal_xy, float)
         self._key = map_key(grid_kind)

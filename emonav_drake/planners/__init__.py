@@ -8,12 +8,12 @@ on the object, `reset()` between episodes).
 
 from __future__ import annotations
 
-from emonav_drake.learning.variants import VARIANTS, is_learned, shipped_checkpoint
 from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.planners.variants import VARIANTS, is_learned, shipped_checkpoint
 
 # "policy" runs any trained checkpoint, by default the shipped policy (the EmoBipedNav
 # variant, a DAgger student); "sac" a SAC-trained checkpoint (`emonav train --algo sac`);
-# the other learned methods of the paper by their variant name (`learning/variants.py`).
+# the other learned methods of the paper by their variant name (`planners/variants.py`).
 # Model-based planners (no checkpoint). "dwa_digit" is the Digit/Digit route's expert: DWA
 # planning with Digit's step-response model and the route's collision margin.
 MODEL_PLANNERS = ("dwa", "mpc", "dwa_digit")
@@ -36,15 +36,11 @@ def make_planner(name: str, config: EmoNavConfig, checkpoint=None, device: str =
 
         return MpcPlanner(config)
     if name == "dwa_digit":
-        from emonav_drake.learning.calibration import model_aware_expert
-        from emonav_drake.learning.config import DaggerConfig
-        from emonav_drake.learning.variants import variant
-        from emonav_drake.params import load_typed_yaml
+        from emonav_drake.planners.model_aware import dwa_digit
 
-        route = load_typed_yaml(DaggerConfig, path=variant("emobipednav_digit").config)
-        return model_aware_expert(config, route.expert_margin, route.response)
+        return dwa_digit(config)
     if is_learned(name):
-        from emonav_drake.learning.policy import PolicyPlanner, describe_policy, policy_kind
+        from emonav_drake.planners.policy import PolicyPlanner, describe_policy, policy_kind
 
         if name == "sac" and checkpoint is None:
             raise ConfigError(

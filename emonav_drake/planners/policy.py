@@ -31,14 +31,14 @@ import torch
 
 from emonav_drake.atomic_io import atomic_write
 from emonav_drake.core.navigation import PlannerInput
-from emonav_drake.learning.networks import (
+from emonav_drake.planners.networks import (
     Actor,
     CategoricalPolicy,
     LgmEncoder,
     ScanEncoder,
     ScanLstmEncoder,
 )
-from emonav_drake.learning.run_state import load_failure, refused_global
+from emonav_drake.torch_load import load_failure, refused_global
 
 FORMAT = "emonav-policy/1"
 DEFAULT_POLICY = Path(__file__).resolve().parent.parent / "data" / "policy_lgm.pt"

@@ -15,8 +15,8 @@ from pathlib import Path
 
 from emonav_drake.atomic_io import check_output_dir
 from emonav_drake.cli import SeedArg
-from emonav_drake.learning.variants import VARIANTS, variant
 from emonav_drake.params import ConfigError
+from emonav_drake.planners.variants import VARIANTS, variant
 
 
 def add_train_parser(sub: argparse._SubParsersAction) -> None:
@@ -151,7 +151,7 @@ def resume_command(args: argparse.Namespace, out: Path) -> str:
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    from emonav_drake.learning.policy import resolve_device
+    from emonav_drake.planners.policy import resolve_device
 
     _apply_variant(args)
     cfg = _training_config(args)
@@ -197,7 +197,7 @@ def add_export_parser(sub: argparse._SubParsersAction) -> None:
 
 def cmd_export(args: argparse.Namespace) -> int:
     from emonav_drake.atomic_io import check_distinct, check_output_file
-    from emonav_drake.learning.policy import DEFAULT_POLICY, export_torchscript
+    from emonav_drake.planners.policy import DEFAULT_POLICY, export_torchscript
 
     check_output_file(args.out, "--out")
     check_distinct({"CHECKPOINT": args.checkpoint, "--out": args.out})

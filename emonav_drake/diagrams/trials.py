@@ -1,0 +1,291 @@
+"""Trials: one method (planner) on the scenario of one seed, on either plant.
+
+The unit of work of every evaluation on many seeds (`emonav benchmark`, trace collection
+for calibration, the Digit DAgger rounds):
+
+* `MethodSpec` / `BenchmarkSpec`: what a worker needs to run any trial of a run — the
+  methods (a planner kind and, for learned policies, the checkpoint and its hash), the
+  plant ("lip" or "digit"), the configuration as YAML, the emotion estimate.
+* `parse_methods`: `--planners` and `--checkpoint NAME=PATH` → validated methods.
+* `TrialRunner`: runs trials in one process, each method's planner built once and
+  reused (a planner's memory lives in the diagram's Context, so reuse changes no command).
+* `TrialWorker` / `run_trials`: the same on Ray actors (`parallel.run_tasks`), or serially
+  in this process with the same arithmetic (torch on one thread in both).
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses as dc
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from emonav_drake.atomic_io import json_safe
+from emonav_drake.parallel import Worker, run_tasks
+from emonav_drake.params import ConfigError, EmoNavConfig, load_config
+from emonav_drake.planners import MODEL_PLANNERS
+from emonav_drake.planners.variants import VARIANTS, is_learned, shipped_checkpoint
+from emonav_drake.provenance import sha256_file
+
+# --trials at most (per method): every scenario is sampled (~0.2 ms per seed, ~20 s at the
+# maximum) and every (method, seed) task listed before the first trial.
+MAX_TRIALS = 100_000
+
+
+@dc.dataclass
+class MethodSpec:
+    """One compared method: a planner kind and, for learned policies, the checkpoint."""
+
+    name: str
+    planner: str  # dwa | mpc | policy (a learned policy; "sac" in runs before the rename)
+    checkpoint: str | None = None  # path of a learned policy's checkpoint
+    checkpoint_sha256: str | None = None
+    observation: str = "state"  # what the method sees: "state" (DWA, MPC) or the grid kind
+
+
+@dc.dataclass
+class BenchmarkSpec:
+    """What a worker needs to run any trial of the benchmark."""
+
+    methods: list[MethodSpec]
+    plant: str
+    config_yaml: str
+    emotion_estimate_yaml: str | None = None
+
+    def method(self, name: str) -> MethodSpec:
+        for m in self.methods:
+            if m.name == name:
+                return m
+        raise KeyError(name)
+
+
+def parse_methods(
+    planners: str | Sequence[str], checkpoints: Sequence[str] = ()
+) -> list[MethodSpec]:
+    """`--planners policy,mpc,dwa` and `--checkpoint NAME=PATH …` → the methods (validated).
+
+    A method is `dwa`, `mpc`, `policy` (the shipped policy unless a checkpoint is given),
+    `sac` (a SAC-trained checkpoint, given with `--checkpoint sac=PATH`), a
+    variant of `planners/variants.py` (its shipped policy unless a checkpoint is given) or
+    any other name given a checkpoint with `--checkpoint NAME=PATH` (another learned policy).
+    """
+    names = planners.split(",") if isinstance(planners, str) else list(planners)
+    names = [n.strip() for n in names]
+    if not names or any(not n for n in names):
+        raise ConfigError(f"--planners {','.join(names)!r}: give a comma-separated list of methods")
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise ConfigError(f"--planners: {dup[0]} is listed twice")
+    ckpt: dict[str, Path] = {}
+    for item in checkpoints:
+        name, sep, path = item.partition("=")
+        name = name.strip()
+        if not sep or not name or not path:
+            raise ConfigError(
+                f"--checkpoint {item!r}: expected NAME=PATH (e.g. policy=runs/x/policy.pt)"
+            )
+        if name in ckpt:
+            raise ConfigError(f"--checkpoint {name}: given twice")
+        if name not in names:
+            raise ConfigError(
+                f"--checkpoint {name}=…: {name} is not among --planners ({','.join(names)})"
+            )
+        if name in MODEL_PLANNERS:
+            raise ConfigError(f"--checkpoint {name}=…: only learned policies take a checkpoint")
+        p = Path(path)
+        if not p.is_file():
+            raise ConfigError(f"--checkpoint {name}={path}: no such file")
+        ckpt[name] = p
+    methods = []
+    for n in names:
+        if n in MODEL_PLANNERS:
+            methods.append(MethodSpec(n, n))
+        elif is_learned(n) or n in ckpt:
+            path = ckpt.get(n)
+            if path is None and n == "policy":
+                from emonav_drake.planners.policy import DEFAULT_POLICY
+
+                path = DEFAULT_POLICY
+            elif path is None and n == "sac":
+                raise ConfigError(
+                    "--planners sac: a SAC-trained checkpoint is needed (--checkpoint "
+                    "sac=PATH); the shipped policy is a DAgger student: use policy"
+                )
+            elif path is None:
+                path = shipped_checkpoint(n)
+            if n == "sac":
+                _check_sac_actor(path)
+            methods.append(MethodSpec(n, "policy", str(path), sha256_file(path)))
+        else:
+            raise ConfigError(
+                f"--planners: unknown method {n!r}; use {', '.join(MODEL_PLANNERS)}, policy, "
+                f"sac, a variant "
+                f"({', '.join(VARIANTS)}), or name a learned policy with --checkpoint {n}=PATH"
+            )
+    return methods
+
+
+def _check_sac_actor(path: str | Path) -> None:
+    """The method called `sac` must be a SAC actor, not a DAgger student under that label."""
+    from emonav_drake.planners.policy import describe_policy, load_policy, policy_kind
+
+    _, meta = load_policy(Path(path), "cpu")
+    if policy_kind(meta) != "sac":
+        raise ConfigError(
+            f"--checkpoint sac={path}: not a SAC actor but a {describe_policy(meta)}; "
+            "give it another method name (e.g. policy)"
+        )
+
+
+class TrialRunner:
+    """Runs trials in one process; each method's planner is built once and reused.
+
+    Args:
+        spec: the benchmark (methods, plant, configuration YAML, emotion estimate).
+        blobs: checkpoint bytes by method name, used where the checkpoint's path does not
+            exist here (a worker on another machine) or holds another file.
+    """
+
+    def __init__(self, spec: BenchmarkSpec, blobs: dict[str, bytes] | None = None) -> None:
+        self.spec = spec
+        self.config = load_config(data=spec.config_yaml)
+        self.estimate = None
+        if spec.emotion_estimate_yaml is not None:
+            from emonav_drake.params import load_typed_yaml
+            from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+
+            self.estimate = load_typed_yaml(
+                EmotionEstimateParams, data=spec.emotion_estimate_yaml
+            ).validate()
+        self._blobs = blobs or {}
+        self._tmp: tempfile.TemporaryDirectory | None = None
+        self._planners: dict[str, tuple[Any, EmoNavConfig, str]] = {}
+
+    def _checkpoint_path(self, m: MethodSpec) -> str | None:
+        if m.checkpoint is None:
+            return None
+        p = Path(m.checkpoint)
+        if p.is_file() and (m.checkpoint_sha256 is None or sha256_file(p) == m.checkpoint_sha256):
+            return str(p)
+        if m.name not in self._blobs:
+            raise ConfigError(f"checkpoint of {m.name}: {p} is missing or differs on this worker")
+        if self._tmp is None:
+            self._tmp = tempfile.TemporaryDirectory(prefix="emonav-bench-")
+        q = Path(self._tmp.name) / f"{m.name}-{p.name}"
+        q.write_bytes(self._blobs[m.name])
+        return str(q)
+
+    def planner(self, name: str) -> tuple[Any, EmoNavConfig, str]:
+        """(planner, its configuration, grid kind) of a method, built on first use."""
+        if name not in self._planners:
+            from emonav_drake.planners import configure_for, make_planner
+
+            m = self.spec.method(name)
+            cfg = copy.deepcopy(self.config)  # a policy adapts the grid-map settings
+            # a learned method is whatever its checkpoint holds ("sac" in older runs)
+            kind = "policy" if m.checkpoint is not None else m.planner
+            planner = make_planner(kind, cfg, checkpoint=self._checkpoint_path(m))
+            self._planners[name] = (planner, cfg, configure_for(planner, cfg))
+        return self._planners[name]
+
+    def observation(self, name: str) -> str:
+        """What the method observes: "state" (privileged crowd state) or its grid kind."""
+        planner, _, kind = self.planner(name)
+        return kind.upper() if hasattr(planner, "expected_shape") else "state"
+
+    def replay(self, method: str, seed: int):
+        """Re-simulate one LIP trial: (scenario, `EpisodeRecord`, `StepLog`) — for plots."""
+        from emonav_drake.core.scenario import sample_scenario
+        from emonav_drake.diagrams.navigation import run_episode
+
+        if self.spec.plant != "lip":
+            raise ConfigError("replay draws LIP trials only (the Digit run keeps no step log)")
+        planner, cfg, grid_kind = self.planner(method)
+        scenario = sample_scenario(seed, self.config)
+        record, step_log = run_episode(
+            scenario,
+            cfg,
+            planner,
+            goal_radius=cfg.episode.eval_goal_radius,
+            grid_kind=grid_kind,
+            emotion_estimate=self.estimate,
+        )
+        return scenario, record, step_log
+
+    def run(self, method: str, seed: int) -> dict:
+        """One trial: method `method` on the scenario of `seed`; the `trials.jsonl` line."""
+        from emonav_drake.core.scenario import sample_scenario
+        from emonav_drake.diagrams.evaluation_episode import run_evaluation_episode
+
+        planner, cfg, grid_kind = self.planner(method)
+        scenario = sample_scenario(seed, self.config)
+        t0 = time.perf_counter()
+        record = run_evaluation_episode(
+            self.spec.plant, scenario, cfg, planner, grid_kind, self.estimate
+        )
+        wall = time.perf_counter() - t0
+        rec = record.to_json()
+        rec["seed"] = seed
+        return {
+            "method": method,
+            "seed": seed,
+            "plant": self.spec.plant,
+            "record": json_safe(rec),
+            "wall_seconds": round(wall, 4),
+        }
+
+
+class TrialWorker(Worker):
+    """The Ray actor: one `TrialRunner` per worker process (planners built once). Other
+    per-episode jobs on Digit subclass it and override `run` (`learning/calibration.py`,
+    `learning/digit_dagger.py`)."""
+
+    def __init__(self, spec: BenchmarkSpec, blobs: dict[str, bytes]) -> None:
+        super().__init__()
+        self.runner = TrialRunner(spec, blobs)
+
+    def run(self, method: str, seed: int) -> dict:
+        return self.runner.run(method, seed)
+
+
+def run_serial(
+    spec: BenchmarkSpec,
+    tasks: Sequence[tuple[str, int]],
+    on_result: Callable[[dict], None],
+) -> None:
+    """Every (method, seed) task in this process, in order, with a Ray worker's arithmetic."""
+    import torch
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)  # as in a Ray worker: identical arithmetic, no oversubscription
+    try:
+        runner = TrialRunner(spec)
+        for method, seed in tasks:
+            on_result(runner.run(method, seed))
+    finally:
+        torch.set_num_threads(threads)
+
+
+def run_trials(
+    spec: BenchmarkSpec,
+    tasks: Sequence[tuple[str, int]],
+    on_result: Callable[[dict], None],
+    workers: int | None,
+    address: str | None,
+    worker_cls: type | None = None,
+) -> None:
+    """Run `worker.run(method, seed)` for every task on Ray actors (`parallel.run_tasks`),
+    `on_result` in the order they finish. `worker_cls(spec, blobs)` (default: the trial
+    worker) is a `TrialWorker`; the checkpoints of learned methods reach workers on other
+    machines as bytes (local workers read them from their paths, hashes checked)."""
+
+    def args(remote: bool) -> tuple[BenchmarkSpec, dict[str, bytes]]:
+        if not remote:
+            return spec, {}
+        blobs = {m.name: Path(m.checkpoint).read_bytes() for m in spec.methods if m.checkpoint}
+        return spec, blobs
+
+    run_tasks(worker_cls or TrialWorker, tasks, on_result, workers, address, args)

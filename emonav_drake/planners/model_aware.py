@@ -1,0 +1,67 @@
+"""Planners that plan with a robot's measured step response instead of the LIP's.
+
+A step-response model (`core.step_response`, fitted on traced Digit episodes by `emonav
+calibrate fit`) predicts each walking step's displacement, turn and speed from the
+commands; `DwaPlanner(config, response=model)` rolls its candidates out with it. The
+shipped model of the full-order Digit is `emonav_drake/data/digit_response.json`.
+
+`dwa_digit` is the expert of the Digit/Digit learning route (`configs/variants/
+emobipednav_digit.yaml`): DWA with that route's collision margin, planning with the model
+the route names. Its two settings are read from the route's file, so the planner and the
+route cannot drift apart.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+from pathlib import Path
+
+from emonav_drake.core.step_response import StepResponseModel
+from emonav_drake.params import ConfigError, EmoNavConfig
+
+DIGIT_RESPONSE = Path(__file__).resolve().parent.parent / "data" / "digit_response.json"
+
+
+def read_response(path: str | Path) -> StepResponseModel:
+    """A step-response model JSON (`ConfigError` naming the file and what is wrong)."""
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"step-response model {path}: no such file")
+    try:
+        data = json.loads(path.read_text())
+        return StepResponseModel.from_plain(data.get("model", data))
+    except (ValueError, KeyError, TypeError, AttributeError) as e:
+        raise ConfigError(f"step-response model {path}: {e}") from None
+
+
+def load_response(spec: str) -> StepResponseModel | None:
+    """ "" → None (the LIP); "digit" → the shipped Digit model; else a model file."""
+    if not spec:
+        return None
+    return read_response(DIGIT_RESPONSE if spec == "digit" else spec)
+
+
+def model_aware_expert(config: EmoNavConfig, margin: float, response: str = "digit"):
+    """The expert of the routes that learn a robot's dynamics: DWA with collision margin
+    `margin` [m] planning with the step-response model `response` (`load_response`)."""
+    from emonav_drake.core.dwa import DwaPlanner
+
+    expert_cfg = copy.deepcopy(config)
+    expert_cfg.dwa.safety_margin = margin
+    return DwaPlanner(expert_cfg, response=load_response(response))
+
+
+def dwa_digit(config: EmoNavConfig):
+    """The Digit/Digit route's expert: `model_aware_expert` with the `expert_margin` [m]
+    and `response` of `configs/variants/emobipednav_digit.yaml`."""
+    from pydrake.common.yaml import yaml_load_data
+
+    from emonav_drake.planners.variants import variant
+
+    path = variant("emobipednav_digit").config
+    route = yaml_load_data(Path(path).read_text()) or {}
+    missing = [k for k in ("expert_margin", "response") if k not in route]
+    if missing:
+        raise ConfigError(f"{path}: dwa_digit needs {' and '.join(missing)} in the route file")
+    return model_aware_expert(config, float(route["expert_margin"]), str(route["response"]))

@@ -1,0 +1,75 @@
+"""What code produced a result: the package's version, git commit and code hash.
+
+Every run directory and checkpoint that records provenance uses these: a benchmark
+refuses to continue a run with other code (`code_hash`), Ray pools refuse a worker that
+runs other code than its driver, and checkpoints carry the file hashes of what they were
+trained from.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import subprocess
+from pathlib import Path
+from typing import Any
+
+
+def sha256_bytes(data: bytes) -> str:
+    """Hex sha256 of `data`."""
+    return hashlib.sha256(data).hexdigest()
+
+
+def sha256_file(path: str | Path) -> str:
+    """Hex sha256 of the file at `path`, read in 1 MiB chunks."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+_PACKAGE_DIR = Path(__file__).resolve().parent  # the emonav_drake package
+
+
+def code_hash() -> str:
+    """sha256 over the package's Python sources (relative path and bytes, sorted)."""
+    h = hashlib.sha256()
+    for p in sorted(_PACKAGE_DIR.rglob("*.py")):
+        if "__pycache__" in p.parts:
+            continue
+        h.update(str(p.relative_to(_PACKAGE_DIR)).encode() + b"\0")
+        h.update(p.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+def _git(*args: str) -> str | None:
+    root = _PACKAGE_DIR.parent
+    if not (root / ".git").exists():
+        return None
+    try:
+        out = subprocess.run(
+            ["git", "-C", str(root), *args], capture_output=True, text=True, timeout=10
+        )
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout.strip() if out.returncode == 0 else None
+
+
+def package_identity(with_commit: bool = True) -> dict:
+    """Version, git commit (if a checkout) and whether the package differs from it, code hash."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        ver = version("emonav_drake")
+    except PackageNotFoundError:
+        ver = "unknown"
+    out: dict[str, Any] = {"version": ver}
+    if with_commit:
+        out["commit"] = _git("rev-parse", "HEAD")
+        status = _git("status", "--porcelain", "--", "emonav_drake")
+        out["dirty"] = None if status is None else bool(status)
+    out["code_sha256"] = code_hash()
+    return out
+
+
+# --------------------------------------------------------------------------- settings
