@@ -174,8 +174,12 @@ def naming_full_disk(path: str | Path, what: str = "not written") -> Iterator[No
 
 
 @contextmanager
-def atomic_output(path: str | Path) -> Iterator[Path]:
+def atomic_output(path: str | Path, durable: bool = False) -> Iterator[Path]:
     """Yield a temporary path to write; on success it replaces `path`, on failure it goes.
+
+    `durable`: fsync the file before the rename and the folder after it, so the new
+    content survives a power loss (run states and checkpoints); the rename is atomic
+    either way.
 
     Example:
         with atomic_output("fig.png") as tmp:
@@ -187,15 +191,33 @@ def atomic_output(path: str | Path) -> Iterator[Path]:
         try:
             yield tmp
             os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; give the usual mode
+            if durable:
+                fd = os.open(tmp, os.O_RDONLY)
+                try:
+                    os.fsync(fd)
+                finally:
+                    os.close(fd)
             os.replace(tmp, path)
         except BaseException:
             tmp.unlink(missing_ok=True)
             raise
+    if durable:
+        _fsync_folder(path.parent)
 
 
-def write_text_atomic(path: str | Path, text: str) -> None:
-    """Write `text` to `path` atomically (never half-written)."""
-    with atomic_output(path) as tmp:
+def _fsync_folder(folder: Path) -> None:
+    """Make a rename in `folder` durable (not every OS or file system can)."""
+    with suppress(OSError):
+        fd = os.open(folder if str(folder) else ".", os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+def write_text_atomic(path: str | Path, text: str, durable: bool = False) -> None:
+    """Write `text` to `path` atomically (never half-written); `durable` as `atomic_output`."""
+    with atomic_output(path, durable) as tmp:
         tmp.write_text(text)
 
 
@@ -230,24 +252,7 @@ def write_json(path: str | Path, data: Any) -> None:
 
 
 def atomic_write(path: str | Path, write: Callable[[BinaryIO], None]) -> None:
-    """Durable atomic write for state files: `write(file)` into `NAME.emonav-<pid>.tmp`,
-    flush and fsync, rename over `path`, fsync the directory. A save killed half-way
-    leaves only that temp file (`learning.run_state.clean_stale_temp_files` removes it)."""
-    path = Path(path)
-    tmp = path.with_name(f"{path.name}.emonav-{os.getpid()}.tmp")
-    try:
-        with naming_full_disk(path, "not written (its previous content, if any, is kept)"):
-            with open(tmp, "wb") as f:
-                write(f)
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    with suppress(OSError):  # make the rename durable (not on every OS/FS)
-        fd = os.open(path.parent, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
+    """Durable atomic write for state files: `write(file)` into a temporary sibling
+    (`atomic_output(durable=True)`), renamed over `path` when complete."""
+    with atomic_output(path, durable=True) as tmp, open(tmp, "wb") as f:
+        write(f)

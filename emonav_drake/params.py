@@ -25,6 +25,12 @@ class ConfigError(ValueError):
     """A configuration or scenario value is invalid; the message names the field."""
 
 
+def pendulum_frequency(height: float, gravity: float) -> float:
+    """ω = √(g/H) [1/s] of a (angular-momentum) linear inverted pendulum of CoM height H [m]
+    under gravity g [m/s²]: the LIP of the paper's Eq. 1 and Digit's ALIP alike."""
+    return math.sqrt(gravity / height)
+
+
 @dc.dataclass
 class RobotParams:
     """The reduced-order (LIP) robot and its command bounds (paper Table I, Eq. 1–2)."""
@@ -40,15 +46,20 @@ class RobotParams:
 
     @property
     def omega(self) -> float:
-        """LIP natural frequency ω = √(g/H) [1/s]."""
-        return math.sqrt(self.gravity / self.com_height)
+        """LIP natural frequency ω = √(g/H) [1/s] of this robot's H."""
+        return pendulum_frequency(self.com_height, self.gravity)
+
+
+# K, the paper's number of LiDAR beams over 360° (`LidarParams.num_beams`): the default of
+# every function and network that takes a beam count.
+NUM_BEAMS = 1800
 
 
 @dc.dataclass
 class LidarParams:
     """The 2-D LiDAR and the grid maps built from it (docs/lidar_grid_maps.md)."""
 
-    num_beams: int = 1800  # K, over 360°
+    num_beams: int = NUM_BEAMS  # K, over 360°
     max_range: float = 6.0  # L [m]
     min_range: float = 0.27  # nearer hits are raised to this range [m]
     grid_size: int = 100  # M (rings × sectors for the LGM, cells per side for the OGM)

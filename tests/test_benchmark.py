@@ -78,7 +78,12 @@ def test_serial_run_writes_lines_settings_and_tables(reference):
     ]
     for t in trials:
         assert t["plant"] == "lip" and t["record"]["seed"] == t["seed"] and t["wall_seconds"] > 0
-        assert t["record"]["outcome"] in ("success", "collision", "timeout")
+        # the outcome agrees with the rest of the record
+        r, cfg = t["record"], load_config()
+        assert (r["outcome"] == "collision") == bool(r.get("collided_with")), r
+        assert r["steps"] <= cfg.episode.max_steps, r
+        assert r["outcome"] != "timeout" or r["steps"] == cfg.episode.max_steps, r
+        assert r["nav_time"] == pytest.approx(r["steps"] * cfg.robot.step_time), r
     md = (reference / "tables.md").read_text()
     # every success rate with its Wilson interval and trial count
     k = sum(t["record"]["outcome"] == "success" for t in trials if t["method"] == "dwa")

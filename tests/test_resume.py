@@ -137,12 +137,14 @@ def test_stale_temp_files_of_killed_saves_are_removed(tmp_path):
     run = tmp_path / "run"
     run.mkdir()
     stale = [
-        run / f"checkpoint.pt.emonav-{DEAD_PID}.tmp",  # our naming, process gone
-        run / f"policy.pt.emonav-{os.getpid()}.tmp",  # this process saves nothing yet
+        run / f"checkpoint.tmp-{DEAD_PID}-a1b2c3.pt",  # our naming, process gone
+        run / f"policy.tmp-{os.getpid()}-x9y8z7.pt",  # this process saves nothing yet
+        run / f"checkpoint.pt.emonav-{DEAD_PID}.tmp",  # the writer before, process gone
         run / "checkpoint.ptk3_9xq2a.tmp",  # the pickle-era writer's naming
     ]
     kept = [
-        run / f"checkpoint.pt.emonav-{os.getppid()}.tmp",  # a live process may be saving
+        run / f"checkpoint.tmp-{os.getppid()}-q1w2e3.pt",  # a live process may be saving
+        run / f"checkpoint.pt.emonav-{os.getppid()}.tmp",
         run / "notes.tmp",  # not ours
         run / "policy.pt.tmp",
     ]

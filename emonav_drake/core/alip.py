@@ -27,10 +27,7 @@ import math
 
 import numpy as np
 
-
-def alip_frequency(height: float, gravity: float) -> float:
-    """ℓ = √(g/H) [1/s]."""
-    return math.sqrt(gravity / height)
+from emonav_drake.params import pendulum_frequency
 
 
 def alip_predict(
@@ -42,15 +39,10 @@ def alip_predict(
     gravity: float,
 ) -> tuple[float | np.ndarray, float | np.ndarray]:
     """ALIP state `elapsed` seconds later: (x_c [m], ℒ [kg·m²/s]), per axis."""
-    ell = math.sqrt(gravity / height)
+    ell = pendulum_frequency(height, gravity)
     c, s = math.cosh(ell * elapsed), math.sinh(ell * elapsed)
     mhl = mass * height * ell
     return c * xc + s * momentum / mhl, mhl * s * xc + c * momentum
-
-
-def alip_acceleration(xc: float | np.ndarray, height: float, gravity: float):
-    """CoM acceleration of the pendulum, ẍ_c = (g/H) x_c [m/s²]."""
-    return gravity / height * xc
 
 
 def lateral_momentum_target(
@@ -62,7 +54,7 @@ def lateral_momentum_target(
     gravity: float,
 ) -> float:
     """ℒ_l at the end of the next step for a periodic gait of step width W [kg·m²/s]."""
-    ell = math.sqrt(gravity / height)
+    ell = pendulum_frequency(height, gravity)
     mag = 0.5 * mass * height * width * ell * math.tanh(0.5 * ell * step_time)
     return mag if next_stance_right else -mag
 
@@ -87,7 +79,7 @@ def foot_placement(
         mass, height, step_time, gravity: m [kg], H [m], T [s], g [m/s²].
     """
     x_end, m_end = alip_predict(xc, momentum, max(remaining, 0.0), mass, height, gravity)
-    ell = math.sqrt(gravity / height)
+    ell = pendulum_frequency(height, gravity)
     xc_des = (momentum_target - math.cosh(ell * step_time) * m_end) / (
         mass * height * ell * math.sinh(ell * step_time)
     )

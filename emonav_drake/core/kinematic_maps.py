@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 from emonav_drake.core.grid_maps import lgm_frame
+from emonav_drake.params import NUM_BEAMS
 
 
 def pedestrian_velocity_map(
@@ -66,7 +67,7 @@ def drlvo_image(
     ped_positions: np.ndarray,
     ped_velocities: np.ndarray,
     ped_radius: float,
-    num_beams: int = 1800,
+    num_beams: int = NUM_BEAMS,
     grid_size: int = 100,
     max_range: float = 6.0,
     min_range: float = 0.27,

@@ -52,7 +52,9 @@ from functools import lru_cache
 
 import numpy as np
 
-DEFAULT_NUM_BEAMS = 1800
+from emonav_drake.params import NUM_BEAMS
+
+DEFAULT_NUM_BEAMS = NUM_BEAMS
 DEFAULT_MAX_RANGE = 6.0  # L [m]
 DEFAULT_MIN_RANGE = 0.27  # [m]
 

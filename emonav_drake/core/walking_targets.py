@@ -124,10 +124,6 @@ class WalkingTargets:
         """0 left, 1 right (the leg that is not the stance leg; undefined standing)."""
         return 1 - self.phase
 
-    def phase_time(self, t: float) -> float:
-        """τ = t − t_s [s]."""
-        return t - self.start_time
-
     def torso_yaw(self, t: float) -> Vec3:
         """Torso heading reference at time t: (yaw, rate, acceleration)."""
         if self.standing:

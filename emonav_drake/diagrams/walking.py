@@ -33,7 +33,7 @@ from emonav_drake.core.tracking import column as tracking_column
 from emonav_drake.core.tracking import step_tracking
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
 from emonav_drake.diagrams.meshcat_viewing import make_meshcat
-from emonav_drake.params import EmoNavConfig, load_config
+from emonav_drake.params import EmoNavConfig, load_config, pendulum_frequency
 from emonav_drake.systems.alip_footstep_planner import (
     LOG_COM,
     LOG_COMMAND,
@@ -155,7 +155,7 @@ class WalkResult:
     def tracking(self, config: EmoNavConfig) -> np.ndarray:
         """The per-step tracking table of this walk (`walk_tracking`, `core.tracking.COLUMNS`)
         with this robot's ω = √(g/H) [1/s] and T [s] of `config.robot`."""
-        omega = math.sqrt(config.robot.gravity / self.com_height)
+        omega = pendulum_frequency(self.com_height, config.robot.gravity)
         return walk_tracking(self.steps, omega, config.robot.step_time)
 
     def to_json(self) -> dict:
@@ -309,7 +309,7 @@ def run_walk(
         meshcat.PublishRecording()
         Path(record_html).write_text(meshcat.StaticHtml())
     steps = step_records(wd, ctx)
-    omega = math.sqrt(cfg.robot.gravity / station.com_height)
+    omega = pendulum_frequency(station.com_height, cfg.robot.gravity)
     table = tracking_table(steps, omega, cfg.robot.step_time)
     planner_ctx = station.planner.GetMyContextFromRoot(ctx)
     return WalkResult(

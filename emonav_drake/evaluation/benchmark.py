@@ -701,17 +701,3 @@ def _check_scenarios(config: EmoNavConfig, first_seed: int, trials: int, where: 
             sample_scenario(seed, config)
         except ScenarioSamplingError as e:
             raise ScenarioSamplingError(f"{where}: {e}") from None
-
-
-def table3_across_runs(paths: Sequence[str | Path]) -> str:
-    """Table III style over several run directories (one row per method and setting)."""
-    header, rows = None, []
-    for p in paths:
-        settings, trials = load_run(p)
-        summary = tables.summarize_methods(trials, settings["planners"])
-        obs = {m: settings["methods"][m]["observation"] for m in settings["planners"]}
-        header, r = tables.table3_rows(summary, settings["setting_label"], settings["plant"], obs)
-        rows += r
-    if header is None:
-        raise ValueError("no run directories given")
-    return tables.markdown_table(header, rows) + "\n"

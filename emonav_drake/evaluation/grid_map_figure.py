@@ -37,7 +37,7 @@ from emonav_drake.core.palette import (
     ROBOT_RGB,
     STATIC_RGB,
 )
-from emonav_drake.params import EMOTION_NAMES
+from emonav_drake.params import EMOTION_NAMES, NUM_BEAMS
 
 STATIC, PEDESTRIAN = 0, 1
 
@@ -57,7 +57,7 @@ def render_grid_map_figure(
     kinds: object,
     goal_xy: object | None = None,
     grid_size: int = 100,
-    num_beams: int = 1800,
+    num_beams: int = NUM_BEAMS,
     max_range: float = 6.0,
     min_range: float = 0.27,
     robot_radius: float = 0.3,

@@ -8,10 +8,8 @@ every field against its allowed range (`_DAGGER_RANGES`, `_SAC_RANGES`, in the s
 
 import dataclasses as dc
 
-from emonav_drake.params import ConfigError, validate_ranges
+from emonav_drake.params import NUM_BEAMS, ConfigError, EpisodeParams, validate_ranges
 
-# The LiDAR of the training environment (EmoNavConfig defaults): the grid size divides it.
-_NUM_BEAMS = 1800
 # The 4-conv encoder (3 x 3, strides 2-1-1-1) needs an input of at least this many cells.
 MIN_ENCODER_INPUT = 15
 
@@ -35,7 +33,8 @@ class DaggerConfig:
     eval_episodes: int = 60
     train_seed_offset: int = 1_000_000  # training scenarios: seeds offset + i
     eval_seed_offset: int = 500_000  # held-out seeds for the per-round evaluation
-    goal_radius: float = 0.2
+    # the DAgger route's episodes end within the evaluation radius (`episode.eval_goal_radius`)
+    goal_radius: float = EpisodeParams.eval_goal_radius
     # Observation variant, as in `SacConfig`: "lgm" (paper), "ogm", "scan" (LiDAR-SAC; with
     # encoder "lstm": LNDNL), "drlvo" (DRL-VO*, num_frames 1); num_frames 1 = Single-LGM.
     grid_kind: str = "lgm"
@@ -98,7 +97,7 @@ class SacConfig:
     num_frames: int = 9
     grid_size: int = 100
     encoder: str = "cnn"  # "lstm" with grid_kind "scan" = LNDNL (LSTM over normalised scans)
-    goal_radius: float = 0.1
+    goal_radius: float = EpisodeParams.goal_radius  # d_goal of training (`episode.goal_radius`)
     # The robot of the training environment: "lip" (`EmoNavLIP-v0`) or "digit" (the
     # full-order Digit diagram, `EmoNavDigit-v0`: ~0.2 s of CPU per environment step).
     plant: str = "lip"
@@ -113,10 +112,10 @@ class SacConfig:
         _check_observation(self.grid_kind, self.encoder, self.num_frames)
         _choice("plant", self.plant, ("lip", "digit"))
         if self.grid_kind != "scan":
-            if _NUM_BEAMS % self.grid_size:
+            if NUM_BEAMS % self.grid_size:
                 raise ConfigError(
                     f"grid_size = {self.grid_size} is invalid: must divide the LiDAR's "
-                    f"{_NUM_BEAMS} beams (e.g. 50, 100, 120, 150)"
+                    f"{NUM_BEAMS} beams (e.g. 50, 100, 120, 150)"
                 )
             if self.grid_size // self.pool < MIN_ENCODER_INPUT:
                 raise ConfigError(

@@ -49,6 +49,7 @@ import torch
 from torch.nn import functional as F
 from tqdm import tqdm
 
+from emonav_drake.atomic_io import write_text_atomic
 from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.metrics import format_summary, summarize
 from emonav_drake.core.navigation import (
@@ -65,7 +66,6 @@ from emonav_drake.learning.run_state import (
     DAGGER_FORMAT,
     InterruptGuard,
     RunStateError,
-    atomic_write_text,
     check_state,
     clean_stale_temp_files,
     config_changes,
@@ -636,7 +636,7 @@ def train_dagger(
                 prog = _Progress(round=rnd + 1)
                 save()
                 saved_round = prog.round
-                atomic_write_text(out / "history.json", json.dumps(history, indent=2))
+                write_text_atomic(out / "history.json", json.dumps(history, indent=2), durable=True)
         interrupted = guard.requested and prog.round <= cfg.rounds
         if interrupted:
             log.warning("interrupted in round %d (%s): saving the state", prog.round, prog.phase)

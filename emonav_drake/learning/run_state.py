@@ -18,10 +18,11 @@ global, then `json.loads`: **loading a run directory never runs code**. A file o
 pickle-based format 1 (emonav before this format), a crafted file, a truncated file or
 a file of another format is refused with a `RunStateError` naming the file.
 
-Saves are atomic: the file is written to `NAME.emonav-<pid>.tmp` in the same directory,
-flushed and fsynced, then renamed over `NAME` (`os.replace`), and the directory is
-fsynced. A save killed half-way (SIGKILL, power loss) leaves only such a temp file;
-`clean_stale_temp_files` removes those of dead processes when the next run starts.
+Saves are atomic and durable (`atomic_io.atomic_write`): the file is written to a
+temporary sibling `STEM.tmp-<pid>-<random>SUFFIX`, fsynced, then renamed over `NAME`,
+and the directory is fsynced. A save killed half-way (SIGKILL, power loss) leaves only
+such a temp file; `clean_stale_temp_files` removes those of dead processes when the next
+run starts (and those of the earlier writers: `NAME.emonav-<pid>.tmp`, pickle-era names).
 
 `InterruptGuard` turns Ctrl-C (and SIGTERM) into a request that the trainer polls at
 consistent points (between SAC steps, between DAgger episodes and updates); a second
@@ -50,7 +51,8 @@ from emonav_drake.torch_load import load_failure, refused_global
 SAC_FORMAT = "emonav-sac-checkpoint/2"
 DAGGER_FORMAT = "emonav-dagger-state/2"
 _ARRAY = "__ndarray__"
-_TMP = re.compile(r"^(?P<name>.+)\.emonav-(?P<pid>\d+)\.tmp$")
+_TMP = re.compile(r"^.+\.tmp-(?P<pid>\d+)-[^.]*(\.[^.]+)?$")  # atomic_io.temp_sibling
+_OLD_TMP = re.compile(r"^(?P<name>.+)\.emonav-(?P<pid>\d+)\.tmp$")  # the writer before it
 # Temp files of the pickle-era writer (`tempfile.mkstemp(prefix=NAME, suffix=".tmp")`)
 # for the files a run directory holds: also ours, also removed.
 _LEGACY_TMP = re.compile(
@@ -136,23 +138,20 @@ def unpack(text: str, arrays: dict[str, torch.Tensor]) -> Any:
 # ------------------------------------------------------------------------ files
 
 
-def atomic_write_text(path: str | Path, text: str) -> None:
-    atomic_write(path, lambda f: f.write(text.encode()))
-
-
 def clean_stale_temp_files(directory: str | Path) -> list[Path]:
     """Remove the temp files that killed saves left in a run directory; returns them.
 
-    Only our own names are touched: `NAME.emonav-<pid>.tmp` of a process that is no
-    longer running (or of this process: nothing is being saved yet), and the pickle-era
-    writer's `checkpoint.pt*.tmp`, `dagger_state.pt*.tmp`, `policy*.pt*.tmp`.
+    Only our own names are touched: `STEM.tmp-<pid>-<random>SUFFIX` (and the earlier
+    `NAME.emonav-<pid>.tmp`) of a process that is no longer running (or of this process:
+    nothing is being saved yet), and the pickle-era writer's `checkpoint.pt*.tmp`,
+    `dagger_state.pt*.tmp`, `policy*.pt*.tmp`.
     """
     removed = []
     directory = Path(directory)
     if not directory.is_dir():
         return removed
     for p in directory.iterdir():
-        m = _TMP.match(p.name)
+        m = _TMP.match(p.name) or _OLD_TMP.match(p.name)
         writer = int(m["pid"]) if m is not None else None
         # ours and gone, or ours from this very process (it saves nothing yet)
         ours_stale = writer is not None and (writer == os.getpid() or not process_alive(writer))

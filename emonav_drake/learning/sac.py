@@ -23,6 +23,7 @@ import torch
 from torch.nn import functional as F
 
 from emonav_drake.learning.config import SacConfig
+from emonav_drake.params import NUM_BEAMS
 from emonav_drake.planners.networks import (
     Actor,
     Critic,
@@ -32,7 +33,7 @@ from emonav_drake.planners.networks import (
 )
 
 
-def make_encoder(cfg: SacConfig, beams: int = 1800, max_range: float = 6.0) -> torch.nn.Module:
+def make_encoder(cfg: SacConfig, beams: int = NUM_BEAMS, max_range: float = 6.0) -> torch.nn.Module:
     """The encoder for the configured observation variant."""
     if cfg.grid_kind == "scan" and cfg.encoder == "lstm":  # LNDNL
         return ScanLstmEncoder(cfg.num_frames, beams, max_range, cfg.features)
@@ -86,12 +87,6 @@ class SacAgent:
         """[−1, 1]² → (u_v ∈ [0, ū_v], u_Δθ ∈ [−ū_Δθ, ū_Δθ])."""
         a = np.clip(action, -1.0, 1.0)
         return np.array([(a[0] + 1.0) / 2.0 * self.bounds[0], a[1] * self.bounds[1]])
-
-    def to_action(self, command: np.ndarray) -> np.ndarray:
-        """Inverse of `to_command`."""
-        return np.array(
-            [2.0 * command[0] / self.bounds[0] - 1.0, command[1] / self.bounds[1]], np.float32
-        )
 
     @torch.no_grad()
     def act(self, obs: np.ndarray, state: np.ndarray, deterministic: bool) -> np.ndarray:

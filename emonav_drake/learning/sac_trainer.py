@@ -34,6 +34,7 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
+from emonav_drake.atomic_io import write_text_atomic
 from emonav_drake.core.metrics import record_from_json, summarize
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import SacConfig
@@ -44,7 +45,6 @@ from emonav_drake.learning.run_state import (
     SAC_FORMAT,
     InterruptGuard,
     RunStateError,
-    atomic_write_text,
     check_state,
     clean_stale_temp_files,
     config_changes,
@@ -409,7 +409,7 @@ def _truncate_csv(path: Path, rows: int) -> None:
     if keep == lines:
         return
     if keep:
-        atomic_write_text(path, "".join(keep))
+        write_text_atomic(path, "".join(keep), durable=True)
     else:
         path.unlink()
 

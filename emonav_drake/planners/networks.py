@@ -25,6 +25,8 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
+from emonav_drake.params import NUM_BEAMS
+
 LOG_STD_MIN, LOG_STD_MAX = -10.0, 2.0
 
 
@@ -127,7 +129,7 @@ class ScanEncoder(_ConvEncoder):
     def __init__(
         self,
         frames: int = 9,
-        beams: int = 1800,
+        beams: int = NUM_BEAMS,
         max_range: float = 6.0,
         features: int = 50,
         filters: int = 32,
@@ -168,7 +170,7 @@ class ScanLstmEncoder(_ConvEncoder):
     def __init__(
         self,
         frames: int = 9,
-        beams: int = 1800,
+        beams: int = NUM_BEAMS,
         max_range: float = 6.0,
         features: int = 50,
         hidden: int = 64,

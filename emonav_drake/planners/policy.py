@@ -31,6 +31,7 @@ import torch
 
 from emonav_drake.atomic_io import atomic_write
 from emonav_drake.core.navigation import PlannerInput
+from emonav_drake.params import NUM_BEAMS
 from emonav_drake.planners.networks import (
     Actor,
     CategoricalPolicy,
@@ -254,7 +255,7 @@ def observation_spec(meta: dict[str, Any]) -> tuple[str, tuple[int, ...], np.dty
     ob = meta["observation"]
     kind, n, m = ob["grid_kind"], ob["num_frames"], ob["grid_size"]
     if kind == "scan":
-        return kind, (n, int(meta["encoder"].get("beams", 1800))), np.dtype(np.float32)
+        return kind, (n, int(meta["encoder"].get("beams", NUM_BEAMS))), np.dtype(np.float32)
     if kind == "drlvo":
         return kind, (n, 3, m, m), np.dtype(np.uint8)
     return kind, (n, m, m), np.dtype(np.uint8)
@@ -267,7 +268,7 @@ def probe_input(meta: dict[str, Any]) -> tuple[torch.Tensor, torch.Tensor]:
     if ob["grid_kind"] == "drlvo":
         frames *= 3
     if ob["grid_kind"] == "scan":
-        beams = meta["encoder"].get("beams", 1800)
+        beams = meta["encoder"].get("beams", NUM_BEAMS)
         return torch.zeros(1, frames, beams), torch.zeros(1, 4)
     return torch.zeros(1, frames, size, size, dtype=torch.uint8), torch.zeros(1, 4)
 
