@@ -11,7 +11,7 @@ from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
-from emonav_drake.systems.navigation_planner import Planner
+from emonav_drake.planners.protocol import Planner
 
 
 def run_evaluation_episode(
@@ -29,25 +29,10 @@ def run_evaluation_episode(
         scenario, config, planner, grid_kind: as `run_episode`.
         emotion_estimate: perceived emotions (LIP plant only).
     """
+    from emonav_drake.diagrams.plants import plant_named
+
+    robot = plant_named(plant, "plant =")
+    if emotion_estimate is not None and not robot.emotion_estimates:
+        raise ConfigError("--emotion-estimate is available with --plant lip only")
     goal_radius = config.episode.eval_goal_radius
-    if plant == "digit":
-        from emonav_drake.diagrams.navigation_digit import run_digit_episode
-
-        if emotion_estimate is not None:
-            raise ConfigError("--emotion-estimate is available with --plant lip only")
-        return run_digit_episode(
-            scenario, config, planner, grid_kind=grid_kind, goal_radius=goal_radius
-        )
-    if plant != "lip":
-        raise ConfigError(f"plant = {plant!r} is invalid: must be 'lip' or 'digit'")
-    from emonav_drake.diagrams.navigation import run_episode
-
-    record, _ = run_episode(
-        scenario,
-        config,
-        planner,
-        goal_radius=goal_radius,
-        grid_kind=grid_kind,
-        emotion_estimate=emotion_estimate,
-    )
-    return record
+    return robot.run(scenario, config, planner, grid_kind, goal_radius, emotion_estimate)

@@ -52,13 +52,14 @@ from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+from emonav_drake.planners.protocol import Planner
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.emotion_estimate_source import AddEmotionEstimateSource
 from emonav_drake.systems.episode_monitor import EpisodeMonitor, episode_monitor_callback
 from emonav_drake.systems.lidar_grid_map_builder import LidarGridMapBuilder
 from emonav_drake.systems.lip_robot_plant import LipRobotPlant
 from emonav_drake.systems.navigation_meshcat import NavigationMeshcatVisualizer
-from emonav_drake.systems.navigation_planner import NavigationPlanner, Planner
+from emonav_drake.systems.navigation_planner import NavigationPlanner
 
 if TYPE_CHECKING:
     from emonav_drake.diagrams.rates import RateMeasurement

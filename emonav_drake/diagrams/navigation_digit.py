@@ -47,11 +47,12 @@ from emonav_drake.diagrams.meshcat_viewing import ReplayCaption, make_meshcat, w
 from emonav_drake.diagrams.navigation import AddNavigationStack
 from emonav_drake.diagrams.rates import RateMeasurement
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.protocol import Planner
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.episode_monitor import EpisodeMonitor
 from emonav_drake.systems.fall_monitor import FALL
 from emonav_drake.systems.navigation_meshcat import NavigationMeshcatVisualizer
-from emonav_drake.systems.navigation_planner import NavigationPlanner, Planner
+from emonav_drake.systems.navigation_planner import NavigationPlanner
 
 
 @dc.dataclass

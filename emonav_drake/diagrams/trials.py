@@ -26,8 +26,8 @@ from typing import Any
 from emonav_drake.atomic_io import json_safe
 from emonav_drake.parallel import Worker, run_tasks
 from emonav_drake.params import ConfigError, EmoNavConfig, load_config
-from emonav_drake.planners import MODEL_PLANNERS
-from emonav_drake.planners.variants import VARIANTS, is_learned, shipped_checkpoint
+from emonav_drake.planners import is_registered, model_planner_names, planner_kind
+from emonav_drake.planners.variants import VARIANTS
 from emonav_drake.provenance import sha256_file
 
 # --trials at most (per method): every scenario is sampled (~0.2 ms per seed, ~20 s at the
@@ -67,10 +67,11 @@ def parse_methods(
 ) -> list[MethodSpec]:
     """`--planners policy,mpc,dwa` and `--checkpoint NAME=PATH …` → the methods (validated).
 
-    A method is `dwa`, `mpc`, `policy` (the shipped policy unless a checkpoint is given),
-    `sac` (a SAC-trained checkpoint, given with `--checkpoint sac=PATH`), a
-    variant of `planners/variants.py` (its shipped policy unless a checkpoint is given) or
-    any other name given a checkpoint with `--checkpoint NAME=PATH` (another learned policy).
+    A method is any registered planner (`planners.planner_names()`): a model planner
+    (`dwa`, `mpc`, …), a learned one with its default checkpoint unless one is given
+    (`policy`: the shipped policy; a variant: its shipped policy; `sac`: a SAC-trained
+    checkpoint must be given with `--checkpoint sac=PATH`), or any other name given a
+    checkpoint with `--checkpoint NAME=PATH` (another learned policy).
     """
     names = planners.split(",") if isinstance(planners, str) else list(planners)
     names = [n.strip() for n in names]
@@ -93,7 +94,7 @@ def parse_methods(
             raise ConfigError(
                 f"--checkpoint {name}=…: {name} is not among --planners ({','.join(names)})"
             )
-        if name in MODEL_PLANNERS:
+        if is_registered(name) and not planner_kind(name).learned:
             raise ConfigError(f"--checkpoint {name}=…: only learned policies take a checkpoint")
         p = Path(path)
         if not p.is_file():
@@ -101,29 +102,28 @@ def parse_methods(
         ckpt[name] = p
     methods = []
     for n in names:
-        if n in MODEL_PLANNERS:
+        kind = planner_kind(n) if is_registered(n) else None
+        if kind is not None and not kind.learned:
             methods.append(MethodSpec(n, n))
-        elif is_learned(n) or n in ckpt:
+        elif kind is not None or n in ckpt:
             path = ckpt.get(n)
-            if path is None and n == "policy":
-                from emonav_drake.planners.policy import DEFAULT_POLICY
-
-                path = DEFAULT_POLICY
-            elif path is None and n == "sac":
+            if path is None and n == "sac":
                 raise ConfigError(
                     "--planners sac: a SAC-trained checkpoint is needed (--checkpoint "
                     "sac=PATH); the shipped policy is a DAgger student: use policy"
                 )
-            elif path is None:
-                path = shipped_checkpoint(n)
+            if path is None:
+                if kind is None or kind.default_checkpoint is None:
+                    raise ConfigError(f"--planners {n}: give its checkpoint, --checkpoint {n}=PATH")
+                path = kind.default_checkpoint()
             if n == "sac":
                 _check_sac_actor(path)
             methods.append(MethodSpec(n, "policy", str(path), sha256_file(path)))
         else:
             raise ConfigError(
-                f"--planners: unknown method {n!r}; use {', '.join(MODEL_PLANNERS)}, policy, "
-                f"sac, a variant "
-                f"({', '.join(VARIANTS)}), or name a learned policy with --checkpoint {n}=PATH"
+                f"--planners: unknown method {n!r}; use {', '.join(model_planner_names())}, "
+                f"policy, sac, a variant ({', '.join(VARIANTS)}), or name a learned policy "
+                f"with --checkpoint {n}=PATH"
             )
     return methods
 

@@ -62,6 +62,7 @@ from emonav_drake.atomic_io import (
 )
 from emonav_drake.core.metrics import COLLISION, FALL, SUCCESS, TIMEOUT, EpisodeRecord
 from emonav_drake.core.scenario import MAX_SEED
+from emonav_drake.diagrams.plants import PLANTS, plant_named
 from emonav_drake.diagrams.trials import (
     MAX_TRIALS,
     BenchmarkSpec,
@@ -246,8 +247,8 @@ def check_trial(t: dict) -> str | None:
         return f"method = {t['method']!r} is not a method name"
     if not (_is_int(t["seed"]) and 0 <= t["seed"] <= MAX_SEED):
         return f"seed = {t['seed']!r} is not a seed (an integer in [0, 2**64 - 1])"
-    if "plant" in t and t["plant"] not in ("lip", "digit"):
-        return f"plant = {t['plant']!r} is not lip or digit"
+    if "plant" in t and t["plant"] not in PLANTS:
+        return f"plant = {t['plant']!r} is not {' or '.join(PLANTS)}"
     if "wall_seconds" in t and not (_is_number(t["wall_seconds"]) and t["wall_seconds"] >= 0):
         return f"wall_seconds = {t['wall_seconds']!r} must be a number >= 0"
     r = t["record"]
@@ -600,8 +601,7 @@ def run_benchmark(
         RunInterrupted: after Ctrl-C / SIGTERM: the finished trials are kept and the
             tables of them written; running the same call again continues.
     """
-    if plant not in ("lip", "digit"):
-        raise ConfigError(f"--plant {plant!r}: choose lip or digit")
+    robot = plant_named(plant)
     if not 1 <= trials <= MAX_TRIALS:
         raise ConfigError(
             f"--trials {trials}: must be in [1, {MAX_TRIALS}] (trials per method; every "
@@ -618,7 +618,7 @@ def run_benchmark(
         raise ConfigError(f"--workers {workers}: must be >= 1")
     if workers is None and not ray_address:
         workers = os.cpu_count() or 1
-    if emotion_estimate_yaml is not None and plant == "digit":
+    if emotion_estimate_yaml is not None and not robot.emotion_estimates:
         raise ConfigError("--emotion-estimate is available with --plant lip only")
     out = check_output_dir(out, "--out")
     # the same YAML text drives every engine (the driver's and the workers' configs are equal)

@@ -24,6 +24,7 @@ import math
 from collections.abc import Iterable, Sequence
 
 from emonav_drake.core.metrics import SUCCESS, record_from_json, summarize
+from emonav_drake.diagrams.plants import PLANTS
 
 ALPHA = 0.05
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
@@ -204,7 +205,8 @@ def social_rows(summary: dict, plant: str) -> tuple[list[str], list[list[object]
         "collision rate",
         "timeout rate",
     ]
-    if plant == "digit":
+    falls = plant in PLANTS and PLANTS[plant].can_fall
+    if falls:
         header.append("fall rate")
     header.append("wall s / trial")
     rows = []
@@ -217,7 +219,7 @@ def social_rows(summary: dict, plant: str) -> tuple[list[str], list[list[object]
             f"{s['collision_rate']:.3f}",
             f"{s['timeout_rate']:.3f}",
         ]
-        if plant == "digit":
+        if falls:
             row.append(f"{s['fall_rate']:.3f}")
         row.append(f"{s['wall_seconds_mean']:.2f}")
         rows.append(row)

@@ -8,6 +8,7 @@ every field against its allowed range (`_DAGGER_RANGES`, `_SAC_RANGES`, in the s
 
 import dataclasses as dc
 
+from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.params import NUM_BEAMS, ConfigError, EpisodeParams, validate_ranges
 
 # The 4-conv encoder (3 x 3, strides 2-1-1-1) needs an input of at least this many cells.
@@ -110,7 +111,7 @@ class SacConfig:
         """Raise `ConfigError` naming the field if a value is out of range or inconsistent."""
         validate_ranges(self, _SAC_RANGES)
         _check_observation(self.grid_kind, self.encoder, self.num_frames)
-        _choice("plant", self.plant, ("lip", "digit"))
+        _choice("plant", self.plant, tuple(PLANTS))
         if self.grid_kind != "scan":
             if NUM_BEAMS % self.grid_size:
                 raise ConfigError(

@@ -1,63 +1,152 @@
-"""Planner registry: one name → one planner object (`systems.navigation_planner.Planner`).
+"""Planners: one name → one planner object (`planners.protocol.Planner`).
 
 The same objects drive the Drake diagram (`systems.NavigationPlanner`, through the pure
 `plan_with_memory(obs, memory)`, the memory living in the Context) and act as policies on
 the Gymnasium environment (`planner.plan(env.unwrapped.planner_input())`, the memory kept
 on the object, `reset()` between episodes).
+
+The registry (`planners/registry.py`) holds every planner the command line and the trial
+workers can build by name; the built-in ones are registered below, one line each:
+
+* model planners (no checkpoint): `dwa` and `mpc` (the math in `core/dwa.py`,
+  `core/mpc.py`), `dwa_digit` (DWA planning with Digit's step-response model, the
+  Digit/Digit route's expert, `planners/model_aware.py`);
+* learned planners (a policy checkpoint, `planners/policy.py`): `policy` (any trained
+  checkpoint, by default the shipped policy), `sac` (a SAC-trained actor, checkpoint
+  required), and every variant of `planners/variants.py` (its shipped policy by default).
 """
 
 from __future__ import annotations
 
+import functools
+from pathlib import Path
+
 from emonav_drake.params import ConfigError, EmoNavConfig
-from emonav_drake.planners.variants import VARIANTS, is_learned, shipped_checkpoint
+from emonav_drake.planners.registry import (
+    PlannerKind,
+    is_registered,
+    model_planner_names,
+    planner_kind,
+    planner_names,
+    register,
+    unregister,
+)
+from emonav_drake.planners.variants import VARIANTS, shipped_checkpoint
 
-# "policy" runs any trained checkpoint, by default the shipped policy (the EmoBipedNav
-# variant, a DAgger student); "sac" a SAC-trained checkpoint (`emonav train --algo sac`);
-# the other learned methods of the paper by their variant name (`planners/variants.py`).
-# Model-based planners (no checkpoint). "dwa_digit" is the Digit/Digit route's expert: DWA
-# planning with Digit's step-response model and the route's collision margin.
-MODEL_PLANNERS = ("dwa", "mpc", "dwa_digit")
-PLANNERS = (*MODEL_PLANNERS, "policy", "sac", *VARIANTS)
+__all__ = [
+    "PlannerKind",
+    "configure_for",
+    "is_learned",
+    "is_registered",
+    "make_planner",
+    "model_planner_names",
+    "observation_of",
+    "planner_kind",
+    "planner_names",
+    "register",
+    "unregister",
+]
 
 
-def make_planner(name: str, config: EmoNavConfig, checkpoint=None, device: str = "cpu"):
-    """Create the planner called `name`: "dwa", "mpc", "dwa_digit", "policy", "sac" or a
-    variant name.
+def _dwa(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
+    from emonav_drake.core.dwa import DwaPlanner
 
-    "policy" loads `checkpoint` (default: the shipped policy); "sac" needs the checkpoint
-    of a SAC actor (a `ConfigError` names `--planner policy` for a DAgger student or a
-    missing checkpoint); a variant defaults to the policy shipped under its name."""
-    if name == "dwa":
-        from emonav_drake.core.dwa import DwaPlanner
+    return DwaPlanner(config)
 
-        return DwaPlanner(config)
-    if name == "mpc":
-        from emonav_drake.core.mpc import MpcPlanner
 
-        return MpcPlanner(config)
-    if name == "dwa_digit":
-        from emonav_drake.planners.model_aware import dwa_digit
+def _mpc(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
+    from emonav_drake.core.mpc import MpcPlanner
 
-        return dwa_digit(config)
-    if is_learned(name):
-        from emonav_drake.planners.policy import PolicyPlanner, describe_policy, policy_kind
+    return MpcPlanner(config)
 
-        if name == "sac" and checkpoint is None:
-            raise ConfigError(
-                "--planner sac runs a SAC-trained checkpoint (`emonav train --algo sac`): "
-                "give --checkpoint PATH; the shipped policy is a DAgger student, run it "
-                "with --planner policy"
-            )
-        if checkpoint is None and name != "policy":
-            checkpoint = shipped_checkpoint(name)
-        planner = PolicyPlanner(checkpoint, device=device)
-        if name == "sac" and policy_kind(planner.meta) != "sac":
-            raise ConfigError(
-                f"--planner sac: {planner.path} is not a SAC actor but a "
-                f"{describe_policy(planner.meta)}; run it with --planner policy"
-            )
-        return planner
-    raise ValueError(f"unknown planner {name!r}: choose one of {list(PLANNERS)}")
+
+def _dwa_digit(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
+    from emonav_drake.planners.model_aware import dwa_digit
+
+    return dwa_digit(config)
+
+
+def _policy(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
+    from emonav_drake.planners.policy import PolicyPlanner
+
+    return PolicyPlanner(checkpoint, device=device)
+
+
+def _sac(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
+    from emonav_drake.planners.policy import PolicyPlanner, describe_policy, policy_kind
+
+    planner = PolicyPlanner(checkpoint, device=device)
+    if policy_kind(planner.meta) != "sac":
+        raise ConfigError(
+            f"--planner sac: {planner.path} is not a SAC actor but a "
+            f"{describe_policy(planner.meta)}; run it with --planner policy"
+        )
+    return planner
+
+
+def _default_policy() -> Path:
+    from emonav_drake.planners.policy import DEFAULT_POLICY
+
+    return DEFAULT_POLICY
+
+
+def _no_sac_checkpoint() -> Path:
+    raise ConfigError(
+        "--planner sac runs a SAC-trained checkpoint (`emonav train --algo sac`): "
+        "give --checkpoint PATH; the shipped policy is a DAgger student, run it "
+        "with --planner policy"
+    )
+
+
+register(PlannerKind("dwa", _dwa, summary="dynamic window approach (paper's baseline)"))
+register(PlannerKind("mpc", _mpc, summary="OSQP social MPC"))
+register(PlannerKind("dwa_digit", _dwa_digit, summary="DWA with Digit's step response"))
+register(
+    PlannerKind("policy", _policy, True, _default_policy, "a policy checkpoint (default: shipped)")
+)
+register(PlannerKind("sac", _sac, True, _no_sac_checkpoint, "a SAC-trained actor"))
+for _name, _variant in VARIANTS.items():
+    register(
+        PlannerKind(
+            _name,
+            _policy,
+            True,
+            functools.partial(shipped_checkpoint, _name),
+            f"{_variant.paper}: {_variant.observation}",
+        )
+    )
+
+
+# the built-in names (transitional: the command line moves to `planner_names()`, which also
+# lists planners registered later)
+PLANNERS = planner_names()
+MODEL_PLANNERS = model_planner_names()
+
+
+def is_learned(name: str) -> bool:
+    """True for the registered planners that run a policy checkpoint."""
+    return is_registered(name) and planner_kind(name).learned
+
+
+def make_planner(
+    name: str, config: EmoNavConfig, checkpoint: str | Path | None = None, device: str = "cpu"
+):
+    """Create the planner called `name` (any registered name).
+
+    A learned planner loads `checkpoint`, by default its kind's default checkpoint ("policy":
+    the shipped policy; a variant: the policy shipped under its name; "sac": none — a
+    `ConfigError` says how to get one); a model planner takes no checkpoint."""
+    kind = planner_kind(name)
+    if kind.learned and checkpoint is None:
+        checkpoint = kind.default_checkpoint() if kind.default_checkpoint else None
+    return kind.build(config, checkpoint, device)
+
+
+def observation_of(planner) -> str:
+    """What a planner observes: "state" (the privileged crowd state: DWA, MPC) or the map
+    observation kind of a learned policy ("lgm", "ogm", "scan", "drlvo")."""
+    kind = getattr(planner, "grid_kind", None)
+    return kind if kind is not None and hasattr(planner, "expected_shape") else "state"
 
 
 def configure_for(planner, config: EmoNavConfig) -> str:

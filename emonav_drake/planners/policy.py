@@ -10,7 +10,7 @@ A policy checkpoint is one `torch.save` file:
                      "grid_size": M},
      "bounds": [ū_v, ū_Δθ], "state_dict": {...}, "provenance": {...}}
 
-`PolicyPlanner` implements the planner interface (`systems.navigation_planner.Planner`:
+`PolicyPlanner` implements the planner interface (`planners.protocol.Planner`:
 `plan(PlannerInput)`, `reset`, and the memoryless `initial_memory`/`plan_with_memory`), so a
 policy drives the Drake diagram (`emonav sim --planner policy`) or the Gymnasium env
 exactly like DWA or MPC. It uses only the map observation of its grid kind (the planner

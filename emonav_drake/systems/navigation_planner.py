@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import copy
 import logging
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 from pydrake.common.value import AbstractValue
@@ -46,45 +46,10 @@ from pydrake.systems.framework import Context, LeafSystem, State
 
 from emonav_drake.core.navigation import PlannerInput, check_command
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.protocol import Planner
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
 log = logging.getLogger(__name__)
-
-
-class Planner(Protocol):
-    """What the navigation diagram and the Gymnasium env need of a planner.
-
-    The diagram uses the pure pair `initial_memory()` / `plan_with_memory(obs, memory)`:
-    a planning step is a function of (planner input, memory) that returns the command and
-    the next memory without modifying its argument. The env, DAgger and scripts use the
-    stateful pair `plan(obs)` / `reset()`, which keeps one memory on the object
-    (`command, self._memory = self.plan_with_memory(obs, self._memory)`). A pure function
-    rather than `get_memory()` / `set_memory()` on the object: the Drake event then never
-    depends on what the object last planned (a cloned Context, two simulations sharing the
-    planner, or an exception between a restore and a save cannot leak memory from one
-    context into another), the object's own memory is only the convenience of `plan`, and
-    `plan(obs)` keeps working unchanged. Memoryless planners (DWA, replay, policies)
-    return None as their memory.
-    """
-
-    name: str
-
-    def initial_memory(self) -> Any:
-        """The memory at the start of an episode (copyable with `copy.deepcopy`)."""
-        ...
-
-    def plan_with_memory(self, obs: PlannerInput, memory: Any) -> tuple[np.ndarray, Any]:
-        """(u_v [m/s], u_Δθ [rad]) for this walking step and the memory for the next one;
-        `memory` is not modified."""
-        ...
-
-    def reset(self) -> None:
-        """Back to `initial_memory()` for `plan` (a new episode)."""
-        ...
-
-    def plan(self, obs: PlannerInput) -> np.ndarray:
-        """`plan_with_memory` with the memory kept on the object."""
-        ...
 
 
 class NavigationPlanner(LeafSystem):

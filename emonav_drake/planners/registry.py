@@ -1,0 +1,83 @@
+"""The planner registry: one name → how to build that planner.
+
+A planner is anything that satisfies `planners.protocol.Planner` (the pure pair
+`initial_memory()` / `plan_with_memory(obs, memory)`, the stateful `plan(obs)` /
+`reset()`). Each planner module registers a `PlannerKind` — its name, its builder and
+whether it runs a learned checkpoint — with one `register(...)` line in
+`planners/__init__.py`. Everything that chooses a planner by name (`emonav sim|eval
+--planner`, `emonav benchmark --planners`, the trial workers) asks this registry, so a
+new planner is one module plus one registry line (`docs/architecture.md`).
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from emonav_drake.params import ConfigError, EmoNavConfig
+
+# build(config, checkpoint, device) -> the planner; `checkpoint` None for model planners
+Builder = Callable[[EmoNavConfig, "str | Path | None", str], Any]
+
+
+@dc.dataclass(frozen=True)
+class PlannerKind:
+    """One registered planner.
+
+    Attributes:
+        name: the name on the command line.
+        build: `build(config, checkpoint, device)` → a new planner. It must not modify
+            `config` (the planner may keep it).
+        learned: runs a policy checkpoint (`--checkpoint`); model planners take none.
+        default_checkpoint: the checkpoint a learned planner runs without `--checkpoint`
+            (called when needed: it may raise `ConfigError` saying how to train it), or
+            None if one must be given.
+        summary: one line for `--help` and error messages.
+    """
+
+    name: str
+    build: Builder
+    learned: bool = False
+    default_checkpoint: Callable[[], Path] | None = None
+    summary: str = ""
+
+
+_KINDS: dict[str, PlannerKind] = {}
+
+
+def register(kind: PlannerKind, replace: bool = False) -> PlannerKind:
+    """Add `kind` to the registry (`ValueError` if its name is taken and not `replace`)."""
+    if not kind.name or not kind.name.replace("_", "").isalnum():
+        raise ValueError(f"planner name {kind.name!r}: letters, digits and '_' only")
+    if kind.name in _KINDS and not replace:
+        raise ValueError(f"a planner called {kind.name!r} is registered already")
+    _KINDS[kind.name] = kind
+    return kind
+
+
+def unregister(name: str) -> None:
+    """Remove a planner (tests that register a throw-away one)."""
+    _KINDS.pop(name, None)
+
+
+def planner_names() -> tuple[str, ...]:
+    """Every registered name, in registration order."""
+    return tuple(_KINDS)
+
+
+def model_planner_names() -> tuple[str, ...]:
+    """The registered planners that take no checkpoint."""
+    return tuple(n for n, k in _KINDS.items() if not k.learned)
+
+
+def is_registered(name: str) -> bool:
+    return name in _KINDS
+
+
+def planner_kind(name: str) -> PlannerKind:
+    """The kind called `name`; `ConfigError` listing the names otherwise."""
+    if name not in _KINDS:
+        raise ConfigError(f"unknown planner {name!r}: choose one of {', '.join(_KINDS)}")
+    return _KINDS[name]
