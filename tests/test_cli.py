@@ -1,6 +1,9 @@
 import json
 
+import pytest
+
 from emonav_drake.cli import main
+from emonav_drake.configs import SETTINGS
 
 
 def test_sim_writes_the_json_outcome(tmp_path, capsys):
@@ -90,3 +93,40 @@ def test_shipped_example_scenarios_load_and_run_by_name(tmp_path, capsys):
     assert json.loads(out.read_text())["outcome"] in ("success", "collision", "timeout")
     assert main(["sim", "--scenario", "nowhere"]) == 2
     assert "head_on, crossing, mood_swing" in capsys.readouterr().err
+
+
+def test_sim_and_eval_take_a_named_setting_as_benchmark_does(tmp_path, capsys):
+    """`--setting NAME` on sim and eval: the shipped setting's configuration; an unknown
+    name is refused (exit 2) with the same error line as `benchmark`'s, naming the choices."""
+    out = tmp_path / "r.json"
+    argv = ["sim", "--plant", "lip", "--seed", "1", "--json", out]
+    assert main([*argv, "--setting", "constant_0.5"]) == 0
+    discomfort = json.loads(out.read_text())["trajectory"]["scenario"]["discomfort"]
+    assert {k: discomfort[k] for k in ("happy", "neutral", "negative")} == dict.fromkeys(
+        ("happy", "neutral", "negative"), 0.5
+    )
+    assert main(argv) == 0  # without it: the defaults (var_dd)
+    discomfort = json.loads(out.read_text())["trajectory"]["scenario"]["discomfort"]
+    assert (discomfort["happy"], discomfort["negative"]) == (0.2, 0.5)
+    capsys.readouterr()
+
+    errors = {}
+    for command in ("benchmark", "sim", "eval"):
+        extra = ["--out", tmp_path / "run"] if command == "benchmark" else []
+        with pytest.raises(SystemExit) as e:
+            main([command, "--setting", "var_dd_typo", *extra])
+        assert e.value.code == 2
+        err = capsys.readouterr().err
+        assert "Traceback" not in err
+        lines = [line for line in err.splitlines() if "error:" in line]
+        assert len(lines) == 1, err  # argparse: the usage, then one error line
+        errors[command] = lines[0].removeprefix(f"emonav {command}: ")
+    assert errors["sim"] == errors["eval"] == errors["benchmark"]
+    assert errors["sim"].startswith("error: argument --setting: invalid choice: 'var_dd_typo'")
+    assert all(repr(name) in errors["sim"] for name in SETTINGS)
+    # --setting and --config exclude each other, as in benchmark
+    with pytest.raises(SystemExit) as e:
+        main(["eval", "--setting", "no_emotion", "--config", tmp_path / "c.yaml"])
+    assert e.value.code == 2
+    assert "not allowed with argument" in capsys.readouterr().err
+    assert not (tmp_path / "run").exists()

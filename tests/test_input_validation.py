@@ -309,7 +309,7 @@ def test_the_last_seed_of_a_range_must_fit_too(tmp_path, capsys):
 
 
 def test_the_largest_seed_is_accepted():
-    from emonav_drake.cli import parse_seed
+    from emonav_drake.cli.common import parse_seed
     from emonav_drake.core.scenario import sample_scenario
 
     assert parse_seed(str(2**64 - 1), "--seed") == 2**64 - 1

@@ -359,12 +359,12 @@ def test_crowd_that_does_not_fit_is_an_error_not_fewer_objects(tmp_path, capsys)
 def test_time_varying_with_a_scenario_file(tmp_path, capsys, tiny):
     import argparse
 
-    from emonav_drake.cli import _config, _scenario
+    from emonav_drake.cli.config import resolve_config, resolve_scenario
 
     sc = tmp_path / "scene.yaml"
     sc.write_text("pedestrians:\n  - {start: [0.0, 4.0], goal: [0.0, -4.0], emotion: negative}\n")
     args = argparse.Namespace(scenario=sc, seed=3, time_varying=True, config=None)
-    scenario = _scenario(args, _config(args))
+    scenario = resolve_scenario(args, resolve_config(args))
     schedule = scenario.pedestrians[0].emotion_schedule
     assert schedule[0] == "negative" and len(schedule) >= 25
     assert all(a != b for a, b in zip(schedule, schedule[1:], strict=False))
@@ -549,9 +549,9 @@ def test_debug_shows_the_traceback(tmp_path):
 
 
 def test_an_unexpected_exception_is_one_line_exit_1(capsys, monkeypatch):
-    import emonav_drake.cli as cli
+    import emonav_drake.cli.lgm as lgm
 
-    monkeypatch.setattr(cli, "cmd_lgm", lambda args: [][1])  # a bug
+    monkeypatch.setattr(lgm, "cmd_lgm", lambda args: [][1])  # a bug
     code, err = run(capsys, "lgm", "--png", "x.png")
     assert code == 1 and "Traceback" not in err
     assert err.strip().startswith("emonav: internal error: IndexError") and "--debug" in err

@@ -5,31 +5,25 @@ emonav walk --seconds S --seed K [--command random|straight|turn|stand] [--speed
             [--record out.html] [--json out.json]
             [--steps-out steps.csv]
 
-`write_steps_csv` also writes `emonav sim --steps-out` (one row per planner step).
+The steps CSV is written by `common.write_steps_csv` (also `emonav sim --steps-out`).
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
-import csv
-import io
 import math
-from collections.abc import Sequence
 from pathlib import Path
-
-import numpy as np
 
 from emonav_drake.atomic_io import (
     atomic_output,
     check_distinct,
     check_output_file,
     write_json,
-    write_text_atomic,
 )
-from emonav_drake.cli import SeedArg, add_meshcat_host, meshcat_host
-from emonav_drake.core.tracking import COLUMNS
-from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.cli.common import SeedArg, add_meshcat_host, meshcat_host, write_steps_csv
+from emonav_drake.cli.config import CONFIG_HELP, resolve_config
+from emonav_drake.params import ConfigError
 
 STEPS_OUT_HELP = (
     "write one CSV row per walking step: its command, the desired LIP step (paper Eq. 1), "
@@ -39,7 +33,7 @@ STEPS_OUT_HELP = (
 
 def _validate_walk_args(args: argparse.Namespace, max_speed: float) -> None:
     """Every flag checked before the (minutes-long) simulation starts (the seed while
-    parsing: `cli.SeedArg`)."""
+    parsing: `common.SeedArg`)."""
     from emonav_drake.diagrams.walking import MAX_WALK_SECONDS
 
     if not (math.isfinite(args.seconds) and args.seconds > 0):
@@ -65,51 +59,13 @@ def _validate_walk_args(args: argparse.Namespace, max_speed: float) -> None:
     check_distinct({"--json": args.json, "--record": args.record, "--steps-out": args.steps_out})
 
 
-def write_steps_csv(path: str | Path, table: np.ndarray) -> int:
-    """Write a tracking table (`core.tracking.COLUMNS`, one row per step) as CSV, atomically.
-
-    The header is the column names; `step` is an integer, every other value a float in
-    SI units (m, rad, s, m/s: `core.tracking.UNITS`) with full precision (NaN as "nan").
-    Returns the number of rows written."""
-    rows = np.asarray(table, float).reshape(-1, len(COLUMNS))
-    buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(COLUMNS)
-    for r in rows:
-        writer.writerow([int(r[0]), *(repr(float(v)) for v in r[1:])])
-    write_text_atomic(path, buf.getvalue())
-    return len(rows)
-
-
-def episode_steps_table(
-    config: EmoNavConfig,
-    trace: Sequence[dict] | None = None,
-    robot: Sequence[np.ndarray] | None = None,
-    commands: Sequence[np.ndarray] | None = None,
-) -> np.ndarray:
-    """The tracking table of a navigation episode against the planner's LIP (ω = √(g/H) of
-    `config.robot`): from a Digit episode's `trace` (`run_digit_episode(trace=...)`), or
-    from the LIP diagram's `StepLog` lists `robot` (t_k = kT) and `commands`."""
-    from emonav_drake.core.tracking import sequence_tracking, trace_tracking
-
-    r = config.robot
-    if trace is not None:
-        return trace_tracking(trace, r.omega, r.step_time)
-    states = np.asarray(robot, float).reshape(-1, 4)
-    u = np.asarray(commands, float).reshape(-1, 2)[: max(len(states) - 1, 0)]
-    n = len(u) + 1
-    return sequence_tracking(np.arange(n) * r.step_time, states[:n], u, r.omega, r.step_time)
-
-
 def _fmt(value: float, digits: int) -> str:
     return f"{value:.{digits}f}" if math.isfinite(value) else "n/a"
 
 
 def cmd_walk(args: argparse.Namespace) -> int:
     """Run one walk and print / write its JSON summary."""
-    from emonav_drake.params import load_config
-
-    cfg = load_config(args.config) if args.config else load_config()
+    cfg = resolve_config(args).config
     _validate_walk_args(args, cfg.robot.max_speed)
     meshcat_host(args)
     from emonav_drake.diagrams.walking import run_walk
@@ -159,7 +115,7 @@ def cmd_walk(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_walk_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register `emonav walk` on the CLI's sub-parsers."""
     w = subparsers.add_parser("walk", help="simulate the full-order Digit walking (Drake, 1 kHz)")
     w.add_argument(
@@ -187,7 +143,7 @@ def add_walk_parser(subparsers: argparse._SubParsersAction) -> argparse.Argument
         type=float,
         help="u_v for --command straight [m/s], in [0, robot.max_speed] (default the maximum)",
     )
-    w.add_argument("--config", type=Path, help="YAML configuration overriding the defaults")
+    w.add_argument("--config", type=Path, help=CONFIG_HELP)
     w.add_argument(
         "--meshcat",
         action="store_true",

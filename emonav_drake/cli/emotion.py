@@ -39,8 +39,8 @@ IMAGE_WRITE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp")
 VIDEO_WRITERS = {".mp4": "mp4v", ".avi": "MJPG"}
 
 
-def add_emotion_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Register the `emotion` sub-command on an argparse sub-parser collection."""
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `emonav emotion` on the CLI's sub-parsers."""
     p = subparsers.add_parser(
         "emotion",
         help="detect faces and classify their emotions in an image or a video",

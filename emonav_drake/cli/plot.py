@@ -13,13 +13,12 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
 
 from emonav_drake.params import ConfigError
 
 
-def add_plot_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Register the `plot` sub-command on an argparse sub-parser collection."""
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `emonav plot` on the CLI's sub-parsers."""
     p = subparsers.add_parser(
         "plot",
         help="draw an `emonav sim --json` episode: top-view PNG and/or animation",
@@ -65,6 +64,7 @@ def parse_times(text: str) -> list[float]:
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
+    """Check every flag, then draw the PNG and/or the animation."""
     from emonav_drake.atomic_io import atomic_output, check_distinct, check_output_file
 
     if args.png is None and args.animation is None:

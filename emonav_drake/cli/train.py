@@ -14,13 +14,16 @@ import sys
 from pathlib import Path
 
 from emonav_drake.atomic_io import check_output_dir
-from emonav_drake.cli import SeedArg
+from emonav_drake.cli.common import SeedArg
 from emonav_drake.params import ConfigError
 from emonav_drake.planners.variants import VARIANTS, variant
 
 
-def add_train_parser(sub: argparse._SubParsersAction) -> None:
-    t = sub.add_parser("train", help="train a navigation policy (SAC, or the CPU DAgger route)")
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `emonav train` on the CLI's sub-parsers."""
+    t = subparsers.add_parser(
+        "train", help="train a navigation policy (SAC, or the CPU DAgger route)"
+    )
     t.add_argument(
         "--algo", choices=["sac", "dagger"], help="sac (default) or dagger (the CPU route)"
     )
@@ -64,6 +67,7 @@ def add_train_parser(sub: argparse._SubParsersAction) -> None:
     )
     t.add_argument("--resume", type=Path, help="continue the run in this directory")
     t.set_defaults(func=cmd_train)
+    return t
 
 
 def _apply_variant(args: argparse.Namespace) -> None:
@@ -151,6 +155,7 @@ def resume_command(args: argparse.Namespace, out: Path) -> str:
 
 
 def cmd_train(args: argparse.Namespace) -> int:
+    """Train by the chosen route into --out (or continue --resume)."""
     from emonav_drake.planners.policy import resolve_device
 
     _apply_variant(args)
@@ -184,26 +189,5 @@ def cmd_train(args: argparse.Namespace) -> int:
         resume=args.resume is not None,
         ray_address=args.ray_address,
         resume_command=resume_command(args, out),
-    )
-    return 0
-
-
-def add_export_parser(sub: argparse._SubParsersAction) -> None:
-    e = sub.add_parser("export", help="export a policy checkpoint to TorchScript")
-    e.add_argument("checkpoint", type=Path, nargs="?", help="default: the shipped policy")
-    e.add_argument("--out", type=Path, required=True, help="TorchScript file to write")
-    e.set_defaults(func=cmd_export)
-
-
-def cmd_export(args: argparse.Namespace) -> int:
-    from emonav_drake.atomic_io import check_distinct, check_output_file
-    from emonav_drake.planners.policy import DEFAULT_POLICY, export_torchscript
-
-    check_output_file(args.out, "--out")
-    check_distinct({"CHECKPOINT": args.checkpoint, "--out": args.out})
-    path = export_torchscript(args.checkpoint or DEFAULT_POLICY, args.out)
-    print(
-        f"TorchScript written to {path} (inputs: uint8 stack (1, N, M, M), vector state "
-        "(1, 4) = [d/10, phi/pi, v/0.4, dtheta/0.2])"
     )
     return 0

@@ -1,0 +1,181 @@
+"""The `emonav` command line.
+
+emonav sim  --planner dwa --plant lip --seed S [--scenario F.yaml]
+            [--config F.yaml | --setting NAME] [--meshcat [--no-wait] [--meshcat-host H]]
+            [--record out.html] [--json out.json] [--rays]
+emonav eval --planner dwa --plant lip --episodes 100 --first-seed 0
+            [--config F.yaml | --setting NAME] [--json out.json]
+emonav lgm  --seed S --png out.png [--steps K] [--time-varying]
+emonav plot RUN.json --png out.png [--times 0,5,10] [--gif out.gif]
+emonav SUB-COMMAND --help   for every other one
+
+One module per sub-command in emonav_drake/cli/ (sim.py, eval.py, lgm.py, plot.py, walk.py,
+emotion.py, train.py, export.py, benchmark.py, diagnose.py, config_cmd.py, calibrate.py,
+digit_rounds.py); --config / --setting / --scenario are resolved in one place, config.py.
+
+Errors: a bad flag, file or field is one line `emonav: error: ...` naming it, exit code 2
+(`--debug` shows the traceback instead). Ctrl-C: one line, exit code 130; `eval` keeps
+the finished episodes, `train` saves a checkpoint. Output files are checked before any
+work and written atomically (never half-written). See docs/reliability.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import logging
+import signal
+import sys
+import threading
+import traceback
+from collections.abc import Iterator
+
+from emonav_drake.cli import (
+    benchmark,
+    calibrate,
+    config_cmd,
+    diagnose,
+    digit_rounds,
+    emotion,
+    export,
+    lgm,
+    plot,
+    sim,
+    train,
+    walk,
+)
+from emonav_drake.cli import eval as eval_cmd
+from emonav_drake.errors import RunInterrupted
+
+# Exit codes.
+EXIT_USAGE = 2  # a user error: bad flag, file, field or output path
+EXIT_INTERRUPTED = 130  # Ctrl-C (128 + SIGINT)
+EXIT_INTERNAL = 1  # an unexpected exception: a bug
+
+# Exceptions that are the user's to fix: the ValueError family (ConfigError, PolicyError,
+# CommandError, ImageReadError, OutputPathError, DeviceError, …) and the file system's.
+USER_ERRORS = (ValueError, OSError, NotImplementedError)
+
+# The sub-commands in the order of `emonav --help`.
+SUBCOMMANDS = (
+    sim,
+    eval_cmd,
+    lgm,
+    train,
+    export,
+    emotion,
+    walk,
+    plot,
+    benchmark,
+    diagnose,
+    config_cmd,
+    calibrate,
+    digit_rounds,
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The `emonav` parser: every sub-command module's `add_parser`, and `--debug`."""
+    p = argparse.ArgumentParser(
+        prog="emonav", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    p.add_argument("-v", "--verbose", action="store_true")
+    p.add_argument(
+        "--debug",
+        action="store_true",
+        help="on an error, show the Python traceback instead of the one-line message",
+    )
+    sub = p.add_subparsers(dest="command", required=True)
+    for module in SUBCOMMANDS:
+        module.add_parser(sub)
+    # accepted after the sub-command too (`emonav sim --debug`); SUPPRESS keeps the
+    # sub-parser from overwriting a --debug given before the sub-command
+    for parser in sub.choices.values():
+        parser.add_argument(
+            "--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS
+        )
+    return p
+
+
+def _one_line(e: BaseException) -> str:
+    """The exception's message on one line (YAML and torch messages can span several)."""
+    lines = [line.strip() for line in str(e).splitlines() if line.strip()]
+    return "; ".join(lines) or type(e).__name__
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM handled like Ctrl-C while a command runs (temporary files removed, runs saved).
+
+    The signal is passed to whatever SIGINT handler is installed at that moment — the
+    trainers' graceful stop-request guard during training, else Python's default, which
+    raises `KeyboardInterrupt` (also when SIGINT is ignored, as in a background job:
+    `kill` must still stop the run).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def as_sigint(signum: int, frame: object) -> None:
+        handler = signal.getsignal(signal.SIGINT)
+        if callable(handler):
+            handler(signal.SIGINT, frame)
+        else:
+            raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, as_sigint)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run a sub-command; the one place where exceptions become messages and exit codes.
+
+    0: done. 2: a user error (bad flag, file, field or output path), one line
+    `emonav: error: ...`. 130: interrupted (Ctrl-C or SIGTERM), one line. 1: an
+    unexpected exception (a bug), one line. `--debug` re-raises instead, with the
+    traceback. Argument-syntax errors are argparse's (usage and exit code 2).
+    """
+    argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    try:
+        args = build_parser().parse_args(argv)
+    except USER_ERRORS as e:  # a flag value refused while parsing (the seed flags)
+        if "--debug" in argv:
+            raise
+        print(f"emonav: error: {_one_line(e)}", file=sys.stderr)
+        return EXIT_USAGE
+    debug = getattr(args, "debug", False)
+    logging.basicConfig(
+        level=logging.INFO if args.verbose else logging.WARNING,
+        format="%(levelname)s %(name)s: %(message)s",
+    )
+    try:
+        with _sigterm_as_interrupt():
+            return args.func(args)
+    except RunInterrupted as e:
+        if debug:
+            traceback.print_exc()
+        print(f"emonav: {_one_line(e)}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except KeyboardInterrupt:
+        if debug:
+            traceback.print_exc()
+        saved = "" if args.command == "train" else "; no output file was written"
+        print(f"emonav: interrupted{saved}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except USER_ERRORS as e:
+        if debug:
+            raise
+        print(f"emonav: error: {_one_line(e)}", file=sys.stderr)
+        return EXIT_USAGE
+    except Exception as e:
+        if debug:
+            raise
+        print(
+            f"emonav: internal error: {type(e).__name__}: {_one_line(e)} "
+            "(a bug: rerun with --debug for the traceback and report it)",
+            file=sys.stderr,
+        )
+        return EXIT_INTERNAL

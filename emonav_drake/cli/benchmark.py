@@ -1,0 +1,149 @@
+"""`emonav benchmark`: methods × seeded trials, resumable, on Ray (paper Tables II-III).
+
+`DESCRIPTION` is its `--help` text (it also names `emonav config`, in config_cmd.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from emonav_drake.cli.common import SeedArg, check_workers, load_emotion_estimate
+from emonav_drake.cli.config import add_config_choice, resolve_config
+from emonav_drake.diagrams.trials import MAX_TRIALS
+from emonav_drake.params import ConfigError
+
+DESCRIPTION = """\
+`emonav benchmark` (methods × seeded trials, resumable, on Ray) and `emonav config`.
+
+emonav benchmark --planners policy,mpc,dwa --plant lip --trials 500 --first-seed 0
+                 [--workers W] [--ray-address ADDR] [--config F | --setting NAME]
+                 [--time-varying] [--emotion-estimate F] [--checkpoint NAME=PATH …] --out DIR
+emonav config [--dump] [--setting NAME | --config F] [--time-varying]
+emonav config --list
+
+The run directory keeps `settings.json`, `trials.jsonl` (one line per finished trial) and
+the tables (`tables.md`, CSVs); the same command again continues an interrupted run, a
+larger --trials extends it, other settings are refused (exit 2). See
+`emonav_drake/evaluation/benchmark.py` and docs/results.md.
+"""
+
+TIME_VARYING_HELP = "one pedestrian's emotion changes every 2 s (paper §IV-F)"
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `emonav benchmark` on the CLI's sub-parsers."""
+    b = subparsers.add_parser(
+        "benchmark",
+        help="compare methods on the same seeded trials (paper Tables II-III); resumable, Ray",
+        description=DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    b.add_argument(
+        "--planners",
+        default="policy,mpc,dwa",
+        help="comma-separated methods: dwa, mpc, dwa_digit (DWA planning with Digit's "
+        "step-response model: the Digit/Digit route's expert), policy (the shipped policy), "
+        "a variant, or a name given a --checkpoint (sac: a SAC-trained one)",
+    )
+    b.add_argument("--plant", default="lip", choices=["lip", "digit"])
+    b.add_argument(
+        "--trials",
+        type=int,
+        default=500,
+        help=f"trials per method, in [1, {MAX_TRIALS}]: every scenario is sampled and every "
+        "task listed before the first trial (a crowd that does not fit fails at once; ~0.2 ms "
+        "per seed)",
+    )
+    b.add_argument(
+        "--first-seed",
+        action=SeedArg,
+        default=0,
+        help="trial i runs seed first-seed + i (>= 0)",
+    )
+    b.add_argument(
+        "--workers",
+        type=int,
+        help="parallel workers (default: the CPU count, or the cluster's CPUs with "
+        "--ray-address); 1 runs serially in this process without Ray",
+    )
+    b.add_argument("--ray-address", help="run on this Ray cluster (e.g. auto or HOST:6379)")
+    add_config_choice(b)
+    b.add_argument("--time-varying", action="store_true", help=TIME_VARYING_HELP)
+    b.add_argument(
+        "--emotion-estimate",
+        type=Path,
+        help="YAML EmotionEstimateParams: perceive emotions through a confusion matrix "
+        "(--plant lip)",
+    )
+    b.add_argument(
+        "--checkpoint",
+        action="append",
+        metavar="NAME=PATH",
+        help="policy checkpoint of a learned method (repeatable); policy defaults to the "
+        "shipped policy, a variant to its shipped policy",
+    )
+    b.add_argument("--out", type=Path, required=True, help="run directory (created if missing)")
+    b.add_argument("--quiet", action="store_true", help="no progress bar")
+    b.set_defaults(func=cmd_benchmark)
+    return b
+
+
+def _emotion_estimate_yaml(path: Path | None) -> str | None:
+    """The validated emotion estimate of --emotion-estimate as canonical YAML."""
+    if path is None:
+        return None
+    from emonav_drake.params import dump_typed_yaml
+
+    return dump_typed_yaml(load_emotion_estimate(path))
+
+
+def cmd_benchmark(args: argparse.Namespace) -> int:
+    """Run or continue a benchmark; print where the tables are."""
+    from emonav_drake.atomic_io import check_output_dir
+    from emonav_drake.diagrams.trials import parse_methods
+    from emonav_drake.evaluation.benchmark import run_benchmark
+
+    # every flag checked before the first trial (planners are built in run_benchmark)
+    check_output_dir(args.out, "--out")
+    if args.workers is not None:
+        check_workers(args.workers)
+    if args.plant == "digit" and args.emotion_estimate is not None:
+        raise ConfigError("--emotion-estimate is available with --plant lip only")
+    methods = parse_methods(args.planners, args.checkpoint or [])
+    resolved = resolve_config(args)
+    workers = args.workers
+    if workers is None and not args.ray_address:
+        import os
+
+        workers = os.cpu_count() or 1
+    result = run_benchmark(
+        args.out,
+        methods,
+        args.plant,
+        args.trials,
+        args.first_seed,
+        resolved.config,
+        workers=workers,
+        ray_address=args.ray_address,
+        setting=resolved.setting,
+        config_source=resolved.source,
+        emotion_estimate_yaml=_emotion_estimate_yaml(args.emotion_estimate),
+        progress=not args.quiet,
+    )
+    from emonav_drake.evaluation import tables
+
+    summary = tables.summarize_methods(result.trials, result.settings["planners"])
+    for m, s in summary.items():
+        lo, hi = s["SR_ci"]
+        print(
+            f"{m:>8s}: SR {s['SR']:.3f} [{lo:.3f}, {hi:.3f}] (n={s['episodes']})  NT "
+            f"{tables.format_nt(s)} s  DT {s['DT']}  IDT {tables.format_idt(s)}"
+        )
+    for row in tables.pairwise_comparisons(result.trials, result.settings["planners"]):
+        print(tables.pairwise_statement(row))
+    print(
+        f"{result.ran} trials run in {result.wall_seconds:.1f} s; "
+        f"{len(result.trials)} in {result.path}; tables: {result.path / 'tables.md'}"
+    )
+    return 0

@@ -1,0 +1,211 @@
+"""What several sub-commands share (no sub-command of its own).
+
+Seed flags (`SeedArg`, `parse_seed`, `check_seed_range`), the Meshcat host option
+(`add_meshcat_host`, `meshcat_host`), output-file checks (`check_outputs`), the planner and
+emotion-estimate flags of `sim` and `eval` (`add_episode_flags`, `check_planner_flags`,
+`load_emotion_estimate`), `check_workers`, and the per-step tracking table written by
+`sim --steps-out` and `walk --steps-out` (`episode_steps_table`, `write_steps_csv`).
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from emonav_drake.atomic_io import check_distinct, check_output_file, write_text_atomic
+from emonav_drake.cli.config import add_config_choice
+from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.planners import PLANNERS
+from emonav_drake.planners.variants import is_learned
+
+if TYPE_CHECKING:
+    import numpy as np
+
+PLANNER_CHOICES = list(PLANNERS)
+
+
+def parse_seed(text: str, flag: str) -> int:
+    """A seed flag's value: an integer in [0, 2**64 - 1]; else `ConfigError` naming `flag`."""
+    from emonav_drake.core.scenario import MAX_SEED
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise ConfigError(f"{flag} {text!r}: must be an integer in [0, 2**64 - 1]") from None
+    if value < 0:
+        raise ConfigError(f"{flag} {value}: must be >= 0")
+    if value > MAX_SEED:
+        raise ConfigError(
+            f"{flag} {value}: beyond 64 bits; seeds are in [0, 2**64 - 1] = [0, {MAX_SEED}]"
+        )
+    return value
+
+
+class SeedArg(argparse.Action):
+    """The argparse action shared by every seed flag (`--seed`, `--first-seed`): the value
+    is an integer in [0, 2**64 - 1] (`parse_seed`). Unlike a `type`, an action knows the
+    flag, so a bad value is a `ConfigError` naming it: one line, exit 2 (`main`)."""
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: object,
+        option_string: str | None = None,
+    ) -> None:
+        setattr(namespace, self.dest, parse_seed(str(values), option_string or self.dest))
+
+
+def check_seed_range(first: int, count: int, flag: str) -> None:
+    """Seeds `first` … `first + count - 1` must all fit in 64 bits (`ConfigError` naming `flag`)."""
+    from emonav_drake.core.scenario import MAX_SEED
+
+    if first + count - 1 > MAX_SEED:
+        raise ConfigError(
+            f"{flag} {first}: with {count} seeds the last one, {first + count - 1}, is beyond "
+            "64 bits (2**64 - 1)"
+        )
+
+
+def add_meshcat_host(p: argparse.ArgumentParser) -> None:
+    """`--meshcat-host`: where a live Meshcat listens (loopback unless asked)."""
+    p.add_argument(
+        "--meshcat-host",
+        default=None,
+        metavar="HOST",
+        help="with --meshcat: the interface Meshcat listens on (default localhost: this "
+        "machine only); '*' = every interface, or one address of this machine. Meshcat has "
+        "no authentication: anyone who reaches it can watch and change the scene (a warning "
+        "is printed); prefer `ssh -L 7000:localhost:7000` to watch from another machine",
+    )
+
+
+def meshcat_host(args: argparse.Namespace) -> str:
+    """The Meshcat host of `--meshcat-host` (checked: only with `--meshcat`, not empty)."""
+    from emonav_drake.diagrams.meshcat_viewing import LOOPBACK_HOST
+
+    if args.meshcat_host is None:
+        return LOOPBACK_HOST
+    if not args.meshcat:
+        raise ConfigError("--meshcat-host is used with --meshcat only")
+    if not args.meshcat_host.strip():
+        raise ConfigError("--meshcat-host '': give a host name or address, or '*'")
+    return args.meshcat_host.strip()
+
+
+def check_outputs(args: argparse.Namespace, *flags: str) -> None:
+    """Every output flag given: a writable file path (checked before any work), all distinct."""
+    outputs = {}
+    for flag in flags:
+        path = getattr(args, flag.removeprefix("--").replace("-", "_"), None)
+        if path is not None:
+            outputs[flag] = check_output_file(path, flag)
+    check_distinct(outputs)
+
+
+def check_workers(workers: int) -> None:
+    """`--workers` must be >= 1."""
+    if workers < 1:
+        raise ConfigError(f"--workers {workers}: must be >= 1")
+
+
+def add_episode_flags(p: argparse.ArgumentParser) -> None:
+    """The flags `sim` and `eval` share: the configuration (`--config | --setting`), the
+    learned planner's checkpoint and device, the emotion estimate, `--time-varying`."""
+    add_config_choice(p)
+    p.add_argument(
+        "--checkpoint",
+        type=Path,
+        help="policy checkpoint for a learned planner (default: the one shipped under its name)",
+    )
+    p.add_argument(
+        "--device", default="cpu", help="torch device for a learned planner (cpu, cuda, cuda:N)"
+    )
+    p.add_argument(
+        "--emotion-estimate",
+        type=Path,
+        help="YAML EmotionEstimateParams: perceive emotions through a confusion "
+        "matrix (mode: confusion) instead of the ground truth",
+    )
+    p.add_argument(
+        "--time-varying",
+        action="store_true",
+        help="one pedestrian's emotion changes every 2 s (paper §IV-F); with --scenario, "
+        "a pedestrian of the file chosen by --seed",
+    )
+
+
+def check_planner_flags(args: argparse.Namespace) -> None:
+    """--checkpoint / --device only mean something with a learned planner; check them early."""
+    if not is_learned(args.planner):
+        if args.checkpoint is not None:
+            raise ConfigError(
+                f"--checkpoint applies to a learned planner (--planner policy, sac or a variant), "
+                f"not {args.planner}"
+            )
+        if args.device != "cpu":
+            raise ConfigError(
+                f"--device applies to a learned planner (--planner policy, sac or a variant), "
+                f"not {args.planner}"
+            )
+        return
+    from emonav_drake.planners.policy import resolve_device
+
+    resolve_device(args.device)
+
+
+def load_emotion_estimate(path: Path | None) -> Any:
+    """The validated `EmotionEstimateParams` of `--emotion-estimate`, or None without it."""
+    if not path:
+        return None
+    from emonav_drake.params import load_typed_yaml
+    from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+
+    return load_typed_yaml(EmotionEstimateParams, path=path).validate()
+
+
+def write_steps_csv(path: str | Path, table: np.ndarray) -> int:
+    """Write a tracking table (`core.tracking.COLUMNS`, one row per step) as CSV, atomically.
+
+    The header is the column names; `step` is an integer, every other value a float in
+    SI units (m, rad, s, m/s: `core.tracking.UNITS`) with full precision (NaN as "nan").
+    Returns the number of rows written."""
+    import csv
+    import io
+
+    import numpy as np
+
+    from emonav_drake.core.tracking import COLUMNS
+
+    rows = np.asarray(table, float).reshape(-1, len(COLUMNS))
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(COLUMNS)
+    for r in rows:
+        writer.writerow([int(r[0]), *(repr(float(v)) for v in r[1:])])
+    write_text_atomic(path, buf.getvalue())
+    return len(rows)
+
+
+def episode_steps_table(
+    config: EmoNavConfig,
+    trace: Sequence[dict] | None = None,
+    robot: Sequence[np.ndarray] | None = None,
+    commands: Sequence[np.ndarray] | None = None,
+) -> np.ndarray:
+    """The tracking table of a navigation episode against the planner's LIP (ω = √(g/H) of
+    `config.robot`): from a Digit episode's `trace` (`run_digit_episode(trace=...)`), or
+    from the LIP diagram's `StepLog` lists `robot` (t_k = kT) and `commands`."""
+    import numpy as np
+
+    from emonav_drake.core.tracking import sequence_tracking, trace_tracking
+
+    r = config.robot
+    if trace is not None:
+        return trace_tracking(trace, r.omega, r.step_time)
+    states = np.asarray(robot, float).reshape(-1, 4)
+    u = np.asarray(commands, float).reshape(-1, 2)[: max(len(states) - 1, 0)]
+    n = len(u) + 1
+    return sequence_tracking(np.arange(n) * r.step_time, states[:n], u, r.omega, r.step_time)

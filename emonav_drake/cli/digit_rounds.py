@@ -1,0 +1,71 @@
+"""`emonav digit-rounds`: DAgger rounds on the full-order Digit after the calibrated route.
+
+emonav digit-rounds --from RUN --rounds 2 --episodes 60 [--workers W] --out DIR [--resume]
+
+See `emonav_drake/learning/digit_dagger.py`.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from emonav_drake.cli.common import SeedArg, check_workers
+from emonav_drake.params import ConfigError
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `emonav digit-rounds` on the CLI's sub-parsers."""
+    r = subparsers.add_parser(
+        "digit-rounds",
+        help="DAgger rounds on the full-order Digit after the calibrated route (Ray)",
+    )
+    r.add_argument(
+        "--from",
+        dest="source",
+        type=Path,
+        required=True,
+        help="the calibrated DAgger run (its dagger_state.pt and policy.pt)",
+    )
+    r.add_argument("--rounds", type=int, default=2, help="Digit rounds, >= 1")
+    r.add_argument("--episodes", type=int, default=60, help="Digit episodes per round, >= 1")
+    r.add_argument(
+        "--first-seed",
+        action=SeedArg,
+        default=4_000_000,
+        help="round r's episodes play seeds first-seed + r * episodes + i",
+    )
+    r.add_argument(
+        "--beta",
+        type=float,
+        default=0.25,
+        help="expert-acting probability in round 0, in [0, 1] (halved every round)",
+    )
+    r.add_argument("--grad-steps", type=int, default=1500, help="gradient steps per round, >= 1")
+    r.add_argument("--workers", type=int, default=1, help="parallel Ray workers, >= 1")
+    r.add_argument("--ray-address")
+    r.add_argument("--out", type=Path, required=True)
+    r.add_argument("--resume", action="store_true", help="continue the rounds in --out")
+    r.set_defaults(func=cmd_digit_rounds)
+    return r
+
+
+def cmd_digit_rounds(args: argparse.Namespace) -> int:
+    """Run (or --resume) the Digit DAgger rounds from --from's run; print the policy path."""
+    from emonav_drake.learning.digit_dagger import DigitRoundsConfig, run_digit_rounds
+
+    cfg = DigitRoundsConfig(
+        rounds=args.rounds,
+        episodes=args.episodes,
+        first_seed=args.first_seed,
+        beta=args.beta,
+        grad_steps=args.grad_steps,
+    ).validate()
+    check_workers(args.workers)
+    if not (args.source / "dagger_state.pt").is_file():
+        raise ConfigError(f"--from {args.source}: no DAgger run there (dagger_state.pt)")
+    policy = run_digit_rounds(
+        args.out, args.source, cfg, args.workers, args.ray_address, resume=args.resume
+    )
+    print(f"policy written to {policy}")
+    return 0

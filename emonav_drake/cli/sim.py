@@ -1,0 +1,216 @@
+"""`emonav sim`: one navigation episode in the Drake diagram (LIP or the full-order Digit).
+
+emonav sim  --planner dwa --plant lip --seed S [--scenario F.yaml]
+            [--config F.yaml | --setting NAME] [--meshcat [--no-wait] [--meshcat-host H]]
+            [--record out.html] [--json out.json] [--steps-out F.csv] [--rays] [--rates]
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import time
+from pathlib import Path
+from typing import Any
+
+from emonav_drake.atomic_io import atomic_output, write_json
+from emonav_drake.cli.common import (
+    PLANNER_CHOICES,
+    SeedArg,
+    add_episode_flags,
+    add_meshcat_host,
+    check_outputs,
+    check_planner_flags,
+    episode_steps_table,
+    load_emotion_estimate,
+    meshcat_host,
+    write_steps_csv,
+)
+from emonav_drake.cli.config import resolve_config, resolve_scenario
+from emonav_drake.params import ConfigError
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `emonav sim` on the CLI's sub-parsers."""
+    s = subparsers.add_parser("sim", help="run one navigation episode in the Drake diagram")
+    s.add_argument("--planner", default="dwa", choices=PLANNER_CHOICES)
+    s.add_argument("--plant", default="lip", choices=["lip", "digit"])
+    s.add_argument("--seed", action=SeedArg, default=0, help="scenario seed, in [0, 2**64 - 1]")
+    s.add_argument(
+        "--scenario",
+        help="YAML scenario file instead of a sampled one, or the name of a shipped "
+        "example (head_on, crossing, mood_swing; `emonav config --list`)",
+    )
+    s.add_argument(
+        "--meshcat",
+        action="store_true",
+        help="draw live in Meshcat (real time): prints the URL, waits for a browser to "
+        "connect, and keeps serving after the episode until Ctrl-C",
+    )
+    s.add_argument(
+        "--no-wait",
+        action="store_true",
+        help="with --meshcat: start without waiting for a browser and exit when the "
+        "episode ends (scripts, tests)",
+    )
+    add_meshcat_host(s)
+    s.add_argument("--record", type=Path, help="write a self-contained HTML replay")
+    s.add_argument(
+        "--rays", action="store_true", help="draw the LiDAR rays (per walking step) in Meshcat"
+    )
+    s.add_argument(
+        "--json",
+        type=Path,
+        help="write the outcome and the trajectory as JSON (drawn by `emonav plot`)",
+    )
+    s.add_argument(
+        "--steps-out",
+        type=Path,
+        metavar="FILE.csv",
+        help="write one CSV row per planner step: the command held, the planner's LIP step "
+        "(paper Eq. 1) from the robot at t_k vs the robot at t_k+1, the errors "
+        "(docs/walking.md; with --plant lip the errors are zero up to rounding)",
+    )
+    s.add_argument(
+        "--rates",
+        action="store_true",
+        help="profile the run: events per simulated second and wall-time share of every "
+        "system (printed, and added to --json as 'rates' and 'wall_time_share')",
+    )
+    add_episode_flags(s)
+    s.set_defaults(func=cmd_sim)
+    return s
+
+
+def cmd_sim(args: argparse.Namespace) -> int:
+    """Run one episode; print its outcome and write --json / --record / --steps-out."""
+    check_outputs(args, "--json", "--record", "--steps-out")
+    meshcat_host(args)
+    if args.plant == "digit" and (args.emotion_estimate or args.rays):
+        raise ConfigError(
+            "--plant digit: --rays and --emotion-estimate are available "
+            "with --plant lip only in this version"
+        )
+    check_planner_flags(args)
+    resolved = resolve_config(args)
+    cfg = resolved.config
+    scenario = resolve_scenario(args, resolved)
+    estimate = load_emotion_estimate(args.emotion_estimate)
+    from emonav_drake.diagrams.navigation import run_episode
+    from emonav_drake.diagrams.navigation_digit import run_digit_episode
+    from emonav_drake.planners import configure_for, make_planner
+
+    planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
+    grid_kind = configure_for(planner, cfg)
+    if hasattr(planner, "describe"):
+        print(f"planner {args.planner}: {planner.describe()}")
+    meshcat = caption = None
+    if args.meshcat or args.record:
+        from emonav_drake.diagrams.meshcat_viewing import (
+            ReplayCaption,
+            make_meshcat,
+            start_live_view,
+        )
+        from emonav_drake.systems.navigation_meshcat import set_overview_camera
+
+        # record only: no "listening at" line
+        meshcat = make_meshcat(live=args.meshcat, host=meshcat_host(args))
+        set_overview_camera(meshcat, cfg)
+        if args.meshcat:
+            plant = "Digit" if args.plant == "digit" else "LIP"
+            caption = ReplayCaption(args.planner, plant, scenario.seed, rays=args.rays)
+            start_live_view(meshcat, wait=not args.no_wait, caption=caption)
+    rates = None
+    if args.rates:
+        from emonav_drake.diagrams.rates import RateMeasurement
+
+        rates = RateMeasurement()
+    trace: list[dict] = []  # Digit's per-step log: the trajectory of --json
+    t0 = time.perf_counter()
+    with contextlib.ExitStack() as stack:
+        # the replay goes to a temporary sibling, renamed when complete
+        record_html = stack.enter_context(atomic_output(args.record)) if args.record else None
+        if args.plant == "digit":
+            record = run_digit_episode(
+                scenario,
+                cfg,
+                planner,
+                meshcat=meshcat,
+                grid_kind=grid_kind,
+                goal_radius=cfg.episode.eval_goal_radius,
+                realtime_rate=1.0 if args.meshcat else 0.0,
+                record_html=record_html,
+                rates=rates,
+                trace=trace if args.json or args.steps_out else None,
+            )
+        else:
+            record, step_log = run_episode(
+                scenario,
+                cfg,
+                planner,
+                meshcat=meshcat,
+                record_html=record_html,
+                show_rays=args.rays,
+                goal_radius=cfg.episode.eval_goal_radius,
+                realtime_rate=1.0 if args.meshcat else 0.0,
+                grid_kind=grid_kind,
+                emotion_estimate=estimate,
+                rates=rates,
+            )
+    wall = time.perf_counter() - t0
+    out = record.to_json()
+    out["seed"] = scenario.seed
+    if rates is not None and rates.report is not None:
+        out.update(rates.report.to_json())
+        print(_format_rates(rates.report))
+    print(
+        f"seed {scenario.seed}: {record.outcome} after {record.steps} steps "
+        f"({record.nav_time:.1f} s simulated, {wall:.2f} s wall), path "
+        f"{record.path_length:.2f} m, min pedestrian distance "
+        f"{record.min_ped_distance:.2f} m, discomfort steps {record.discomfort_steps}, "
+        f"IDT {record.idt}"
+    )
+    if args.record:
+        print(f"replay written to {Path(args.record).resolve()} (open it in a browser)")
+    if args.json:  # the episode step by step, drawn by `emonav plot`
+        from emonav_drake.evaluation import trajectory as tj
+
+        goal_r = cfg.episode.eval_goal_radius
+        out["trajectory"] = (
+            tj.trajectory_from_digit_trace(scenario, cfg, record, trace, args.planner, goal_r)
+            if args.plant == "digit"
+            else tj.trajectory_from_step_log(scenario, cfg, record, step_log, args.planner, goal_r)
+        ).to_json()
+        write_json(args.json, out)
+    if args.steps_out:  # per planner step: the planner's LIP step vs the robot
+        table = (
+            episode_steps_table(cfg, trace=trace)
+            if args.plant == "digit"
+            else episode_steps_table(cfg, robot=step_log.robot, commands=step_log.commands)
+        )
+        n = write_steps_csv(args.steps_out, table)
+        print(f"{n} steps written to {args.steps_out}")
+    if caption is not None:  # live: the outcome in Meshcat, served until Ctrl-C
+        from emonav_drake.diagrams.meshcat_viewing import finish_live_view
+
+        caption.set_outcome(record)
+        finish_live_view(meshcat, keep_serving=not args.no_wait, caption=caption)
+    return 0
+
+
+def _format_rates(report: Any) -> str:
+    """The measured rates and wall-time shares (`--rates`) as a small table."""
+    shares = report.wall_time_share
+    rates = report.rates()
+    # the plant's wall time is the C++ remainder, listed as "<plant> + framework"
+    rows = {n.removesuffix(" + framework"): n for n in shares}
+    names = sorted(set(rates) | set(rows), key=lambda n: -shares.get(rows.get(n, n), 0.0))
+    lines = [f"{'system':32s} {'rate [1/s sim]':>15s} {'wall share':>11s}"]
+    for n in names:
+        r = f"{rates[n]:.1f}" if n in rates else "-"
+        label = rows.get(n, n)
+        lines.append(f"{label:32s} {r:>15s} {100 * shares.get(label, 0.0):10.1f}%")
+    lines.append(
+        f"(profiled: {report.sim_seconds:.1f} s simulated in {report.wall_seconds:.1f} s wall)"
+    )
+    return "\n".join(lines)
