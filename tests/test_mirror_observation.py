@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from emonav_drake.core.lip import LipState
-from emonav_drake.core.navigation import NavigationWorld, mirror_observation, observation_frame
+from emonav_drake.core.navigation import NavigationWorld
+from emonav_drake.core.observations import mirror_observation, observation_frame
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.params import EmoNavConfig
 

@@ -12,7 +12,7 @@ from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
 from emonav_drake.core.crowd import CrowdSnapshot
 from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.lip import LipState
-from emonav_drake.core.navigation import observation_frame
+from emonav_drake.core.observations import observation_frame
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.params import HAPPY, NEGATIVE, NEUTRAL, EmoNavConfig
 from emonav_drake.perception.face_emotion import FaceEmotionClassifier, face_bearings

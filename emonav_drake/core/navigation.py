@@ -23,9 +23,9 @@ foot switch t_k and the crowd at t_k, oldest first:
     "scan"   LiDAR-SAC, LNDNL (ranges [m])    float32 (K,)      float32 (N, K)
     "drlvo"  DRL-VO* (scan OGM + ped. v map)  uint8 (3, M, M)   uint8 (1, 3, M, M)
 
-`observation_frame` computes a frame, `observation_shape` / `observation_dtype` give the
-stack; a stack holds the frames of the last N walking steps (DRL-VO*: the current one
-only), filled with the first frame at the start of the episode.
+Each kind is an entry of the registry in `core/observations.py` (its frame, stack, shape,
+dtype, mirror); a stack holds the frames of the last N walking steps (DRL-VO*: the current
+one only), filled with the first frame at the start of the episode.
 """
 
 from __future__ import annotations
@@ -35,16 +35,14 @@ import math
 
 import numpy as np
 
-from emonav_drake.core.crowd import Crowd, CrowdSnapshot, CrowdState, obstacle_discs
-from emonav_drake.core.grid_maps import FrameStack, lgm_frame
-from emonav_drake.core.kinematic_maps import drlvo_image
-from emonav_drake.core.lidar import scan_discs
+from emonav_drake.core.crowd import Crowd, CrowdSnapshot, CrowdState
 from emonav_drake.core.lip import LipState, lip_in_step, lip_step, lip_velocity, wrap_angle
 from emonav_drake.core.metrics import EpisodeRecord, EpisodeTracker
+from emonav_drake.core.observations import observation_kind
 from emonav_drake.core.reward import StepEvaluation, evaluate_step
 from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec
 from emonav_drake.core.step_response import StepResponseModel
-from emonav_drake.params import EmoNavConfig, LidarParams, RobotParams
+from emonav_drake.params import EmoNavConfig, RobotParams
 
 
 @dc.dataclass(frozen=True)
@@ -127,128 +125,7 @@ def robot_at_substep(
     )
 
 
-OBSERVATION_KINDS = ("lgm", "ogm", "scan", "drlvo")
 RESPONSE_SEED_SALT = 0x5E5  # the calibrated robot's residual draws: seeded by (salt, scenario)
-
-
-def check_observation_kind(kind: str) -> str:
-    """`kind` if it is one of `OBSERVATION_KINDS`, else `ValueError`."""
-    if kind not in OBSERVATION_KINDS:
-        raise ValueError(f"grid kind = {kind!r}: must be one of {list(OBSERVATION_KINDS)}")
-    return kind
-
-
-def observation_shape(kind: str, lidar: LidarParams) -> tuple[int, ...]:
-    """Shape of the map observation (the stack) of `kind` (module docstring)."""
-    n, m, k = lidar.num_frames, lidar.grid_size, lidar.num_beams
-    return {"scan": (n, k), "drlvo": (1, 3, m, m)}.get(check_observation_kind(kind), (n, m, m))
-
-
-def observation_dtype(kind: str) -> np.dtype:
-    """dtype of the map observation of `kind`: float32 ranges for scans, else uint8."""
-    return np.dtype(np.float32 if check_observation_kind(kind) == "scan" else np.uint8)
-
-
-def observation_frame(
-    robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig, kind: str = "lgm"
-) -> np.ndarray:
-    """One observation frame seen from the robot's CoM and heading (module docstring).
-
-    "lgm" / "ogm": uint8 (M, M) grid map; "scan": float32 (K,) LiDAR ranges [m] in
-    [min_range, max_range]; "drlvo": uint8 (3, M, M), `kinematic_maps.drlvo_image`.
-    The environment (`NavigationWorld`) and the diagram (`LidarGridMapBuilder`) both
-    build their observations from this function.
-    """
-    check_observation_kind(kind)
-    centers, radii, margins = obstacle_discs(crowd)
-    li = config.lidar
-    xy = np.array([robot.x, robot.y])
-    if kind == "scan":
-        ranges = scan_discs(
-            xy, robot.heading, centers, radii, li.num_beams, li.max_range, li.min_range
-        )
-        return ranges.astype(np.float32)
-    if kind == "drlvo":
-        return drlvo_image(
-            xy,
-            robot.heading,
-            centers,
-            radii,
-            margins,
-            crowd.positions,
-            crowd.velocities,
-            crowd.radius,
-            li.num_beams,
-            li.grid_size,
-            li.max_range,
-            li.min_range,
-        )
-    return lgm_frame(
-        xy,
-        robot.heading,
-        centers,
-        radii,
-        margins,
-        num_beams=li.num_beams,
-        grid_size=li.grid_size,
-        max_range=li.max_range,
-        min_range=li.min_range,
-        kind=kind,
-    )
-
-
-def mirror_observation(stacks: np.ndarray, kind: str) -> np.ndarray:
-    """The observation of the left-right mirrored world (y → −y in the robot frame).
-
-    Works on one frame, a stack or a batch of stacks (the trailing axes are a frame):
-    "lgm" (…, M, M): sector i ↔ M − 1 − i (rows; beam i ↔ K − 1 − i); "ogm" (…, M, M):
-    column j ↔ M − 1 − j (y ↔ −y); "scan" (…, K): beam i ↔ K − 1 − i; "drlvo"
-    (…, 3, M, M): columns reversed and the v_y plane negated about its zero, 128
-    (256 − value, at most 255). Returns a new array.
-    """
-    check_observation_kind(kind)
-    x = np.asarray(stacks)
-    if kind == "lgm":
-        return np.ascontiguousarray(x[..., ::-1, :])
-    out = np.ascontiguousarray(x[..., ::-1])
-    if kind == "drlvo":
-        vy = out[..., 2, :, :]
-        out[..., 2, :, :] = np.minimum(256 - vy.astype(np.int16), 255).astype(np.uint8)
-    return out
-
-
-class ScanStack:
-    """The last N LiDAR scans (N, K) float32, oldest first (the LiDAR-SAC observation)."""
-
-    def __init__(self, num_frames: int, num_beams: int) -> None:
-        self._scans = np.zeros((num_frames, num_beams), np.float32)
-
-    def reset(self, scan: np.ndarray) -> np.ndarray:
-        self._scans[:] = scan
-        return self.array
-
-    def push(self, scan: np.ndarray) -> np.ndarray:
-        self._scans[:-1] = self._scans[1:]
-        self._scans[-1] = scan
-        return self.array
-
-    @property
-    def array(self) -> np.ndarray:
-        return self._scans.copy()
-
-
-class LatestFrame:
-    """Holds only the newest observation frame (observations without a frame stack)."""
-
-    def reset(self, frame: np.ndarray) -> np.ndarray:
-        self._frame = frame
-        return self.array
-
-    push = reset
-
-    @property
-    def array(self) -> np.ndarray:
-        return self._frame.copy()
 
 
 class NavigationWorld:
@@ -307,25 +184,16 @@ class NavigationWorld:
             self.config.episode.max_steps, self.config.robot.step_time, seed=s.seed
         )
         self.frames = None
-        li = self.config.lidar
-        if self.grid_kind == "drlvo":
-            self.frames = LatestFrame()
-            self.frames.reset(self._frame())
-        elif self.grid_kind == "scan":
-            self.frames = ScanStack(li.num_frames, li.num_beams)
-            self.frames.reset(self._frame())
-        elif self.grid_kind is not None:
-            self.frames = FrameStack(li.num_frames, li.grid_size)
+        if self.grid_kind is not None:
+            self.frames = observation_kind(self.grid_kind).new_stack(self.config.lidar)
             self.frames.reset(self._frame())
         return self.planner_input()
 
     def _frame(self) -> np.ndarray:
         """The current frame, as its stack stores it (DRL-VO*: the whole (1, 3, M, M))."""
-        kind = self.grid_kind or "lgm"
-        frame = observation_frame(
-            self.robot, self.crowd.snapshot(self.crowd_state), self.config, kind
-        )
-        return frame[None] if kind == "drlvo" else frame
+        kind = observation_kind(self.grid_kind or "lgm")
+        frame = kind.frame(self.robot, self.crowd.snapshot(self.crowd_state), self.config)
+        return kind.stack_item(frame)
 
     def planner_input(self) -> PlannerInput:
         """The planner's view of the current walking step."""
@@ -414,7 +282,7 @@ class NavigationWorld:
                     f"saved frames are {frames.dtype} {frames.shape}, this world's "
                     f"{current.dtype} {current.shape}"
                 )
-            if isinstance(self.frames, LatestFrame):
+            if observation_kind(self.grid_kind).single_frame:
                 self.frames.reset(np.array(frames))
             else:  # reset to the oldest frame, then push the others: the same stack
                 self.frames.reset(frames[0])

@@ -1,16 +1,341 @@
-"""The observation kinds a navigation policy can read, and their keys.
+"""The map observations a navigation policy can read: one registry entry per kind.
 
-A policy's map observation is one of: "lgm" (the paper's LiDAR grid maps with emotion
-zones), "ogm" (occupancy grids without them), "scan" (raw LiDAR scans; LiDAR-SAC, LNDNL),
-"drlvo" (the DRL-VO* image). The observation dictionary (`EmoNavLIP-v0`, `EmoNavDigit-v0`,
-`systems.NavigationObservation`) holds the map under `map_key(kind)` beside "goal" and
-"last_action".
+The planner input's `lgm_stack` (the name is the paper's LGM; the field carries whichever
+map the policy reads) is built, robot frame, from the CoM and heading at the foot switch
+t_k and the crowd at t_k, oldest first:
+
+    kind     variant (paper)                  frame at t_k      stack (observation)
+    "lgm"    EmoBipedNav; N = 1: Single-LGM   uint8 (M, M)      uint8 (N, M, M)
+    "ogm"    OGM (Cartesian occupancy grid)   uint8 (M, M)      uint8 (N, M, M)
+    "scan"   LiDAR-SAC, LNDNL (ranges [m])    float32 (K,)      float32 (N, K)
+    "drlvo"  DRL-VO* (scan OGM + ped. v map)  uint8 (3, M, M)   uint8 (1, 3, M, M)
+
+Everything that depends on the kind asks its `ObservationKind`: the environments
+(`NavigationWorld`, `EmoNavLIP-v0`, `EmoNavDigit-v0`), the diagram's
+`LidarGridMapBuilder`, the policies' encoders and checkpoints, DAgger's mirror
+augmentation. A new observation is one `register_observation(ObservationKind(...))`.
+The observation dictionary holds the map under the kind's `key` ("lgm", "scan" or
+"image") beside "goal" and "last_action".
 """
 
 from __future__ import annotations
 
+import dataclasses as dc
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from emonav_drake.core.crowd import CrowdSnapshot, obstacle_discs
+from emonav_drake.core.grid_maps import FrameStack, lgm_frame
+from emonav_drake.core.kinematic_maps import drlvo_image
+from emonav_drake.core.lidar import scan_discs
+from emonav_drake.params import EmoNavConfig, LidarParams
+
+if TYPE_CHECKING:
+    from emonav_drake.core.lip import LipState
+
+
+class ScanStack:
+    """The last N LiDAR scans (N, K) float32, oldest first (the LiDAR-SAC observation)."""
+
+    def __init__(self, num_frames: int, num_beams: int) -> None:
+        self._scans = np.zeros((num_frames, num_beams), np.float32)
+
+    def reset(self, scan: np.ndarray) -> np.ndarray:
+        self._scans[:] = scan
+        return self.array
+
+    def push(self, scan: np.ndarray) -> np.ndarray:
+        self._scans[:-1] = self._scans[1:]
+        self._scans[-1] = scan
+        return self.array
+
+    @property
+    def array(self) -> np.ndarray:
+        return self._scans.copy()
+
+
+class LatestFrame:
+    """Holds only the newest observation frame (observations without a frame stack)."""
+
+    def reset(self, frame: np.ndarray) -> np.ndarray:
+        self._frame = frame
+        return self.array
+
+    push = reset
+
+    @property
+    def array(self) -> np.ndarray:
+        return self._frame.copy()
+
+
+@dc.dataclass(frozen=True)
+class ObservationKind:
+    """One map observation.
+
+    Attributes:
+        name: the kind (`grid_kind` in configurations and checkpoints).
+        description: in words, for users ("LiDAR grid maps").
+        key: the observation dictionary's key of the map.
+        frame: `frame(robot, crowd, config)` → one frame seen from the robot's CoM and
+            heading (`LipState`) at t_k, of the crowd `CrowdSnapshot` at t_k.
+        shape: `shape(lidar)` → the stack's shape (`LidarParams`: N, M, K).
+        dtype: the stack's dtype.
+        high: `high(lidar)` → the largest value (the observation space's bound; low is 0).
+        new_stack: `new_stack(lidar)` → an empty stack (`reset(item)`, `push(item)`,
+            `array`).
+        mirror: the observation of the left-right mirrored world (y → −y in the robot
+            frame), on a frame, a stack or a batch of stacks; returns a new array.
+        lidar_for: `lidar_for(shape, lidar)` → the `LidarParams` fields (num_frames,
+            grid_size) that make `shape(lidar)` equal a policy's declared stack `shape`;
+            `ValueError` if no setting can (e.g. another number of beams).
+        single_frame: the stack is the current frame only (no history; num_frames 1).
+        planes_per_frame: input planes each frame gives a 2-D CNN encoder.
+        scans: a 1-D range signal (scan encoders), not an image (2-D CNN).
+    """
+
+    name: str
+    description: str
+    key: str
+    frame: Callable[[LipState, CrowdSnapshot, EmoNavConfig], np.ndarray]
+    shape: Callable[[LidarParams], tuple[int, ...]]
+    dtype: np.dtype
+    high: Callable[[LidarParams], float]
+    new_stack: Callable[[LidarParams], Any]
+    mirror: Callable[[np.ndarray], np.ndarray]
+    lidar_for: Callable[[tuple[int, ...], LidarParams], dict[str, int]]
+    single_frame: bool = False
+    planes_per_frame: int = 1
+    scans: bool = False
+
+    def stack_item(self, frame: np.ndarray) -> np.ndarray:
+        """What one frame is in the stack (a single-frame kind stores the whole (1, …))."""
+        return frame[None] if self.single_frame else frame
+
+
+_KINDS: dict[str, ObservationKind] = {}
+
+
+def register_observation(kind: ObservationKind, replace: bool = False) -> ObservationKind:
+    """Add an observation kind (`ValueError` if the name is taken and not `replace`)."""
+    if kind.name in _KINDS and not replace:
+        raise ValueError(f"an observation kind called {kind.name!r} is registered already")
+    _KINDS[kind.name] = kind
+    return kind
+
+
+def unregister_observation(name: str) -> None:
+    """Remove an observation kind (tests that register a throw-away one)."""
+    _KINDS.pop(name, None)
+
+
+def observation_kinds() -> tuple[str, ...]:
+    """The registered kinds, in registration order."""
+    return tuple(_KINDS)
+
+
+def observation_kind(kind: str) -> ObservationKind:
+    """The kind called `kind`; `ValueError` listing the kinds otherwise."""
+    if kind not in _KINDS:
+        raise ValueError(f"grid kind = {kind!r}: must be one of {list(_KINDS)}")
+    return _KINDS[kind]
+
+
+def check_observation_kind(kind: str) -> str:
+    """`kind` if it is registered, else `ValueError`."""
+    return observation_kind(kind).name
+
 
 def map_key(grid_kind: str) -> str:
     """The map observation's key: "lgm" for grid maps (LGM or OGM), "scan" for scans,
-    "image" for the DRL-VO* image."""
-    return {"scan": "scan", "drlvo": "image"}.get(grid_kind, "lgm")
+    "image" for the DRL-VO* image (an unregistered kind: "lgm")."""
+    return _KINDS[grid_kind].key if grid_kind in _KINDS else "lgm"
+
+
+def observation_shape(kind: str, lidar: LidarParams) -> tuple[int, ...]:
+    """Shape of the map observation (the stack) of `kind` (module docstring)."""
+    return observation_kind(kind).shape(lidar)
+
+
+def observation_dtype(kind: str) -> np.dtype:
+    """dtype of the map observation of `kind`: float32 ranges for scans, else uint8."""
+    return observation_kind(kind).dtype
+
+
+def observation_frame(
+    robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig, kind: str = "lgm"
+) -> np.ndarray:
+    """One observation frame of `kind` seen from the robot's CoM and heading (module
+    docstring). The environment (`NavigationWorld`) and the diagram
+    (`LidarGridMapBuilder`) both build their observations from this function."""
+    return observation_kind(kind).frame(robot, crowd, config)
+
+
+def mirror_observation(stacks: np.ndarray, kind: str) -> np.ndarray:
+    """The observation of the left-right mirrored world (y → −y in the robot frame), on a
+    frame, a stack or a batch of stacks; returns a new array (`ObservationKind.mirror`)."""
+    return observation_kind(kind).mirror(np.asarray(stacks))
+
+
+# ------------------------------------------------------------------ the paper's kinds
+def _grid_frame(kind: str) -> Callable[[LipState, CrowdSnapshot, EmoNavConfig], np.ndarray]:
+    def frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
+        centers, radii, margins = obstacle_discs(crowd)
+        li = config.lidar
+        return lgm_frame(
+            np.array([robot.x, robot.y]),
+            robot.heading,
+            centers,
+            radii,
+            margins,
+            num_beams=li.num_beams,
+            grid_size=li.grid_size,
+            max_range=li.max_range,
+            min_range=li.min_range,
+            kind=kind,
+        )
+
+    return frame
+
+
+def _scan_frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
+    centers, radii, _ = obstacle_discs(crowd)
+    li = config.lidar
+    xy = np.array([robot.x, robot.y])
+    ranges = scan_discs(xy, robot.heading, centers, radii, li.num_beams, li.max_range, li.min_range)
+    return ranges.astype(np.float32)
+
+
+def _drlvo_frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
+    centers, radii, margins = obstacle_discs(crowd)
+    li = config.lidar
+    return drlvo_image(
+        np.array([robot.x, robot.y]),
+        robot.heading,
+        centers,
+        radii,
+        margins,
+        crowd.positions,
+        crowd.velocities,
+        crowd.radius,
+        li.num_beams,
+        li.grid_size,
+        li.max_range,
+        li.min_range,
+    )
+
+
+def _mirror_rows(x: np.ndarray) -> np.ndarray:
+    """LGM (…, M, M): sector i ↔ M − 1 − i (rows; beam i ↔ K − 1 − i)."""
+    return np.ascontiguousarray(x[..., ::-1, :])
+
+
+def _mirror_last_axis(x: np.ndarray) -> np.ndarray:
+    """OGM (…, M, M): column j ↔ M − 1 − j (y ↔ −y); scan (…, K): beam i ↔ K − 1 − i."""
+    return np.ascontiguousarray(x[..., ::-1])
+
+
+def _mirror_drlvo(x: np.ndarray) -> np.ndarray:
+    """DRL-VO* (…, 3, M, M): columns reversed and the v_y plane negated about its zero,
+    128 (256 − value, at most 255)."""
+    out = np.ascontiguousarray(x[..., ::-1])
+    vy = out[..., 2, :, :]
+    out[..., 2, :, :] = np.minimum(256 - vy.astype(np.int16), 255).astype(np.uint8)
+    return out
+
+
+def _grid_shape(li: LidarParams) -> tuple[int, ...]:
+    return (li.num_frames, li.grid_size, li.grid_size)
+
+
+def _byte_max(li: LidarParams) -> float:
+    return 255
+
+
+def _grid_stack(li: LidarParams) -> FrameStack:
+    return FrameStack(li.num_frames, li.grid_size)
+
+
+def _grid_lidar(shape: tuple[int, ...], li: LidarParams) -> dict[str, int]:
+    return {"num_frames": shape[0], "grid_size": shape[1]}
+
+
+def _scan_lidar(shape: tuple[int, ...], li: LidarParams) -> dict[str, int]:
+    num_frames, beams = shape
+    if beams != li.num_beams:
+        raise ValueError(
+            f"the policy reads {beams}-beam scans, but lidar.num_beams = {li.num_beams}"
+        )
+    return {"num_frames": num_frames}
+
+
+def _drlvo_lidar(shape: tuple[int, ...], li: LidarParams) -> dict[str, int]:
+    num_frames, _, size, _ = shape
+    if num_frames != 1:
+        raise ValueError(
+            f"the DRL-VO* policy declares num_frames = {num_frames}: its observation is "
+            "one (3, M, M) image (num_frames 1), as the environment gives it"
+        )
+    return {"num_frames": 1, "grid_size": size}
+
+
+register_observation(
+    ObservationKind(
+        "lgm",
+        "LiDAR grid maps",
+        "lgm",
+        _grid_frame("lgm"),
+        _grid_shape,
+        np.dtype(np.uint8),
+        _byte_max,
+        _grid_stack,
+        _mirror_rows,
+        _grid_lidar,
+    )
+)
+register_observation(
+    ObservationKind(
+        "ogm",
+        "occupancy grids",
+        "lgm",
+        _grid_frame("ogm"),
+        _grid_shape,
+        np.dtype(np.uint8),
+        _byte_max,
+        _grid_stack,
+        _mirror_last_axis,
+        _grid_lidar,
+    )
+)
+register_observation(
+    ObservationKind(
+        "scan",
+        "raw scans",
+        "scan",
+        _scan_frame,
+        lambda li: (li.num_frames, li.num_beams),
+        np.dtype(np.float32),
+        lambda li: li.max_range,
+        lambda li: ScanStack(li.num_frames, li.num_beams),
+        _mirror_last_axis,
+        _scan_lidar,
+        scans=True,
+    )
+)
+register_observation(
+    ObservationKind(
+        "drlvo",
+        "DRL-VO* image",
+        "image",
+        _drlvo_frame,
+        lambda li: (1, 3, li.grid_size, li.grid_size),
+        np.dtype(np.uint8),
+        _byte_max,
+        lambda li: LatestFrame(),
+        _mirror_drlvo,
+        _drlvo_lidar,
+        single_frame=True,
+        planes_per_frame=3,
+    )
+)

@@ -26,7 +26,7 @@ fresh default contexts, or a cloned context, need no `planner.reset()`.
 Observation. The grid-map builder gives the planner the map observation of the
 diagram's `grid_kind` on its `lgm_stack` port — LGM or OGM stack uint8 (N, M, M), raw
 scan stack float32 (N, K) [m] ("scan": LiDAR-SAC, LNDNL), or the DRL-VO* image uint8
-(1, 3, M, M) ("drlvo") — computed by the same `core.navigation.observation_frame` as the
+(1, 3, M, M) ("drlvo") — computed by the same `core.observations.observation_frame` as the
 Gymnasium env's, so any policy checkpoint runs here with its training observation
 (`planners.configure_for` reads the kind and sizes from the checkpoint). DWA and MPC
 ignore it.

@@ -8,6 +8,7 @@ every field against its allowed range (`_DAGGER_RANGES`, `_SAC_RANGES`, in the s
 
 import dataclasses as dc
 
+from emonav_drake.core.observations import observation_kind, observation_kinds
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.params import NUM_BEAMS, ConfigError, EpisodeParams, validate_ranges
 
@@ -128,17 +129,18 @@ class SacConfig:
 
 def _check_observation(grid_kind: str, encoder: str, num_frames: int) -> None:
     """The observation variant's cross-field rules (shared by both trainers)."""
-    _choice("grid_kind", grid_kind, ("lgm", "ogm", "scan", "drlvo"))
+    _choice("grid_kind", grid_kind, observation_kinds())
     _choice("encoder", encoder, ("cnn", "lstm"))
-    if encoder == "lstm" and grid_kind != "scan":
+    kind = observation_kind(grid_kind)
+    if encoder == "lstm" and not kind.scans:
         raise ConfigError(
             f"encoder = 'lstm' is invalid with grid_kind = {grid_kind!r}: "
             "the LSTM encoder reads scans (grid_kind: scan)"
         )
-    if grid_kind == "drlvo" and num_frames != 1:
+    if kind.single_frame and num_frames != 1:
         raise ConfigError(
-            f"num_frames = {num_frames} is invalid with grid_kind = 'drlvo': "
-            "DRL-VO* observes one (3, M, M) image (num_frames: 1)"
+            f"num_frames = {num_frames} is invalid with grid_kind = {grid_kind!r}: "
+            f"it observes one {kind.description} (num_frames: 1)"
         )
 
 

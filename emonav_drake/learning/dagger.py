@@ -52,10 +52,11 @@ from tqdm import tqdm
 from emonav_drake.atomic_io import write_text_atomic
 from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.metrics import format_summary, summarize
-from emonav_drake.core.navigation import (
-    NavigationWorld,
+from emonav_drake.core.navigation import NavigationWorld
+from emonav_drake.core.observations import (
     mirror_observation,
     observation_dtype,
+    observation_kind,
     observation_shape,
 )
 from emonav_drake.core.scenario import Scenario, sample_scenario
@@ -255,7 +256,7 @@ class Student:
         ob = meta["observation"]
         if meta["kind"] != "categorical" or (ob["grid_kind"], ob["num_frames"]) != (
             self.grid_kind,
-            self.encoder_spec["frames"] // (3 if self.grid_kind == "drlvo" else 1),
+            self.encoder_spec["frames"] // observation_kind(self.grid_kind).planes_per_frame,
         ):
             raise ConfigError(
                 f"init_policy {path}: a {meta['kind']} policy on {ob['grid_kind']} x "

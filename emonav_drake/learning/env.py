@@ -25,7 +25,7 @@ import numpy as np
 from gymnasium import spaces
 
 from emonav_drake.core.navigation import NavigationWorld, PlannerInput
-from emonav_drake.core.observations import map_key
+from emonav_drake.core.observations import map_key, observation_kind
 from emonav_drake.core.scenario import Scenario, sample_scenario
 from emonav_drake.params import EmoNavConfig, load_config
 
@@ -36,13 +36,9 @@ def navigation_spaces(config: EmoNavConfig, grid_kind: str) -> tuple[spaces.Dict
     """(observation space, action space) of the navigation task (module docstring); the
     same for `EmoNavLIP-v0` and `EmoNavDigit-v0`."""
     r, li = config.robot, config.lidar
-    n, m = li.num_frames, li.grid_size
-    if grid_kind == "drlvo":
-        map_space = spaces.Box(0, 255, shape=(1, 3, m, m), dtype=np.uint8)
-    elif grid_kind == "scan":
-        map_space = spaces.Box(0.0, li.max_range, shape=(n, li.num_beams), dtype=np.float32)
-    else:
-        map_space = spaces.Box(0, 255, shape=(n, m, m), dtype=np.uint8)
+    kind = observation_kind(grid_kind)
+    low = 0.0 if kind.dtype.kind == "f" else 0
+    map_space = spaces.Box(low, kind.high(li), shape=kind.shape(li), dtype=kind.dtype)
     bounds = (
         np.array([0.0, -r.max_heading_change], dtype=np.float32),
         np.array([r.max_speed, r.max_heading_change], dtype=np.float32),

@@ -22,6 +22,7 @@ import numpy as np
 import torch
 from torch.nn import functional as F
 
+from emonav_drake.core.observations import observation_kind
 from emonav_drake.learning.config import SacConfig
 from emonav_drake.params import NUM_BEAMS
 from emonav_drake.planners.networks import (
@@ -35,13 +36,14 @@ from emonav_drake.planners.networks import (
 
 def make_encoder(cfg: SacConfig, beams: int = NUM_BEAMS, max_range: float = 6.0) -> torch.nn.Module:
     """The encoder for the configured observation variant."""
-    if cfg.grid_kind == "scan" and cfg.encoder == "lstm":  # LNDNL
+    kind = observation_kind(cfg.grid_kind)
+    if kind.scans and cfg.encoder == "lstm":  # LNDNL
         return ScanLstmEncoder(cfg.num_frames, beams, max_range, cfg.features)
-    if cfg.grid_kind == "scan":
+    if kind.scans:
         return ScanEncoder(cfg.num_frames, beams, max_range, cfg.features, cfg.filters)
-    if cfg.grid_kind == "drlvo":  # one (3, M, M) image: its channels are the input planes
-        return LgmEncoder(3 * cfg.num_frames, cfg.grid_size, cfg.features, cfg.filters, cfg.pool)
-    return LgmEncoder(cfg.num_frames, cfg.grid_size, cfg.features, cfg.filters, cfg.pool)
+    # a 2-D CNN on the frames' planes (DRL-VO*: the image's 3 channels)
+    planes = kind.planes_per_frame * cfg.num_frames
+    return LgmEncoder(planes, cfg.grid_size, cfg.features, cfg.filters, cfg.pool)
 
 
 class SacAgent:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
+from emonav_drake.core.observations import observation_kind
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.registry import (
     PlannerKind,
@@ -164,24 +165,10 @@ def configure_for(planner, config: EmoNavConfig) -> str:
     expected = getattr(planner, "expected_shape", None)
     if kind is None or expected is None:
         return "lgm"
-    li = config.lidar
-    if kind == "scan":
-        num_frames, beams = expected
-        if beams != li.num_beams:
-            raise ValueError(
-                f"the policy reads {beams}-beam scans, but lidar.num_beams = {li.num_beams}"
-            )
-        li.num_frames = num_frames
-    elif kind == "drlvo":
-        num_frames, _, size, _ = expected
-        if num_frames != 1:
-            raise ValueError(
-                f"the DRL-VO* policy declares num_frames = {num_frames}: its observation is "
-                "one (3, M, M) image (num_frames 1), as the environment gives it"
-            )
-        li.num_frames, li.grid_size = 1, size
-    elif kind in ("lgm", "ogm"):
-        li.num_frames, li.grid_size = expected[0], expected[1]
-    else:
-        raise ValueError(f"policy observation {kind!r} is unknown")
+    try:
+        spec = observation_kind(kind)
+    except ValueError:
+        raise ValueError(f"policy observation {kind!r} is unknown") from None
+    for field, value in spec.lidar_for(tuple(expected), config.lidar).items():
+        setattr(config.lidar, field, value)
     return kind

@@ -31,7 +31,8 @@ import torch
 
 from emonav_drake.atomic_io import atomic_write
 from emonav_drake.core.navigation import PlannerInput
-from emonav_drake.params import NUM_BEAMS
+from emonav_drake.core.observations import observation_kind, observation_kinds
+from emonav_drake.params import NUM_BEAMS, LidarParams
 from emonav_drake.planners.networks import (
     Actor,
     CategoricalPolicy,
@@ -113,13 +114,14 @@ def encoder_spec(
     "scan" with encoder "lstm" → LSTM over scans (LNDNL); "scan" → 1-D CNN (LiDAR-SAC);
     every grid kind → the paper's 2-D CNN on N (DRL-VO*: 3 N) planes of M × M cells.
     """
-    if grid_kind == "scan" and encoder == "lstm":
+    kind = observation_kind(grid_kind)
+    if kind.scans and encoder == "lstm":
         return {"type": "scan_lstm", "frames": num_frames, "features": features}
-    if grid_kind == "scan":
+    if kind.scans:
         return {"type": "scan", "frames": num_frames, "features": features, "filters": filters}
     return {
         "type": "lgm",
-        "frames": num_frames * (3 if grid_kind == "drlvo" else 1),
+        "frames": num_frames * kind.planes_per_frame,
         "size": grid_size,
         "features": features,
         "filters": filters,
@@ -184,7 +186,7 @@ def _check_meta(path: Path, blob: dict) -> None:
     for key in ("num_frames", "grid_size"):
         if not (isinstance(ob[key], int) and ob[key] >= 1):
             raise bad(f"observation.{key}", f"= {ob[key]!r} is invalid: must be an integer >= 1")
-    if ob["grid_kind"] not in ("lgm", "ogm", "scan", "drlvo"):
+    if ob["grid_kind"] not in observation_kinds():
         raise bad("observation.grid_kind", f"= {ob['grid_kind']!r} is invalid")
     b = blob["bounds"]
     if not (
@@ -194,7 +196,7 @@ def _check_meta(path: Path, blob: dict) -> None:
     ):
         raise bad("bounds", f"= {b!r} is invalid: must be [max_speed, max_heading_change] > 0")
     if enc["type"] == "lgm":
-        planes = ob["num_frames"] * (3 if ob["grid_kind"] == "drlvo" else 1)
+        planes = ob["num_frames"] * observation_kind(ob["grid_kind"]).planes_per_frame
         if "size" in enc and enc["size"] != ob["grid_size"]:
             raise bad(
                 "observation.grid_size",
@@ -211,14 +213,6 @@ def _check_meta(path: Path, blob: dict) -> None:
             raise bad("commands", "is missing or not a non-empty list of [u_v, u_dtheta]")
 
 
-_OBSERVATION_NAMES = {
-    "lgm": "LiDAR grid maps",
-    "ogm": "occupancy grids",
-    "scan": "raw scans",
-    "drlvo": "DRL-VO* image",
-}
-
-
 def policy_kind(meta: dict[str, Any]) -> str:
     """How a checkpoint's policy was trained: "sac" for a SAC actor (Gaussian over the
     continuous command), "dagger" for an imitation student (categorical over a command
@@ -233,7 +227,12 @@ def describe_policy(meta: dict[str, Any]) -> str:
     """One line for a user: route (and round, variant), observation."""
     prov = meta.get("provenance") or {}
     ob = meta["observation"]
-    what = _OBSERVATION_NAMES.get(ob["grid_kind"], ob["grid_kind"])
+    kinds = observation_kinds()
+    what = (
+        observation_kind(ob["grid_kind"]).description
+        if ob["grid_kind"] in kinds
+        else ob["grid_kind"]
+    )
     if policy_kind(meta) == "sac":
         route = "SAC actor"
     else:
@@ -248,26 +247,26 @@ def describe_policy(meta: dict[str, Any]) -> str:
 def observation_spec(meta: dict[str, Any]) -> tuple[str, tuple[int, ...], np.dtype]:
     """(grid kind, shape, dtype) of the map observation a checkpoint's policy reads.
 
-    The shapes of `core.navigation.observation_shape` with the checkpoint's N, M and, for
+    The shapes of `core.observations.observation_shape` with the checkpoint's N, M and, for
     scans, K = the encoder's beams: uint8 (N, M, M) for "lgm"/"ogm", float32 (N, K) for
     "scan", uint8 (N, 3, M, M) for "drlvo" (the env and the diagram give N = 1).
     """
     ob = meta["observation"]
-    kind, n, m = ob["grid_kind"], ob["num_frames"], ob["grid_size"]
-    if kind == "scan":
-        return kind, (n, int(meta["encoder"].get("beams", NUM_BEAMS))), np.dtype(np.float32)
-    if kind == "drlvo":
-        return kind, (n, 3, m, m), np.dtype(np.uint8)
-    return kind, (n, m, m), np.dtype(np.uint8)
+    kind = observation_kind(ob["grid_kind"])
+    beams = int(meta["encoder"].get("beams", NUM_BEAMS))
+    lidar = LidarParams(num_frames=ob["num_frames"], grid_size=ob["grid_size"], num_beams=beams)
+    shape = kind.shape(lidar)
+    if kind.single_frame:  # as declared: `configure_for` refuses N > 1
+        shape = (ob["num_frames"], *shape[1:])
+    return kind.name, shape, kind.dtype
 
 
 def probe_input(meta: dict[str, Any]) -> tuple[torch.Tensor, torch.Tensor]:
     """A zero observation of the shape the checkpoint declares (uint8 stack, vector state)."""
     ob = meta["observation"]
-    frames, size = ob["num_frames"], ob["grid_size"]
-    if ob["grid_kind"] == "drlvo":
-        frames *= 3
-    if ob["grid_kind"] == "scan":
+    kind = observation_kind(ob["grid_kind"])
+    frames, size = ob["num_frames"] * kind.planes_per_frame, ob["grid_size"]
+    if kind.scans:
         beams = meta["encoder"].get("beams", NUM_BEAMS)
         return torch.zeros(1, frames, beams), torch.zeros(1, 4)
     return torch.zeros(1, frames, size, size, dtype=torch.uint8), torch.zeros(1, 4)

@@ -2,7 +2,7 @@
 
 Builds, for the grid kind of the planner, exactly the observation the Gymnasium env
 (`core.navigation.NavigationWorld`) gives for the same robot and crowd states: both call
-`core.navigation.observation_frame` (docs/learning.md, "Observation variants").
+`core.observations.observation_frame` (docs/learning.md, "Observation variants").
 
 Input ports:
     robot_state (4): (x, y, θ, v) of the robot CoM, world frame; the LiDAR sits at the
@@ -34,7 +34,7 @@ from pydrake.systems.framework import BasicVector, Context, LeafSystem, State, V
 
 from emonav_drake.core.crowd import obstacle_discs
 from emonav_drake.core.lidar import scan_discs
-from emonav_drake.core.navigation import (
+from emonav_drake.core.observations import (
     check_observation_kind,
     observation_dtype,
     observation_frame,
