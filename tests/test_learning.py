@@ -183,7 +183,7 @@ def test_policy_drives_the_drake_diagram_within_bounds(tmp_path):
     path = tmp_path / "p.pt"
     save_policy(path, Actor(LgmEncoder(4, 60, pool=2), hidden=16), meta)
     planner = make_planner("sac", cfg, checkpoint=path)
-    kind = configure_for(planner, cfg)  # the diagram's LGM builder follows the checkpoint
+    cfg, kind = configure_for(planner, cfg)  # the diagram's LGM builder follows the checkpoint
     assert (cfg.lidar.num_frames, cfg.lidar.grid_size, kind) == (4, 60, "lgm")
     record, log = run_episode(sample_scenario(3, cfg), cfg, planner, grid_kind=kind)
     cmds = np.array(log.commands)

@@ -38,7 +38,7 @@ def _config(max_steps: int = 30) -> EmoNavConfig:
 
 def _build(name: str, cfg: EmoNavConfig, seed: int = SEED) -> NavigationDiagram:
     planner = make_planner(name, cfg)
-    kind = configure_for(planner, cfg)
+    cfg, kind = configure_for(planner, cfg)
     return build_navigation_diagram(
         sample_scenario(seed, cfg), cfg, planner, grid_kind=kind, goal_radius=0.2
     )
@@ -210,9 +210,8 @@ def test_two_simulations_of_the_same_diagram_are_identical_without_reset(name):
     first = _play(nav, _simulator(nav))
     # The planner object is used elsewhere in between (its own memory, OSQP workspaces):
     # the diagram does not care.
-    world = NavigationWorld(
-        sample_scenario(SEED + 1, cfg), cfg, grid_kind=configure_for(planner, cfg)
-    )
+    world_cfg, kind = configure_for(planner, cfg)
+    world = NavigationWorld(sample_scenario(SEED + 1, cfg), world_cfg, grid_kind=kind)
     for _ in range(3):
         world.step(planner.plan(world.planner_input()))
     # again in the same simulator, from the diagram's default context

@@ -109,7 +109,7 @@ def test_sim_digit_steps_out_matches_the_trace(tmp_path, capsys):
     # the same episode in-process, with the trace the CSV is made from
     cfg = load_config(cfg_file)
     planner = make_planner("dwa", cfg)
-    grid_kind = configure_for(planner, cfg)
+    cfg, grid_kind = configure_for(planner, cfg)
     trace: list[dict] = []
     record = run_digit_episode(
         sample_scenario(seed, cfg),

@@ -72,7 +72,7 @@ def test_every_variant_runs_a_short_episode_on_lip_and_on_digit(tmp_path, name):
 def test_the_diagram_builds_the_observation_the_policy_reads(tmp_path, name):
     planner = PolicyPlanner(make_checkpoint(tmp_path / "p.pt", name))
     cfg = EmoNavConfig()
-    kind = configure_for(planner, cfg)
+    cfg, kind = configure_for(planner, cfg)
     nav = build_navigation_diagram(sample_scenario(1, cfg), cfg, planner, grid_kind=kind)
     ctx = nav.diagram.CreateDefaultContext()
     obs = nav.grid_maps.GetOutputPort("lgm_stack").Eval(nav.grid_maps.GetMyContextFromRoot(ctx))

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from emonav_drake.cli.common import SeedArg, check_workers, load_emotion_estimate
 from emonav_drake.cli.config import add_config_choice, resolve_config
+from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.diagrams.trials import MAX_TRIALS
 from emonav_drake.params import ConfigError
 
@@ -46,7 +47,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "step-response model: the Digit/Digit route's expert), policy (the shipped policy), "
         "a variant, or a name given a --checkpoint (sac: a SAC-trained one)",
     )
-    b.add_argument("--plant", default="lip", choices=["lip", "digit"])
+    b.add_argument("--plant", default="lip", choices=list(PLANTS))
     b.add_argument(
         "--trials",
         type=int,
@@ -108,7 +109,7 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
     check_output_dir(args.out, "--out")
     if args.workers is not None:
         check_workers(args.workers)
-    if args.plant == "digit" and args.emotion_estimate is not None:
+    if args.emotion_estimate is not None and not PLANTS[args.plant].emotion_estimates:
         raise ConfigError("--emotion-estimate is available with --plant lip only")
     methods = parse_methods(args.planners, args.checkpoint or [])
     resolved = resolve_config(args)

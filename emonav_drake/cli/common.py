@@ -17,13 +17,10 @@ from typing import TYPE_CHECKING, Any
 from emonav_drake.atomic_io import check_distinct, check_output_file, write_text_atomic
 from emonav_drake.cli.config import add_config_choice
 from emonav_drake.params import ConfigError, EmoNavConfig
-from emonav_drake.planners import PLANNERS
-from emonav_drake.planners.variants import is_learned
+from emonav_drake.planners import is_learned
 
 if TYPE_CHECKING:
     import numpy as np
-
-PLANNER_CHOICES = list(PLANNERS)
 
 
 def parse_seed(text: str, flag: str) -> int:

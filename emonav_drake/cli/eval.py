@@ -11,7 +11,6 @@ from pathlib import Path
 
 from emonav_drake.atomic_io import write_json
 from emonav_drake.cli.common import (
-    PLANNER_CHOICES,
     SeedArg,
     add_episode_flags,
     check_outputs,
@@ -20,8 +19,10 @@ from emonav_drake.cli.common import (
     load_emotion_estimate,
 )
 from emonav_drake.cli.config import resolve_config, sample
+from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.params import ConfigError
+from emonav_drake.planners import planner_names
 
 # `eval --episodes` at most: every scenario is sampled before the first episode (a crowd
 # that does not fit fails at once), ~0.2 ms per seed, ~20 s at the maximum; 100 000 DWA
@@ -32,8 +33,8 @@ MAX_EPISODES = 100_000
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register `emonav eval` on the CLI's sub-parsers."""
     e = subparsers.add_parser("eval", help="evaluate a planner over many seeds (SR, NT, DT, IDT)")
-    e.add_argument("--planner", default="dwa", choices=PLANNER_CHOICES)
-    e.add_argument("--plant", default="lip", choices=["lip", "digit"])
+    e.add_argument("--planner", default="dwa", choices=planner_names())
+    e.add_argument("--plant", default="lip", choices=list(PLANTS))
     e.add_argument(
         "--episodes",
         type=int,
@@ -69,7 +70,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     resolved = resolve_config(args)
     cfg = resolved.config
     estimate = load_emotion_estimate(args.emotion_estimate)
-    if args.plant == "digit" and estimate is not None:
+    if estimate is not None and not PLANTS[args.plant].emotion_estimates:
         raise ConfigError("--emotion-estimate is available with --plant lip only")
     from tqdm import tqdm
 
@@ -83,7 +84,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     for seed in seeds:
         sample(seed, resolved)
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
-    grid_kind = configure_for(planner, cfg)
+    cfg, grid_kind = configure_for(planner, cfg)
     if hasattr(planner, "describe"):
         print(f"planner {args.planner}: {planner.describe()}")
     records = []

@@ -15,7 +15,6 @@ from typing import Any
 
 from emonav_drake.atomic_io import atomic_output, write_json
 from emonav_drake.cli.common import (
-    PLANNER_CHOICES,
     SeedArg,
     add_episode_flags,
     add_meshcat_host,
@@ -27,14 +26,16 @@ from emonav_drake.cli.common import (
     write_steps_csv,
 )
 from emonav_drake.cli.config import resolve_config, resolve_scenario
+from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.params import ConfigError
+from emonav_drake.planners import planner_names
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register `emonav sim` on the CLI's sub-parsers."""
     s = subparsers.add_parser("sim", help="run one navigation episode in the Drake diagram")
-    s.add_argument("--planner", default="dwa", choices=PLANNER_CHOICES)
-    s.add_argument("--plant", default="lip", choices=["lip", "digit"])
+    s.add_argument("--planner", default="dwa", choices=planner_names())
+    s.add_argument("--plant", default="lip", choices=list(PLANTS))
     s.add_argument("--seed", action=SeedArg, default=0, help="scenario seed, in [0, 2**64 - 1]")
     s.add_argument(
         "--scenario",
@@ -101,7 +102,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     from emonav_drake.planners import configure_for, make_planner
 
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
-    grid_kind = configure_for(planner, cfg)
+    cfg, grid_kind = configure_for(planner, cfg)
     if hasattr(planner, "describe"):
         print(f"planner {args.planner}: {planner.describe()}")
     meshcat = caption = None

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from emonav_drake.atomic_io import check_output_dir
 from emonav_drake.cli.common import SeedArg
+from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.params import ConfigError
 from emonav_drake.planners.variants import VARIANTS, variant
 
@@ -46,7 +47,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     )
     t.add_argument(
         "--plant",
-        choices=["lip", "digit"],
+        choices=list(PLANTS),
         help="--algo sac: train on EmoNavLIP-v0 (lip, the default) or on the full-order "
         "Digit, EmoNavDigit-v0 (digit: the paper's Digit/Digit route, a GPU or cluster job)",
     )

@@ -188,7 +188,8 @@ class TrialRunner:
             # a learned method is whatever its checkpoint holds ("sac" in older runs)
             kind = "policy" if m.checkpoint is not None else m.planner
             planner = make_planner(kind, cfg, checkpoint=self._checkpoint_path(m))
-            self._planners[name] = (planner, cfg, configure_for(planner, cfg))
+            cfg, grid_kind = configure_for(planner, cfg)
+            self._planners[name] = (planner, cfg, grid_kind)
         return self._planners[name]
 
     def observation(self, name: str) -> str:

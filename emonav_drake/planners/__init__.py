@@ -18,6 +18,7 @@ workers can build by name; the built-in ones are registered below, one line each
 
 from __future__ import annotations
 
+import copy
 import functools
 from pathlib import Path
 
@@ -118,12 +119,6 @@ for _name, _variant in VARIANTS.items():
     )
 
 
-# the built-in names (transitional: the command line moves to `planner_names()`, which also
-# lists planners registered later)
-PLANNERS = planner_names()
-MODEL_PLANNERS = model_planner_names()
-
-
 def is_learned(name: str) -> bool:
     """True for the registered planners that run a policy checkpoint."""
     return is_registered(name) and planner_kind(name).learned
@@ -150,25 +145,28 @@ def observation_of(planner) -> str:
     return kind if kind is not None and hasattr(planner, "expected_shape") else "state"
 
 
-def configure_for(planner, config: EmoNavConfig) -> str:
-    """Adapt the diagram's observation settings to a learned policy; return the grid kind.
+def configure_for(planner, config: EmoNavConfig) -> tuple[EmoNavConfig, str]:
+    """The configuration whose observation a planner reads, and its grid kind.
 
     A policy checkpoint records the observation it was trained on (grid kind, frames,
     grid size; for scans the beams of its encoder); the diagram's `LidarGridMapBuilder`
-    must produce exactly that: `config.lidar.num_frames` and `grid_size` are set from
-    the checkpoint. Planners without an observation (DWA, MPC) get "lgm" (they ignore it).
-    Raises `ValueError` for an observation the env cannot give either: a scan policy for
-    another number of beams than `lidar.num_beams`, or a DRL-VO* policy of more than one
-    frame (its image has no frame stack).
+    must produce exactly that: the returned configuration is a copy of `config` with
+    `lidar.num_frames` and `grid_size` set from the checkpoint (`config` is not
+    modified). Planners without an observation (DWA, MPC) get `config` itself and "lgm"
+    (they ignore it). Raises `ValueError` for an observation the env cannot give either:
+    a scan policy for another number of beams than `lidar.num_beams`, or a DRL-VO*
+    policy of more than one frame (its image has no frame stack).
     """
     kind = getattr(planner, "grid_kind", None)
     expected = getattr(planner, "expected_shape", None)
     if kind is None or expected is None:
-        return "lgm"
+        return config, "lgm"
     try:
         spec = observation_kind(kind)
     except ValueError:
         raise ValueError(f"policy observation {kind!r} is unknown") from None
-    for field, value in spec.lidar_for(tuple(expected), config.lidar).items():
-        setattr(config.lidar, field, value)
-    return kind
+    lidar = spec.lidar_for(tuple(expected), config.lidar)
+    out = copy.deepcopy(config)
+    for field, value in lidar.items():
+        setattr(out.lidar, field, value)
+    return out, kind

@@ -107,9 +107,3 @@ def shipped_checkpoint(name: str) -> Path:
             f"--checkpoint runs/{name}/policy.pt"
         )
     return v.checkpoint
-
-
-def is_learned(name: str) -> bool:
-    """True for the names of learned planners: `policy` (a checkpoint; by default the
-    shipped policy), `sac` (a SAC-trained checkpoint) and the variants."""
-    return name in ("policy", "sac") or name in VARIANTS
