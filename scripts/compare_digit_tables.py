@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from emonav_drake.evaluation.benchmark import read_trials
+from emonav_drake.evaluation.run_directory import read_trials
 from emonav_drake.evaluation.tables import format_p, mcnemar_exact, wilson_interval
 
 RESULTS = Path(__file__).resolve().parent.parent / "benchmarks" / "results"

@@ -18,13 +18,9 @@ from emonav_drake.configs import SETTINGS, load_setting, setting_path
 from emonav_drake.diagrams.trials import BenchmarkSpec, MethodSpec, TrialRunner, parse_methods
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.evaluation import tables
-from emonav_drake.evaluation.benchmark import (
-    BenchmarkSettingsError,
-    comparable,
-    load_run,
-    read_trials,
-    run_benchmark,
-)
+from emonav_drake.evaluation.benchmark import run_benchmark
+from emonav_drake.evaluation.run_directory import comparable, load_run, read_trials
+from emonav_drake.evaluation.run_settings import BenchmarkSettingsError
 from emonav_drake.params import dump_config, load_config
 
 METHODS = "dwa,policy"
@@ -290,7 +286,7 @@ def test_bad_flags_fail_before_any_trial(tmp_path, capsys):
 
 
 def test_a_second_benchmark_into_a_running_directory_is_refused(tmp_path):
-    from emonav_drake.evaluation.benchmark import RunDirectory
+    from emonav_drake.evaluation.run_directory import RunDirectory
 
     with RunDirectory(tmp_path / "busy").locked():
         with pytest.raises(BenchmarkSettingsError, match="another emonav benchmark is running"):

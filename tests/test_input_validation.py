@@ -21,7 +21,8 @@ import numpy as np
 import pytest
 
 from emonav_drake.cli import main
-from emonav_drake.evaluation.benchmark import BenchmarkSettingsError, load_run, read_trials
+from emonav_drake.evaluation.run_directory import load_run, read_trials
+from emonav_drake.evaluation.run_settings import BenchmarkSettingsError
 from tests.cli_errors import assert_user_error, run
 
 TINY = "episode: {max_steps: 2}\n"
@@ -375,7 +376,7 @@ FULL_DISK_SCRIPT = textwrap.dedent(
     from pathlib import Path
     from emonav_drake.atomic_io import atomic_write, write_text_atomic
     from emonav_drake.cli import main
-    from emonav_drake.evaluation.benchmark import RunDirectory
+    from emonav_drake.evaluation.run_directory import RunDirectory
 
     full = Path(sys.argv[1])
     errors = {}

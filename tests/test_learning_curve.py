@@ -9,7 +9,7 @@ import pytest
 
 from emonav_drake.diagrams.trials import parse_methods
 from emonav_drake.evaluation import tables
-from emonav_drake.evaluation.benchmark import load_run, run_benchmark
+from emonav_drake.evaluation.benchmark import run_benchmark
 from emonav_drake.evaluation.learning_curve import (
     CurveError,
     curve_markdown,
@@ -18,6 +18,7 @@ from emonav_drake.evaluation.learning_curve import (
     plot_curve,
     route_success_rates,
 )
+from emonav_drake.evaluation.run_directory import load_run
 
 
 @pytest.fixture(scope="module")

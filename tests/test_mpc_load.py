@@ -15,7 +15,8 @@ import sys
 from pathlib import Path
 
 from emonav_drake.diagrams.trials import parse_methods
-from emonav_drake.evaluation.benchmark import comparable, read_trials, run_benchmark
+from emonav_drake.evaluation.benchmark import run_benchmark
+from emonav_drake.evaluation.run_directory import comparable, read_trials
 from emonav_drake.params import load_config
 from tests.machine_load import cpu_hogs, stalls
 

@@ -104,7 +104,8 @@ def diagnose_run(
 
     from emonav_drake.atomic_io import write_json, write_text_atomic
     from emonav_drake.diagrams.trials import TrialRunner
-    from emonav_drake.evaluation.benchmark import SETTINGS_FILE, load_run, spec_from_settings
+    from emonav_drake.evaluation.run_directory import SETTINGS_FILE, load_run
+    from emonav_drake.evaluation.run_settings import spec_from_settings
     from emonav_drake.planners.model_aware import load_response
 
     settings, trials = load_run(run_dir)

@@ -62,7 +62,7 @@ def measure(points: Sequence[CurvePoint], seeds: Sequence[int] | None = None) ->
         CurveError: no points, a label twice, a run or method missing, runs of different
             plants or settings, or no seed common to every point.
     """
-    from emonav_drake.evaluation.benchmark import load_run
+    from emonav_drake.evaluation.run_directory import load_run
 
     if not points:
         raise CurveError("no points: give at least one LABEL=RUN:METHOD")

@@ -1,0 +1,365 @@
+"""A benchmark's run directory: `settings.json`, `trials.jsonl`, the tables.
+
+`trials.jsonl` holds one JSON line per finished trial, appended as it finishes with one
+`write` + flush + fsync; a torn last line (a kill mid-write) is dropped and its trial
+redone when the directory is opened again, and every other line is checked when read
+(`check_trial`). The files must be regular files (a symbolic link, or a `trials.jsonl`
+with another hard link, is refused). `RunDirectory` opens, checks, appends and writes
+the tables; `load_run` reads a finished run. See `evaluation/benchmark.py` for the run.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses as dc
+import json
+import logging
+import math
+import os
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+from emonav_drake.atomic_io import (
+    json_safe,
+    naming_full_disk,
+    write_json,
+    write_text_atomic,
+)
+from emonav_drake.core.metrics import COLLISION, FALL, SUCCESS, TIMEOUT, EpisodeRecord
+from emonav_drake.core.scenario import MAX_SEED
+from emonav_drake.diagrams.plants import PLANTS
+from emonav_drake.evaluation import tables
+from emonav_drake.evaluation.run_settings import BenchmarkSettingsError, settings_difference
+
+log = logging.getLogger(__name__)
+
+SETTINGS_FILE = "settings.json"
+TRIALS_FILE = "trials.jsonl"
+TABLES_FILE = "tables.md"
+TABLE_CSV_FILES = ("table2.csv", "table3.csv", "social.csv", "pairwise.csv")
+RUN_FILES = (SETTINGS_FILE, TRIALS_FILE, TABLES_FILE, *TABLE_CSV_FILES)
+OUTCOMES = (SUCCESS, COLLISION, TIMEOUT, FALL)
+
+
+def trial_key(t: dict) -> tuple[str, int]:
+    return t["method"], int(t["seed"])
+
+
+def comparable(t: dict) -> dict:
+    """A trial line without its wall time (what must be equal between engines)."""
+    return {k: v for k, v in t.items() if k != "wall_seconds"}
+
+
+_RECORD_FIELDS = {f.name for f in dc.fields(EpisodeRecord)}
+_RECORD_REQUIRED = (
+    "outcome",
+    "steps",
+    "nav_time",
+    "path_length",
+    "min_ped_distance",
+    "discomfort_steps",
+    "idt",
+    "total_reward",
+)
+
+
+def _is_int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def check_trial(t: dict) -> str | None:
+    """What is wrong with one `trials.jsonl` line (a dict with `method`, `seed`, `record`),
+    in words; None if it is a valid trial: a method name, a seed in [0, 2**64 - 1], a
+    record with every field of `EpisodeRecord.to_json()` and no other, a known outcome,
+    step counts that are integers in [0, steps], lengths and times that are finite and
+    >= 0 (`min_ped_distance` may be null: no pedestrian), a finite reward."""
+    if not isinstance(t["method"], str) or not t["method"]:
+        return f"method = {t['method']!r} is not a method name"
+    if not (_is_int(t["seed"]) and 0 <= t["seed"] <= MAX_SEED):
+        return f"seed = {t['seed']!r} is not a seed (an integer in [0, 2**64 - 1])"
+    if "plant" in t and t["plant"] not in PLANTS:
+        return f"plant = {t['plant']!r} is not {' or '.join(PLANTS)}"
+    if "wall_seconds" in t and not (_is_number(t["wall_seconds"]) and t["wall_seconds"] >= 0):
+        return f"wall_seconds = {t['wall_seconds']!r} must be a number >= 0"
+    r = t["record"]
+    if not isinstance(r, dict):
+        return f"record = {r!r} is not an object"
+    missing = [k for k in _RECORD_REQUIRED if k not in r]
+    if missing:
+        return f"record lacks {', '.join(missing)}"
+    unknown = sorted(set(r) - _RECORD_FIELDS)
+    if unknown:
+        return f"record has the unknown field {unknown[0]!r}"
+    if r["outcome"] not in OUTCOMES:
+        return f"record.outcome = {r['outcome']!r} is not one of {', '.join(OUTCOMES)}"
+    if not (_is_int(r["steps"]) and r["steps"] >= 0):
+        return f"record.steps = {r['steps']!r} must be an integer >= 0"
+    idt = r["idt"]
+    if not (isinstance(idt, list) and len(idt) == 4):
+        return f"record.idt = {idt!r} must be a list of 4 step counts"
+    counts = [("discomfort_steps", r["discomfort_steps"])]
+    counts += [(f"idt[{i}]", v) for i, v in enumerate(idt)]
+    for name, v in counts:
+        if not (_is_int(v) and 0 <= v <= r["steps"]):
+            return f"record.{name} = {v!r} must be an integer in [0, steps = {r['steps']}]"
+    for name in ("nav_time", "path_length", "min_ped_distance"):
+        v = r[name]
+        if v is None and name == "min_ped_distance":
+            continue
+        if not (_is_number(v) and v >= 0):
+            return f"record.{name} = {v!r} must be a finite number >= 0"
+    if not _is_number(r["total_reward"]):
+        return f"record.total_reward = {r['total_reward']!r} must be a finite number"
+    if "seed" in r and r["seed"] != t["seed"]:
+        return f"record.seed = {r['seed']!r} differs from the line's seed {t['seed']!r}"
+    for name in ("fall_reason", "collided_with"):
+        if name in r and not isinstance(r[name], str):
+            return f"record.{name} = {r[name]!r} must be a string"
+    return None
+
+
+def read_trials(path: Path, repair: bool = False) -> list[dict]:
+    """The trial lines of `trials.jsonl`, each checked (`check_trial`). A torn last line (a
+    kill while writing: no final newline, or not a trial's JSON) is dropped — and cut from
+    the file with `repair`, so the next append starts on a fresh line; a damaged earlier
+    line, or any line that is a trial's JSON with invalid values, is an error naming the
+    file and the line."""
+    if not path.exists():
+        return []
+    data = path.read_bytes()
+    trials = []
+    pos = 0
+    number = 0
+    while pos < len(data):
+        number += 1
+        nl = data.find(b"\n", pos)
+        end = len(data) if nl < 0 else nl
+        line = data[pos:end]
+        t = None
+        if nl >= 0 and line.strip():
+            try:
+                t = json.loads(line)
+            except ValueError:
+                t = None
+            if not (isinstance(t, dict) and {"method", "seed", "record"} <= set(t)):
+                t = None
+        elif nl >= 0:  # an empty line
+            pos = nl + 1
+            continue
+        if t is None:
+            if end >= len(data) - 1:  # the last line
+                log.warning("%s: dropping a torn last line (%d bytes)", path, len(line))
+                break
+            raise BenchmarkSettingsError(
+                f"{path}: line {number} is damaged (not a trial's JSON); fix or remove that line"
+            )
+        problem = check_trial(t)
+        if problem is not None:
+            raise BenchmarkSettingsError(
+                f"{path}: line {number} is not a valid trial: {problem}; fix or remove that line"
+            )
+        trials.append(t)
+        pos = nl + 1
+    if repair and pos < len(data):
+        fd = os.open(path, os.O_RDWR | os.O_NOFOLLOW)  # never cut the file a link points to
+        with os.fdopen(fd, "r+b") as f:
+            f.truncate(pos)
+            f.flush()
+            os.fsync(f.fileno())
+    return trials
+
+
+class RunDirectory:
+    """A benchmark's run directory (see the module docstring): settings, trials, tables."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self.settings_path = self.path / SETTINGS_FILE
+        self.trials_path = self.path / TRIALS_FILE
+        self._lock_fd: int | None = None
+
+    @contextlib.contextmanager
+    def locked(self) -> Iterator[RunDirectory]:
+        """Exclusive use of the directory (a second benchmark into it is refused)."""
+        import fcntl
+
+        self.path.mkdir(parents=True, exist_ok=True)
+        fd = os.open(self.path, os.O_RDONLY)  # the directory itself: no lock file to leave
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            raise BenchmarkSettingsError(
+                f"--out {self.path}: another emonav benchmark is running in this directory"
+            ) from None
+        self._lock_fd = fd
+        try:
+            yield self
+        finally:
+            fcntl.flock(fd, fcntl.LOCK_UN)
+            os.close(fd)
+            self._lock_fd = None
+
+    def check_regular_files(self) -> None:
+        """`BenchmarkSettingsError` if a file of the run directory (`RUN_FILES`) is a
+        symbolic link, or `trials.jsonl` has another hard link: writing it would change
+        the other file."""
+        for name in RUN_FILES:
+            p = self.path / name
+            if p.is_symlink():
+                raise BenchmarkSettingsError(
+                    f"--out {self.path}: {name} is a symbolic link (to {os.readlink(p)}); a run "
+                    "directory's files must be regular files (a write would go into the file "
+                    "it points to): replace it by a copy of that file, or use another --out"
+                )
+            if p.exists() and not p.is_file():
+                raise BenchmarkSettingsError(
+                    f"--out {self.path}: {name} exists and is not a regular file"
+                )
+        if self.trials_path.exists() and self.trials_path.stat().st_nlink > 1:
+            raise BenchmarkSettingsError(
+                f"--out {self.path}: {TRIALS_FILE} has {self.trials_path.stat().st_nlink} hard "
+                "links: appending would change the file under its other names too; replace it "
+                "by a copy, or use another --out"
+            )
+
+    def read_settings(self) -> dict | None:
+        if not self.settings_path.exists():
+            return None
+        try:
+            return json.loads(self.settings_path.read_text())
+        except ValueError as e:
+            raise BenchmarkSettingsError(f"{self.settings_path}: not valid JSON ({e})") from None
+
+    def open(self, settings: dict) -> tuple[dict, list[dict]]:
+        """Check or create `settings.json`; the valid trials already done (torn line cut).
+
+        Returns the directory's settings (its planners' order and first creation kept; the
+        number of trials raised to `settings["trials"]`) and the finished trials. A file
+        that is a link is refused first (`check_regular_files`).
+        """
+        self.check_regular_files()
+        old = self.read_settings()
+        if old is None:
+            if self.trials_path.exists() and self.trials_path.stat().st_size:
+                raise BenchmarkSettingsError(
+                    f"--out {self.path}: has {TRIALS_FILE} but no {SETTINGS_FILE}; use an empty "
+                    "or new directory"
+                )
+            write_json(self.settings_path, settings)
+            return settings, []
+        diff = settings_difference(old, settings)
+        if diff is not None:
+            raise BenchmarkSettingsError(
+                f"--out {self.path}: holds a benchmark with other settings: {diff}; use another "
+                "--out, or the same settings to continue it"
+            )
+        if settings["trials"] < old["trials"]:
+            raise BenchmarkSettingsError(
+                f"--trials {settings['trials']}: {self.path} already plans {old['trials']} trials "
+                f"per method; give --trials >= {old['trials']} (a run can only be extended)"
+            )
+        merged = dict(old)
+        if settings["trials"] > old["trials"]:
+            merged["trials"] = settings["trials"]
+            merged.setdefault("extended", []).append(
+                {"from": old["trials"], "to": settings["trials"], "at": settings["created"]}
+            )
+            write_json(self.settings_path, merged)
+        trials = read_trials(self.trials_path, repair=True)
+        return merged, self._check_trials(trials, merged)
+
+    def _check_trials(self, trials: list[dict], settings: dict) -> list[dict]:
+        seen: dict[tuple[str, int], dict] = {}
+        lo = settings["first_seed"]
+        hi = lo + settings["trials"]
+        for t in trials:
+            key = trial_key(t)
+            if t["method"] not in settings["planners"] or t.get("plant") != settings["plant"]:
+                raise BenchmarkSettingsError(
+                    f"{self.trials_path}: a trial of {t['method']!r} on {t.get('plant')!r} "
+                    "does not belong to this run's settings"
+                )
+            if not lo <= key[1] < hi:
+                raise BenchmarkSettingsError(
+                    f"{self.trials_path}: seed {key[1]} is outside this run's seeds [{lo}, {hi})"
+                )
+            if key in seen:
+                if comparable(seen[key]) != comparable(t):
+                    raise BenchmarkSettingsError(
+                        f"{self.trials_path}: two different results for {key[0]} seed {key[1]}"
+                    )
+                continue
+            seen[key] = t
+        return list(seen.values())
+
+    def append(self, trial: dict) -> None:
+        """Append one trial line: one write, flushed and fsynced (never through a link)."""
+        line = json.dumps(json_safe(trial), allow_nan=False) + "\n"
+        flags = os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW
+        with naming_full_disk(self.trials_path, "could not be appended to"):
+            with os.fdopen(os.open(self.trials_path, flags, 0o666), "ab") as f:
+                f.write(line.encode())
+                f.flush()
+                os.fsync(f.fileno())
+
+    def write_tables(
+        self, settings: dict, trials: Sequence[dict], interrupted: bool = False
+    ) -> Path:
+        """tables.md and the CSVs, from the trials sorted by method and seed."""
+        methods = settings["planners"]
+        rank = {m: i for i, m in enumerate(methods)}
+        trials = sorted(trials, key=lambda t: (rank.get(t["method"], len(rank)), t["seed"]))
+        md = self.path / TABLES_FILE
+        if not trials:
+            return md
+        obs = {m: settings["methods"][m]["observation"] for m in methods}
+        label = settings["setting_label"]
+        plant = settings["plant"]
+        summary = tables.summarize_methods(trials, methods)
+        pairs = tables.pairwise_comparisons(trials, methods)
+        counts = ", ".join(f"{m} {s['episodes']}" for m, s in summary.items())
+        pkg = settings.get("package", {})
+        notes = [
+            f"plant: {plant}; setting: {label}; seeds {settings['first_seed']}–"
+            f"{settings['first_seed'] + settings['trials'] - 1} "
+            f"({settings['trials']} planned per method; done: {counts})"
+            + (" — INTERRUPTED, partial" if interrupted else ""),
+            f"goal radius {settings['goal_radius']} m (evaluation); configuration hash "
+            f"{settings['config_sha256'][:12]}; emotion estimate: "
+            f"{'ground truth' if settings['emotion_estimate_yaml'] is None else 'confusion model'}",
+            f"package {pkg.get('version')} commit {str(pkg.get('commit'))[:12]}"
+            + (" (with uncommitted changes)" if pkg.get("dirty") else ""),
+        ]
+        write_text_atomic(
+            md,
+            tables.render_markdown(
+                trials, methods, label, plant, obs, title=f"Benchmark {self.path.name}", notes=notes
+            ),
+        )
+        csvs = (
+            tables.table2_csv(summary),
+            tables.table3_csv(summary, label, plant, obs),
+            tables.social_csv(summary),
+            tables.pairwise_csv(pairs),
+        )
+        for name, text in zip(TABLE_CSV_FILES, csvs, strict=True):
+            write_text_atomic(self.path / name, text)
+        return md
+
+
+def load_run(path: str | Path) -> tuple[dict, list[dict]]:
+    """(settings, trials sorted by method and seed) of a run directory (read only)."""
+    rd = RunDirectory(path)
+    settings = rd.read_settings()
+    if settings is None:
+        raise BenchmarkSettingsError(f"{path}: no {SETTINGS_FILE}: not a benchmark run directory")
+    rank = {m: i for i, m in enumerate(settings["planners"])}
+    trials = read_trials(rd.trials_path)
+    trials.sort(key=lambda t: (rank.get(t["method"], len(rank)), t["seed"]))
+    return settings, trials
