@@ -64,7 +64,15 @@ def test_eval_summary(tmp_path):
     )
     r = json.loads(out.read_text())
     assert r["summary"]["episodes"] == 3 and len(r["episodes"]) == 3
-    assert 0.0 <= r["summary"]["SR"] <= 1.0
+    assert [e["seed"] for e in r["episodes"]] == [5, 6, 7]
+    # the summary is that of the episodes listed
+    successes = sum(e["outcome"] == "success" for e in r["episodes"])
+    assert r["summary"]["SR"] == pytest.approx(successes / 3)
+    # and each episode is what `emonav sim` gives for its seed
+    one = tmp_path / "s.json"
+    assert main(["sim", "--planner", "dwa", "--seed", "6", "--json", str(one)]) == 0
+    sim = json.loads(one.read_text())
+    assert {k: sim[k] for k in r["episodes"][1]} == r["episodes"][1]
 
 
 def test_sim_with_misclassified_emotions(tmp_path):
@@ -72,9 +80,21 @@ def test_sim_with_misclassified_emotions(tmp_path):
     est.write_text(
         "mode: confusion\nseed: 4\nconfusion: [[0.6, 0.3, 0.1], [0.2, 0.6, 0.2], [0.1, 0.3, 0.6]]\n"
     )
-    out = tmp_path / "r.json"
-    assert main(["sim", "--seed", "4", "--emotion-estimate", str(est), "--json", str(out)]) == 0
-    assert json.loads(out.read_text())["outcome"] in ("success", "collision", "timeout")
+    runs = []
+    for name in ("r1", "r2"):  # the misclassifications are seeded: the same run twice
+        out = tmp_path / f"{name}.json"
+        assert main(["sim", "--seed", "4", "--emotion-estimate", str(est), "--json", str(out)]) == 0
+        runs.append(json.loads(out.read_text()))
+    assert runs[0] == runs[1]
+    # a confusion matrix that never errs perceives the truth: the ground-truth run
+    est_id = tmp_path / "identity.yaml"
+    est_id.write_text("mode: confusion\nseed: 4\nconfusion: [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\n")
+    truth, ident = tmp_path / "truth.json", tmp_path / "ident.json"
+    assert main(["sim", "--seed", "4", "--json", str(truth)]) == 0
+    assert (
+        main(["sim", "--seed", "4", "--emotion-estimate", str(est_id), "--json", str(ident)]) == 0
+    )
+    assert json.loads(truth.read_text()) == json.loads(ident.read_text())
     est.write_text("mode: confusion\nconfusion: [[2.0, 0.0, 0.0], [0, 1, 0], [0, 0, 1]]\n")
     assert main(["sim", "--seed", "4", "--emotion-estimate", str(est)]) == 2
 
@@ -90,7 +110,15 @@ def test_shipped_example_scenarios_load_and_run_by_name(tmp_path, capsys):
     assert any(p.emotion_schedule for p in load_scenario(scenario_path("mood_swing")).pedestrians)
     out = tmp_path / "r.json"
     assert main(["sim", "--scenario", "head_on", "--json", str(out)]) == 0
-    assert json.loads(out.read_text())["outcome"] in ("success", "collision", "timeout")
+    run = json.loads(out.read_text())["trajectory"]
+    head_on = load_scenario(scenario_path("head_on"))
+    # the episode played the file's scenario: its robot, obstacles and pedestrians
+    assert run["scenario"]["start"] == pytest.approx(head_on.robot_start)
+    assert run["scenario"]["goal"] == pytest.approx(head_on.robot_goal)
+    assert [o["center"] for o in run["scenario"]["obstacles"]] == [
+        pytest.approx(o.center) for o in head_on.obstacles
+    ]
+    assert run["pedestrians"][0] == [pytest.approx(p.start) for p in head_on.pedestrians]
     assert main(["sim", "--scenario", "nowhere"]) == 2
     assert "head_on, crossing, mood_swing" in capsys.readouterr().err
 
