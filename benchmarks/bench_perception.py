@@ -34,8 +34,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from emonav_drake.perception.face_emotion import (  # noqa: E402
     DetectorParams,
     FaceEmotionClassifier,
-    to_gray,
 )
+from emonav_drake.perception.image_io import to_gray  # noqa: E402
 from emonav_drake.perception.mini_xception import load_mini_xception  # noqa: E402
 from emonav_drake.perception.sample_photos import camera_frame  # noqa: E402
 

@@ -8,16 +8,13 @@ import numpy as np
 import pytest
 
 from benchmarks.reference.lgm_reference import ranges_per_beam
-from emonav_drake.core.grid_maps import (
-    FrameStack,
+from emonav_drake.core.grid_maps import FrameStack, lgm_frame, lgm_from_ranges, ogm_from_ranges
+from emonav_drake.core.grid_resolution import (
     lgm_cell_area,
-    lgm_frame,
-    lgm_from_ranges,
     lgm_mean_resolution,
     lgm_resolution,
     lgm_ring_cell_counts,
     ogm_cells_touched_by_disc,
-    ogm_from_ranges,
     ogm_resolution,
     ogm_ring_cell_counts,
     ogm_ring_circle_cell_counts,

@@ -15,7 +15,7 @@ if _REPO_ROOT not in sys.path:
     sys.path.insert(0, _REPO_ROOT)
 
 from benchmarks.reference.orca_reference import orca_velocities_reference  # noqa: E402
-from emonav_drake.core import orca  # noqa: E402
+from emonav_drake.core import orca_lp  # noqa: E402
 from emonav_drake.core.orca import OrcaParams, orca_velocities  # noqa: E402
 
 DT = 0.1
@@ -173,13 +173,13 @@ def test_inactive_agent_keeps_its_velocity_but_is_still_avoided() -> None:
 
 def test_lp3_fallback_for_squeezed_agent(monkeypatch: pytest.MonkeyPatch) -> None:
     lp3_calls = []
-    real_lp3 = orca._linear_program3
+    real_lp3 = orca_lp.linear_program3
 
     def spy(*args: object) -> object:
         lp3_calls.append(args)
         return real_lp3(*args)
 
-    monkeypatch.setattr(orca, "_linear_program3", spy)
+    monkeypatch.setattr(orca_lp, "linear_program3", spy)
     # Agent 0 squeezed by four overlapping agents: each asks it to move away at 1 m/s.
     positions = np.array([[0.0, 0.0], [0.4, 0.0], [-0.4, 0.0], [0.0, 0.4], [0.0, -0.4]])
     velocities = np.zeros((5, 2))
@@ -211,9 +211,9 @@ def test_lp3_minimises_largest_violation(seed: int) -> None:
         normal = np.array([np.cos(normal_angle), np.sin(normal_angle)])
         point = normal * rng.uniform(0.1, 1.0)
         lines.append((normal[1], -normal[0], point[0], point[1]))  # permitted: left side
-    fail, rx, ry = orca._linear_program2(lines, radius, 0.2, 0.1, False)
+    fail, rx, ry = orca_lp.linear_program2(lines, radius, 0.2, 0.1, False)
     assert fail < len(lines)  # LP2 detects the infeasibility
-    rx, ry = orca._linear_program3(lines, 1, fail, radius, rx, ry)
+    rx, ry = orca_lp.linear_program3(lines, 1, fail, radius, rx, ry)
     result = np.array([[rx, ry]])
     assert rx * rx + ry * ry <= radius * radius + 1e-12
     assert violation(lines[:1], result)[0, 0] <= 1e-12  # obstacle line kept hard
@@ -235,13 +235,13 @@ def test_fast_matches_reference_on_crowded_configurations(
     seed: int, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     lp3_calls = []
-    real_lp3 = orca._linear_program3
+    real_lp3 = orca_lp.linear_program3
 
     def spy(*args: object) -> object:
         lp3_calls.append(args)
         return real_lp3(*args)
 
-    monkeypatch.setattr(orca, "_linear_program3", spy)
+    monkeypatch.setattr(orca_lp, "linear_program3", spy)
     crowd = random_crowd(seed, side=3.0 + seed)
     rng = np.random.default_rng(100 + seed)
     n = crowd["positions"].shape[0]

@@ -5,25 +5,19 @@ import numpy as np
 import pytest
 
 from emonav_drake.params import HAPPY, NEGATIVE, NEUTRAL
+from emonav_drake.perception.face_assignment import assign_faces, face_bearings
 from emonav_drake.perception.face_emotion import (
     SEVEN_TO_THREE,
     DetectorParams,
-    EmotionSmoother,
     FaceEmotion,
     FaceEmotionClassifier,
-    FaceTracker,
-    ImageReadError,
     annotate,
-    assign_faces,
-    box_iou,
-    face_bearings,
     frame_label,
-    load_image,
     three_way_label,
     three_way_probabilities,
-    to_gray,
-    video_frames,
 )
+from emonav_drake.perception.face_tracking import EmotionSmoother, FaceTracker, box_iou
+from emonav_drake.perception.image_io import ImageReadError, load_image, to_gray, video_frames
 from emonav_drake.perception.mini_xception import CLASS_NAMES
 from emonav_drake.perception.sample_photos import camera_frame, sample_photo
 

@@ -151,7 +151,8 @@ def keras_reference(path, x):
 
 
 def _golden_inputs():
-    from emonav_drake.perception.face_emotion import FaceEmotionClassifier, to_gray
+    from emonav_drake.perception.face_emotion import FaceEmotionClassifier
+    from emonav_drake.perception.image_io import to_gray
     from emonav_drake.perception.sample_photos import sample_photo
 
     pytest.importorskip("skimage", reason="the astronaut photo ships with scikit-image")

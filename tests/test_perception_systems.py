@@ -15,7 +15,8 @@ from emonav_drake.core.lip import LipState
 from emonav_drake.core.observations import observation_frame
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.params import HAPPY, NEGATIVE, NEUTRAL, EmoNavConfig
-from emonav_drake.perception.face_emotion import FaceEmotionClassifier, face_bearings
+from emonav_drake.perception.face_assignment import face_bearings
+from emonav_drake.perception.face_emotion import FaceEmotionClassifier
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.perception.sample_photos import camera_frame
 from emonav_drake.systems.crowd_system import CrowdSystem

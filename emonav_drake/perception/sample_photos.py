@@ -55,7 +55,7 @@ def sample_photo_path(name: str) -> Path:
 
 def sample_photo(name: str) -> np.ndarray:
     """A bundled photograph as a BGR uint8 array."""
-    from emonav_drake.perception.face_emotion import load_image
+    from emonav_drake.perception.image_io import load_image
 
     return load_image(sample_photo_path(name))
 

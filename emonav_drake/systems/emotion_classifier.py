@@ -38,12 +38,8 @@ from pydrake.systems.framework import Context, LeafSystem, State
 from pydrake.systems.sensors import CameraInfo, ImageRgba8U
 
 from emonav_drake.params import NEUTRAL
-from emonav_drake.perception.face_emotion import (
-    SEVEN_TO_THREE,
-    FaceEmotionClassifier,
-    assign_faces,
-    face_bearings,
-)
+from emonav_drake.perception.face_assignment import assign_faces, face_bearings
+from emonav_drake.perception.face_emotion import SEVEN_TO_THREE, FaceEmotionClassifier
 from emonav_drake.perception.mini_xception import CLASS_NAMES
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
