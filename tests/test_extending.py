@@ -1,5 +1,5 @@
-"""Adding a planner is one module plus one registry line; adding an observation kind is one
-registry entry (docs/architecture.md, "Adding a planner", "Adding an observation").
+"""Adding a planner is one module plus one registry line; adding an observation kind, a
+plant or a sub-command is one registry entry (docs/architecture.md, "Extending").
 
 The throw-away planner and observation below are registered the way a new module would
 register them, then run through `emonav sim` and `emonav benchmark` on both plants, with
@@ -23,6 +23,7 @@ from emonav_drake.core.observations import (
     register_observation,
     unregister_observation,
 )
+from emonav_drake.diagrams.plants import PLANTS, Plant, register_plant, unregister_plant
 from emonav_drake.diagrams.trials import parse_methods
 from emonav_drake.planners import PlannerKind, register, unregister
 
@@ -158,3 +159,83 @@ def test_an_unregistered_planner_is_refused_with_the_choices(tmp_path, capsys):
         main(["sim", "--planner", "toy_straight"])
     assert e.value.code == 2
     assert "invalid choice: 'toy_straight'" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------- a new plant
+class HalfSpeed:
+    """The planner as a robot that walks every command at half its speed would see it."""
+
+    def __init__(self, planner) -> None:
+        self.planner = planner
+        self.name = planner.name
+        for attr in ("grid_kind", "expected_shape", "expected_dtype"):
+            if hasattr(planner, attr):
+                setattr(self, attr, getattr(planner, attr))
+
+    def initial_memory(self):
+        return self.planner.initial_memory()
+
+    def plan_with_memory(self, obs, memory):
+        command, memory = self.planner.plan_with_memory(obs, memory)
+        return np.array([0.5 * command[0], command[1]]), memory
+
+
+def _run_half_speed(scenario, config, planner, grid_kind, goal_radius, estimate):
+    lip = PLANTS["lip"]
+    return lip.run(scenario, config, HalfSpeed(planner), grid_kind, goal_radius, estimate)
+
+
+@pytest.fixture
+def half_speed_plant():
+    register_plant(Plant("lip_half", "LIP at half speed", _run_half_speed, False, True, False))
+    yield
+    unregister_plant("lip_half")
+
+
+def test_a_registered_plant_runs_in_sim_eval_and_benchmark(half_speed_plant, tmp_path, capsys):
+    runs = {}
+    for plant in ("lip", "lip_half"):
+        out = tmp_path / f"{plant}.json"
+        assert main(["sim", "--plant", plant, "--seed", "5", "--json", str(out)]) == 0
+        runs[plant] = json.loads(out.read_text())
+    # the slow robot takes more steps to the goal (or times out), deterministically
+    assert runs["lip_half"]["steps"] > runs["lip"]["steps"]
+    again = tmp_path / "again.json"
+    assert main(["sim", "--plant", "lip_half", "--seed", "5", "--json", str(again)]) == 0
+    assert json.loads(again.read_text()) == runs["lip_half"]
+    assert main(["sim", "--plant", "lip_half", "--record", str(tmp_path / "r.html")]) == 2
+    assert "--record need --plant lip or digit" in capsys.readouterr().err
+    ev = tmp_path / "eval.json"
+    argv = ["eval", "--plant", "lip_half", "--episodes", "1", "--first-seed", "5"]
+    assert main([*argv, "--json", str(ev)]) == 0
+    assert json.loads(ev.read_text())["episodes"][0]["steps"] == runs["lip_half"]["steps"]
+    out = tmp_path / "bench"
+    argv = ["benchmark", "--planners", "dwa", "--plant", "lip_half", "--trials", "1"]
+    assert main([*argv, "--first-seed", "5", "--workers", "1", "--out", str(out)]) == 0
+    (line,) = (out / "trials.jsonl").read_text().splitlines()
+    trial = json.loads(line)
+    assert trial["plant"] == "lip_half"
+    assert trial["record"]["steps"] == runs["lip_half"]["steps"]
+
+
+# ---------------------------------------------------------------- a new sub-command
+def test_a_new_subcommand_is_one_module_and_one_line(monkeypatch, capsys):
+    import types
+
+    import emonav_drake.cli as cli
+
+    hello = types.ModuleType("hello")
+
+    def add_parser(subparsers):
+        p = subparsers.add_parser("hello", help="say hello")
+        p.add_argument("--name", default="Digit")
+        p.set_defaults(func=lambda args: print(f"hello {args.name}") or 0)
+        return p
+
+    hello.add_parser = add_parser
+    monkeypatch.setattr(cli, "SUBCOMMANDS", (*cli.SUBCOMMANDS, hello))
+    assert main(["hello", "--name", "Cassie"]) == 0
+    assert capsys.readouterr().out == "hello Cassie\n"
+    with pytest.raises(SystemExit) as e:  # argparse's errors, like every command
+        main(["hello", "--nmae", "x"])
+    assert e.value.code == 2

@@ -97,6 +97,8 @@ def cmd_sim(args: argparse.Namespace) -> int:
     cfg = resolved.config
     scenario = resolve_scenario(args, resolved)
     estimate = load_emotion_estimate(args.emotion_estimate)
+    if args.plant not in ("lip", "digit"):  # a registered plant: its record only
+        return _sim_registered_plant(args, cfg, scenario, estimate)
     from emonav_drake.diagrams.navigation import run_episode
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
     from emonav_drake.planners import configure_for, make_planner
@@ -196,6 +198,33 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
         caption.set_outcome(record)
         finish_live_view(meshcat, keep_serving=not args.no_wait, caption=caption)
+    return 0
+
+
+def _sim_registered_plant(args: argparse.Namespace, cfg: Any, scenario: Any, estimate: Any) -> int:
+    """`sim` on a plant registered beside the LIP and Digit (`diagrams.plants`): its
+    episode runner gives the record (printed, and --json); the viewers and per-step
+    outputs belong to the LIP and Digit diagrams."""
+    from emonav_drake.diagrams.plants import plant_named
+    from emonav_drake.planners import configure_for, make_planner
+
+    viewer_flags = {"--meshcat": args.meshcat, "--record": args.record, "--rays": args.rays}
+    viewer_flags |= {"--steps-out": args.steps_out, "--rates": args.rates}
+    given = [flag for flag, value in viewer_flags.items() if value]
+    if given:
+        raise ConfigError(f"--plant {args.plant}: {', '.join(given)} need --plant lip or digit")
+    robot = plant_named(args.plant)
+    if estimate is not None and not robot.emotion_estimates:
+        raise ConfigError(f"--plant {args.plant} takes no --emotion-estimate")
+    planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
+    cfg, grid_kind = configure_for(planner, cfg)
+    goal_radius = cfg.episode.eval_goal_radius
+    record = robot.run(scenario, cfg, planner, grid_kind, goal_radius, estimate)
+    out = record.to_json()
+    out["seed"] = scenario.seed
+    print(f"seed {scenario.seed} on {robot.label}: {record.outcome} after {record.steps} steps")
+    if args.json:
+        write_json(args.json, out)
     return 0
 
 

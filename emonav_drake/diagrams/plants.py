@@ -91,6 +91,22 @@ PLANTS: dict[str, Plant] = {
 }
 
 
+def register_plant(plant: Plant, replace: bool = False) -> Plant:
+    """Add a plant (`ValueError` if its name is taken and not `replace`): `emonav eval`,
+    `emonav benchmark` and `emonav sim` (its record; the replay, trajectory and step
+    outputs are those of the LIP and Digit diagrams) then run it by name."""
+    if plant.name in PLANTS and not replace:
+        raise ValueError(f"a plant called {plant.name!r} is registered already")
+    PLANTS[plant.name] = plant
+    return plant
+
+
+def unregister_plant(name: str) -> None:
+    """Remove a plant (tests that register a throw-away one); the built-in ones stay."""
+    if name not in ("lip", "digit"):
+        PLANTS.pop(name, None)
+
+
 def plant_named(name: str, flag: str = "--plant") -> Plant:
     """The plant called `name`; `ConfigError` naming `flag` and the choices otherwise."""
     if name not in PLANTS:
