@@ -48,6 +48,7 @@ from emonav_drake.core.lidar import (
     beam_table,
     cast_robot_frame,
     check_num_beams,
+    check_positive_int,
     check_ranges_limits,
     robot_frame_centers,
 )
@@ -64,11 +65,7 @@ GRID_KINDS = ("lgm", "ogm")
 
 def check_grid_size(grid_size: int) -> int:
     """Return ``grid_size`` (M) as an int, or raise ValueError if it is not a positive int."""
-    if isinstance(grid_size, bool) or not isinstance(grid_size, int | np.integer):
-        raise ValueError(f"grid_size must be an int, got {grid_size!r}")
-    if grid_size < 1:
-        raise ValueError(f"grid_size must be positive, got {grid_size}")
-    return int(grid_size)
+    return check_positive_int(grid_size, "grid_size")
 
 
 def check_beams_per_sector(num_beams: int, grid_size: int) -> int:
@@ -304,12 +301,9 @@ class FrameStack:
     def __init__(
         self, num_frames: int = DEFAULT_NUM_FRAMES, grid_size: int = DEFAULT_GRID_SIZE
     ) -> None:
-        if isinstance(num_frames, bool) or not isinstance(num_frames, int | np.integer):
-            raise ValueError(f"num_frames must be an int, got {num_frames!r}")
-        if num_frames < 1:
-            raise ValueError(f"num_frames must be positive, got {num_frames}")
+        num_frames = check_positive_int(num_frames, "num_frames")
         self._grid_size = check_grid_size(grid_size)
-        self._frames = np.zeros((int(num_frames), self._grid_size, self._grid_size), np.uint8)
+        self._frames = np.zeros((num_frames, self._grid_size, self._grid_size), np.uint8)
         self._started = False
 
     @property

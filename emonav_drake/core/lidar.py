@@ -72,13 +72,19 @@ _WINDOW_MARGIN = 2
 _FAR_SLACK = 1e-9
 
 
+def check_positive_int(value: int, name: str) -> int:
+    """Return ``value`` as an int, or raise ValueError naming ``name`` if it is not a
+    positive integer (bools are not integers here)."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise ValueError(f"{name} must be an int, got {value!r}")
+    if value < 1:
+        raise ValueError(f"{name} must be positive, got {value}")
+    return int(value)
+
+
 def check_num_beams(num_beams: int) -> int:
     """Return ``num_beams`` as an int, or raise ValueError if it is not a positive integer."""
-    if isinstance(num_beams, bool) or not isinstance(num_beams, int | np.integer):
-        raise ValueError(f"num_beams must be an int, got {num_beams!r}")
-    if num_beams < 1:
-        raise ValueError(f"num_beams must be positive, got {num_beams}")
-    return int(num_beams)
+    return check_positive_int(num_beams, "num_beams")
 
 
 def check_ranges_limits(max_range: float, min_range: float) -> tuple[float, float]:
