@@ -1,10 +1,17 @@
 """One typed configuration for the whole project.
 
 Every number of the paper's Table I and of the environment (docs/facts.md) lives
-here, in plain dataclasses. Configurations load from YAML with Drake's typed loader
-(`pydrake.common.yaml.yaml_load_typed`, which already rejects unknown fields) and are
-then validated: a value outside its allowed range raises `ConfigError` naming the
-dotted field path and the range.
+here, in plain dataclasses. Configurations load from YAML (`load_config`) with Drake's
+typed loader, which already rejects unknown fields, and are then validated
+(`EmoNavConfig.validate`): a value outside its allowed range raises `ConfigError` naming
+the dotted field path and the range.
+
+This module is the configuration itself: its fields, defaults and cross-field rules,
+and the small helpers that go with them (`pendulum_frequency`, `NUM_BEAMS`, the emotion
+codes). The allowed ranges are a table in `param_ranges.py`; the schema-agnostic YAML
+machinery (typed loading and dumping, error messages naming the field, the range check,
+`ConfigError`) is `config_yaml.py`, shared with the training configurations and the
+scenarios. `ConfigError` is importable from here too.
 
 Units are SI throughout (metres, seconds, radians).
 """
@@ -12,17 +19,20 @@ Units are SI throughout (metres, seconds, radians).
 # No `from __future__ import annotations`: Drake's typed YAML loader needs real types.
 import dataclasses as dc
 import math
-import typing
 from pathlib import Path
-from typing import Any
+
+from emonav_drake.config_yaml import (
+    ConfigError,
+    dump_typed_yaml,
+    load_typed_yaml,
+    require,
+    validate_ranges,
+)
+from emonav_drake.param_ranges import RANGES as _RANGES
 
 # Emotion codes used everywhere (crowd, grid maps, metrics).
 HAPPY, NEUTRAL, NEGATIVE = 0, 1, 2
 EMOTION_NAMES = ("happy", "neutral", "negative")
-
-
-class ConfigError(ValueError):
-    """A configuration or scenario value is invalid; the message names the field."""
 
 
 def pendulum_frequency(height: float, gravity: float) -> float:
@@ -250,27 +260,27 @@ class EmoNavConfig:
 
     def validate(self) -> "EmoNavConfig":
         """Check every field against `_RANGES`; raise `ConfigError` naming the field."""
-        _validate_ranges(self, "", _RANGES)
+        validate_ranges(self, _RANGES)
         c = self.crowd
-        _require(
+        require(
             c.min_pedestrians <= c.max_pedestrians,
             "crowd.min_pedestrians",
             c.min_pedestrians,
             f"<= crowd.max_pedestrians ({c.max_pedestrians})",
         )
-        _require(
+        require(
             c.min_static <= c.max_static,
             "crowd.min_static",
             c.min_static,
             f"<= crowd.max_static ({c.max_static})",
         )
-        _require(
+        require(
             c.static_radius_min <= c.static_radius_max,
             "crowd.static_radius_min",
             c.static_radius_min,
             "<= crowd.static_radius_max",
         )
-        _require(
+        require(
             c.circle_radius_min <= c.circle_radius_max,
             "crowd.circle_radius_min",
             c.circle_radius_min,
@@ -278,36 +288,36 @@ class EmoNavConfig:
         )
         for name in ("static_x_range", "static_y_range"):
             lo, hi = getattr(c, name)
-            _require(lo <= hi, f"crowd.{name}", [lo, hi], "[low, high] with low <= high")
-        _require(
+            require(lo <= hi, f"crowd.{name}", [lo, hi], "[low, high] with low <= high")
+        require(
             abs(sum(c.emotion_probs) - 1.0) < 1e-6 and min(c.emotion_probs) >= 0,
             "crowd.emotion_probs",
             c.emotion_probs,
             "three non-negative values summing to 1",
         )
         li = self.lidar
-        _require(
+        require(
             li.num_beams % li.grid_size == 0,
             "lidar.num_beams",
             li.num_beams,
             f"a multiple of lidar.grid_size ({li.grid_size})",
         )
-        _require(
+        require(
             li.min_range < li.max_range,
             "lidar.min_range",
             li.min_range,
             f"< lidar.max_range ({li.max_range})",
         )
         w = self.walking
-        _require(w.arms in ("welded", "held"), "walking.arms", w.arms, '"welded" or "held"')
-        _require(
+        require(w.arms in ("welded", "held"), "walking.arms", w.arms, '"welded" or "held"')
+        require(
             w.lateral_step_min < w.lateral_step_max,
             "walking.lateral_step_min",
             w.lateral_step_min,
             "< walking.lateral_step_max",
         )
         steps_per_walk = self.robot.step_time / self.crowd.dt
-        _require(
+        require(
             abs(steps_per_walk - round(steps_per_walk)) < 1e-9,
             "crowd.dt",
             c.dt,
@@ -319,7 +329,7 @@ class EmoNavConfig:
     def _validate_walking(self) -> None:
         """Cross-field rules of the Digit walking stack (its rates are multiples)."""
         w = self.walking
-        _require(
+        require(
             w.lateral_step_min < w.lateral_step_max,
             "walking.lateral_step_min",
             w.lateral_step_min,
@@ -328,306 +338,12 @@ class EmoNavConfig:
         for name in ("planner_period", "controller_period", "fall_check_period"):
             period = getattr(w, name)
             ratio = period / w.time_step
-            _require(
+            require(
                 ratio >= 1.0 - 1e-9 and abs(ratio - round(ratio)) < 1e-9,
                 f"walking.{name}",
                 period,
                 f"a whole multiple of walking.time_step ({w.time_step})",
             )
-
-
-# Allowed ranges: (low, high) inclusive; list fields: (length, low, high) for each element.
-_RANGES: dict[str, Any] = {
-    "robot.step_time": (0.05, 2.0),
-    "robot.com_height": (0.3, 2.0),
-    "robot.gravity": (1.0, 20.0),
-    "robot.radius": (0.05, 1.0),
-    "robot.max_speed": (0.01, 2.0),
-    "robot.max_heading_change": (0.01, math.pi / 2),
-    "robot.start": (2, -50.0, 50.0),
-    "robot.goal": (2, -50.0, 50.0),
-    "lidar.num_beams": (4, 36000),
-    "lidar.max_range": (0.5, 50.0),
-    "lidar.min_range": (0.0, 5.0),
-    "lidar.grid_size": (2, 1000),
-    "lidar.num_frames": (1, 64),
-    "crowd.dt": (0.01, 1.0),
-    "crowd.pedestrian_radius": (0.05, 1.0),
-    "crowd.preferred_speed": (0.0, 3.0),
-    "crowd.min_pedestrians": (0, 20),
-    "crowd.max_pedestrians": (0, 20),
-    "crowd.min_static": (0, 20),
-    "crowd.max_static": (0, 20),
-    "crowd.static_radius_min": (0.05, 2.0),
-    "crowd.static_radius_max": (0.05, 2.0),
-    "crowd.circle_radius_min": (0.5, 20.0),
-    "crowd.circle_radius_max": (0.5, 20.0),
-    "crowd.static_x_range": (2, -20.0, 20.0),
-    "crowd.static_y_range": (2, -20.0, 20.0),
-    "crowd.goal_tolerance": (0.01, 2.0),
-    "crowd.neighbor_dist": (0.1, 100.0),
-    "crowd.max_neighbors": (0, 100),
-    "crowd.time_horizon": (0.1, 30.0),
-    "crowd.time_horizon_obst": (0.1, 30.0),
-    "crowd.safety_space": (0.0, 1.0),
-    "crowd.emotion_probs": (3, 0.0, 1.0),
-    "crowd.emotion_change_period": (0.1, 100.0),
-    "reward.static_discomfort": (0.0, 3.0),
-    "reward.happy_discomfort": (0.0, 3.0),
-    "reward.neutral_discomfort": (0.0, 3.0),
-    "reward.negative_discomfort": (0.0, 3.0),
-    "episode.max_steps": (1, 100000),
-    "episode.goal_radius": (0.01, 2.0),
-    "episode.eval_goal_radius": (0.01, 2.0),
-    "episode.discount": (0.0, 1.0),
-    "dwa.speed_samples": (2, 101),
-    "dwa.heading_samples": (2, 101),
-    "dwa.horizon_steps": (1, 50),
-    "dwa.clearance_cap": (0.01, 10.0),
-    "dwa.safety_margin": (0.0, 2.0),
-    "dwa.hard_steps": (1, 50),
-    "walking.step_width": (0.1, 0.5),
-    "walking.clearance": (0.01, 0.3),
-    "walking.touchdown_speed": (0.0, 1.0),
-    "walking.early_touchdown": (0.5, 1.0),
-    "walking.touchdown_tolerance": (0.0, 0.05),
-    "walking.stand_com_lead": (-0.1, 0.1),
-    "walking.speed_integral_limit": (0.0, 0.5),
-    "walking.heading_blend_fraction": (0.1, 1.0),
-    "walking.swing_yaw_blend_fraction": (0.1, 1.0),
-    "walking.swing_finish_fraction": (0.3, 1.0),
-    "walking.target_freeze_fraction": (0.1, 1.0),
-    "walking.prediction_fraction": (0.0, 1.0),
-    "walking.torso_height": (0.7, 1.1),
-    "walking.torso_pitch": (-0.5, 0.5),
-    "walking.stand_time": (0.0, 1.0e6),
-    "walking.speed_integral_gain": (0.0, 1.0),
-    "walking.lateral_step_min": (0.0, 0.5),
-    "walking.lateral_step_max": (0.1, 1.0),
-    "walking.max_step_length": (0.05, 1.0),
-    "walking.lambda_orientation": (0.0, 200.0),
-    "walking.lambda_height": (0.0, 200.0),
-    "walking.lambda_horizontal": (0.0, 200.0),
-    "walking.lambda_swing": (0.0, 200.0),
-    "walking.kd_leg": (6, 0.0, 1000.0),
-    "walking.kd_arm": (0.0, 1000.0),
-    "walking.kp_arm": (0.0, 10000.0),
-    "walking.ankle_torque_fraction": (0.0, 1.0),
-    "walking.planner_period": (0.001, 0.1),
-    "walking.controller_period": (0.0002, 0.02),
-    "walking.time_step": (0.0002, 0.005),
-    "walking.friction": (0.1, 2.0),
-    "walking.fall_height": (0.2, 1.0),
-    "walking.fall_check_period": (0.0002, 0.01),
-    "mpc.horizon_steps": (2, 40),
-    "mpc.scp_iterations": (1, 20),
-    "mpc.goal_weight": (0.0, 1e4),
-    "mpc.terminal_weight": (0.0, 1e4),
-    "mpc.reference_lead": (0.0, 100.0),
-    "mpc.guide_resolution": (0.01, 1.0),
-    "mpc.guide_padding": (0.5, 50.0),
-    "mpc.guide_zone_cost": (1.0, 100.0),
-    "mpc.speed_smoothness_weight": (0.0, 1e4),
-    "mpc.turn_smoothness_weight": (0.0, 1e4),
-    "mpc.turn_weight": (0.0, 1e4),
-    "mpc.discomfort_weight": (0.0, 1e6),
-    "mpc.collision_weight": (0.0, 1e6),
-    "mpc.slack_quadratic_weight": (1e-6, 1e4),
-    "mpc.prediction_discount": (0.01, 1.0),
-    "mpc.collision_margin": (0.0, 1.0),
-    "mpc.discomfort_margin": (0.0, 1.0),
-    "mpc.hard_pedestrian_steps": (0, 40),
-    "mpc.trust_region": (0.01, math.pi),
-    "mpc.seed_headings": (1, 41),
-    "mpc.seed_max_offset": (0.0, math.pi),
-    "mpc.previous_plan_bonus": (0.0, 1.0),
-    "mpc.fallback_speed_scale": (0.0, 1.0),
-    "mpc.osqp_eps": (1e-8, 1e-1),
-    "mpc.osqp_max_iter": (10, 100000),
-    "mpc.time_limit": (1e-4, 10.0),
-}
-
-
-def _require(ok: bool, field: str, value: Any, allowed: str) -> None:
-    if not ok:
-        raise ConfigError(f"{field} = {value!r} is invalid: must be {allowed}")
-
-
-def _describe_range(lo: Any, hi: Any) -> str:
-    if hi is None:
-        return f">= {lo}"
-    if lo is None:
-        return f"<= {hi}"
-    return f"in [{lo}, {hi}]"
-
-
-def _validate_ranges(obj: Any, prefix: str, ranges: dict[str, Any]) -> None:
-    """Check `obj`'s fields (recursively) against `ranges`.
-
-    `ranges` maps a dotted field name to (low, high) inclusive — either bound may be None
-    for "no bound" — or, for a list field, (length, low, high) for each element.
-    """
-    for f in dc.fields(obj):
-        name = f"{prefix}{f.name}"
-        value = getattr(obj, f.name)
-        if dc.is_dataclass(value):
-            _validate_ranges(value, name + ".", ranges)
-            continue
-        if isinstance(value, float) and not math.isfinite(value):
-            raise ConfigError(f"{name} = {value!r} is invalid: must be a finite number")
-        spec = ranges.get(name)
-        if spec is None:
-            continue
-        if len(spec) == 3:
-            length, lo, hi = spec
-            if len(value) != length:
-                raise ConfigError(f"{name} = {value!r} is invalid: must have {length} elements")
-            for v in value:
-                if not (math.isfinite(v) and lo <= v <= hi):
-                    raise ConfigError(
-                        f"{name} = {value!r} is out of range: each element in [{lo}, {hi}]"
-                    )
-        else:
-            lo, hi = spec
-            if (lo is not None and not lo <= value) or (hi is not None and not value <= hi):
-                raise ConfigError(
-                    f"{name} = {value!r} is out of range: allowed {_describe_range(lo, hi)}"
-                )
-
-
-def validate_ranges(obj: Any, ranges: dict[str, Any], prefix: str = "") -> None:
-    """Public form of the range check (used by the training configurations)."""
-    _validate_ranges(obj, prefix, ranges)
-
-
-def required_fields(schema: type) -> tuple[str, ...]:
-    """Fields a YAML mapping for `schema` must give (class attribute `_REQUIRED`)."""
-    return tuple(getattr(schema, "_REQUIRED", ()))
-
-
-_TYPE_NAMES = {float: "a number", int: "an integer", bool: "true or false", str: "a string"}
-
-
-def _check_scalar(name: str, value: Any, kind: type) -> None:
-    """Mirror Drake's primitive conversions; raise `ConfigError` naming the field."""
-    ok = False
-    if kind is bool:
-        ok = isinstance(value, bool) or value in ("true", "false")
-    elif kind is str:
-        ok = isinstance(value, str)
-    elif kind in (int, float) and not isinstance(value, bool):
-        if isinstance(value, int):
-            ok = True
-        elif isinstance(value, float):
-            ok = kind is float or value.is_integer()
-        elif isinstance(value, str):
-            try:
-                kind(value)
-                ok = True
-            except ValueError:
-                ok = False
-    if not ok:
-        raise ConfigError(f"{name} = {value!r} is invalid: expected {_TYPE_NAMES[kind]}")
-
-
-def _check_yaml_value(name: str, value: Any, kind: Any) -> None:
-    origin = typing.get_origin(kind)
-    if dc.is_dataclass(kind):
-        _check_yaml_mapping(kind, value, name)
-    elif origin is list:
-        (item,) = typing.get_args(kind)
-        if not isinstance(value, list):
-            raise ConfigError(f"{name} = {value!r} is invalid: expected a list")
-        for i, v in enumerate(value):
-            _check_yaml_value(f"{name}[{i}]", v, item)
-    elif kind in _TYPE_NAMES:
-        _check_scalar(name, value, kind)
-
-
-def _check_yaml_mapping(schema: type, data: Any, prefix: str) -> None:
-    """Types, unknown fields and required fields of raw YAML data against a dataclass."""
-    what = prefix or schema.__name__
-    if not isinstance(data, dict):
-        raise ConfigError(
-            f"{what} = {data!r} is invalid: expected a mapping of {schema.__name__} fields"
-        )
-    fields = {f.name: f for f in dc.fields(schema)}
-    dot = f"{prefix}." if prefix else ""
-    for key, value in data.items():
-        if key not in fields:
-            raise ConfigError(
-                f"{dot}{key}: unknown field; {schema.__name__} has {', '.join(fields)}"
-            )
-        _check_yaml_value(f"{dot}{key}", value, fields[key].type)
-    missing = [k for k in required_fields(schema) if k not in data]
-    if missing:
-        raise ConfigError(
-            f"{dot}{missing[0]}: required field missing ({schema.__name__} needs "
-            f"{', '.join(required_fields(schema))})"
-        )
-
-
-def _yaml_error_line(e: Exception) -> str:
-    mark = getattr(e, "problem_mark", None)
-    problem = getattr(e, "problem", None) or str(e).splitlines()[0]
-    if mark is not None:
-        return f"invalid YAML at line {mark.line + 1}, column {mark.column + 1}: {problem}"
-    return f"invalid YAML: {problem}"
-
-
-def load_typed_yaml_raw(
-    schema: type, path: str | Path | None = None, data: str | None = None, defaults: Any = None
-) -> tuple[Any, dict]:
-    """`load_typed_yaml` that also returns the raw mapping (to see which fields were given)."""
-    from pydrake.common.yaml import yaml_load_data, yaml_load_typed
-
-    if (path is None) == (data is None):
-        raise ValueError("give exactly one of path or data")
-    if path is not None:
-        path = Path(path)
-        if path.is_dir():
-            raise ConfigError(f"{path}: is a directory, expected a YAML file")
-        if not path.is_file():
-            raise ConfigError(f"{path}: no such file")
-        try:
-            data = path.read_text()
-        except UnicodeDecodeError:
-            raise ConfigError(f"{path}: not a text (YAML) file") from None
-    where = str(path) if path is not None else "<yaml>"
-    try:
-        raw = yaml_load_data(data)
-    except Exception as e:  # yaml syntax errors come from the yaml parser
-        raise ConfigError(f"{where}: {_yaml_error_line(e)}") from None
-    if raw is None:
-        raise ConfigError(
-            f"{where}: the file is empty; expected a YAML mapping of {schema.__name__} fields"
-        )
-    try:
-        _check_yaml_mapping(schema, raw, "")
-    except ConfigError as e:
-        raise ConfigError(f"{where}: {e}") from None
-    try:
-        obj = yaml_load_typed(
-            schema=schema, data=data, defaults=defaults if defaults is not None else schema()
-        )
-    except (RuntimeError, TypeError, ValueError) as e:
-        raise ConfigError(f"{where}: {e}") from None
-    except Exception as e:
-        raise ConfigError(f"{where}: not valid YAML for {schema.__name__}: {e}") from None
-    return obj, raw
-
-
-def load_typed_yaml(
-    schema: type, path: str | Path | None = None, data: str | None = None, defaults: Any = None
-) -> Any:
-    """Load a dataclass from YAML with Drake's typed loader, re-raising as `ConfigError`.
-
-    Exactly one of `path` or `data` is given. Fields absent from the YAML keep `defaults`,
-    except the schema's required fields (`_REQUIRED`). Before Drake's loader runs, the raw
-    data is checked against the schema so that an empty file, an unknown field, a wrong
-    type or a missing required field is reported with the dotted field name.
-    """
-    return load_typed_yaml_raw(schema, path=path, data=data, defaults=defaults)[0]
 
 
 def load_config(path: str | Path | None = None, data: str | None = None) -> EmoNavConfig:
@@ -639,13 +355,6 @@ def load_config(path: str | Path | None = None, data: str | None = None) -> EmoN
         return cfg.validate()
     except ConfigError as e:
         raise ConfigError(f"{path if path is not None else '<yaml>'}: {e}") from None
-
-
-def dump_typed_yaml(obj: Any) -> str:
-    """A dataclass as YAML text (loadable by `load_typed_yaml`)."""
-    from pydrake.common.yaml import yaml_dump_typed
-
-    return yaml_dump_typed(obj)
 
 
 def dump_config(config: EmoNavConfig) -> str:

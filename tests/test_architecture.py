@@ -25,6 +25,8 @@ LAYERS: list[tuple[str, frozenset[str]]] = [
                 "__init__",
                 "errors",
                 "params",
+                "config_yaml",
+                "param_ranges",
                 "atomic_io",
                 "torch_load",
                 "provenance",

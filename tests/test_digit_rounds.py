@@ -4,10 +4,11 @@ model-aware expert labels; the round writes a loadable policy and a resumable st
 
 import numpy as np
 
+from emonav_drake.config_yaml import load_typed_yaml
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.dagger import train_dagger
 from emonav_drake.learning.digit_dagger import DigitRoundsConfig, run_digit_rounds
-from emonav_drake.params import EmoNavConfig, load_typed_yaml
+from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import PolicyPlanner
 from emonav_drake.planners.variants import variant
 
@@ -43,7 +44,7 @@ def test_resuming_the_rounds_from_a_damaged_state_names_it_and_the_changed_setti
     import pytest
 
     import emonav_drake.learning.digit_dagger as digit_dagger
-    from emonav_drake.learning.dagger import Demonstrations, FrameStore
+    from emonav_drake.learning.demonstrations import Demonstrations, FrameStore
     from emonav_drake.learning.run_state import RunStateError, write_run_state
 
     cfg = DaggerConfig(expert_episodes=1, rounds=1, episodes_per_round=1, batch_size=8)

@@ -8,7 +8,9 @@ from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.learning.config import DaggerConfig, SacConfig
-from emonav_drake.learning.dagger import Demonstrations, FrameStore, Student, run_episode_collect
+from emonav_drake.learning.dagger_rollouts import run_episode_collect
+from emonav_drake.learning.dagger_student import Student
+from emonav_drake.learning.demonstrations import Demonstrations, FrameStore
 from emonav_drake.learning.sac import SacAgent
 from emonav_drake.learning.sac_trainer import train_sac
 from emonav_drake.params import EmoNavConfig

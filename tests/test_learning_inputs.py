@@ -20,7 +20,8 @@ from emonav_drake.cli import main
 from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.learning import dagger as dagger_mod
 from emonav_drake.learning.config import DaggerConfig, SacConfig
-from emonav_drake.learning.dagger import read_dagger_state, train_dagger
+from emonav_drake.learning.dagger import train_dagger
+from emonav_drake.learning.dagger_state import read_dagger_state
 from emonav_drake.learning.env import EmoNavLIPEnv
 from emonav_drake.learning.replay import FrameReplayBuffer
 from emonav_drake.learning.run_state import (

@@ -19,7 +19,8 @@ from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning import dagger as dagger_mod
 from emonav_drake.learning import run_state
 from emonav_drake.learning.config import DaggerConfig, SacConfig
-from emonav_drake.learning.dagger import Student, train_dagger
+from emonav_drake.learning.dagger import train_dagger
+from emonav_drake.learning.dagger_student import Student
 from emonav_drake.learning.env import EmoNavLIPEnv
 from emonav_drake.learning.run_state import (
     DAGGER_FORMAT,

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from emonav_drake.cli import main
+from emonav_drake.config_yaml import ConfigError, load_typed_yaml
 from emonav_drake.learning.config import DaggerConfig
-from emonav_drake.params import ConfigError, load_typed_yaml
 from emonav_drake.planners.policy import load_policy
 from emonav_drake.planners.variants import VARIANTS, shipped_checkpoint, variant
 
@@ -83,7 +83,7 @@ def test_variants_differ_from_the_shipped_route_by_observation_only():
 def test_the_mirrored_batch_is_the_mirrored_world_for_scans():
     # the student's augmentation flips scans beam i <-> K-1-i and the label's turn
     from emonav_drake.core.dwa import DwaPlanner
-    from emonav_drake.learning.dagger import Student
+    from emonav_drake.learning.dagger_student import Student
     from emonav_drake.params import EmoNavConfig
 
     env_cfg = EmoNavConfig()

@@ -94,7 +94,7 @@ def _emotion_estimate_yaml(path: Path | None) -> str | None:
     """The validated emotion estimate of --emotion-estimate as canonical YAML."""
     if path is None:
         return None
-    from emonav_drake.params import dump_typed_yaml
+    from emonav_drake.config_yaml import dump_typed_yaml
 
     return dump_typed_yaml(load_emotion_estimate(path))
 

@@ -157,7 +157,7 @@ def load_emotion_estimate(path: Path | None) -> Any:
     """The validated `EmotionEstimateParams` of `--emotion-estimate`, or None without it."""
     if not path:
         return None
-    from emonav_drake.params import load_typed_yaml
+    from emonav_drake.config_yaml import load_typed_yaml
     from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 
     return load_typed_yaml(EmotionEstimateParams, path=path).validate()

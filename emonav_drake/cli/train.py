@@ -92,7 +92,7 @@ def _apply_variant(args: argparse.Namespace) -> None:
 
 def _training_config(args: argparse.Namespace):
     """The typed configuration with the command-line overrides, validated (field named)."""
-    from emonav_drake.params import load_typed_yaml
+    from emonav_drake.config_yaml import load_typed_yaml
 
     if args.algo == "dagger":
         from emonav_drake.learning.config import DaggerConfig as schema

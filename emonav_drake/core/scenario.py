@@ -21,13 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from emonav_drake.params import (
-    EMOTION_NAMES,
-    ConfigError,
-    EmoNavConfig,
-    dump_typed_yaml,
-    load_typed_yaml_raw,
-)
+from emonav_drake.config_yaml import ConfigError, dump_typed_yaml, load_typed_yaml_raw
+from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 
 PLACEMENT_TRIES = 1000  # rejection-sampling draws per object
 # The most a scenario may hold: what the sampler can be configured to draw

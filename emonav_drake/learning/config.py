@@ -8,9 +8,10 @@ every field against its allowed range (`_DAGGER_RANGES`, `_SAC_RANGES`, in the s
 
 import dataclasses as dc
 
+from emonav_drake.config_yaml import ConfigError, validate_ranges
 from emonav_drake.core.observations import observation_kind, observation_kinds
 from emonav_drake.diagrams.plants import PLANTS
-from emonav_drake.params import NUM_BEAMS, ConfigError, EpisodeParams, validate_ranges
+from emonav_drake.params import NUM_BEAMS, EpisodeParams
 
 # The 4-conv encoder (3 x 3, strides 2-1-1-1) needs an input of at least this many cells.
 MIN_ENCODER_INPUT = 15

@@ -68,7 +68,7 @@ class LabellingPlanner:
         return self.expert.initial_memory()
 
     def plan_with_memory(self, obs, memory):
-        from emonav_drake.learning.dagger import command_index
+        from emonav_drake.learning.demonstrations import command_index
 
         expert_cmd, memory = self.expert.plan_with_memory(obs, memory)
         label = command_index(self.commands, expert_cmd)
@@ -226,13 +226,10 @@ def run_digit_rounds(
     """
     import torch
 
-    from emonav_drake.learning.dagger import STATE_FILE as SOURCE_STATE
-    from emonav_drake.learning.dagger import (
-        Demonstrations,
-        FrameStore,
-        Student,
-        read_dagger_state,
-    )
+    from emonav_drake.learning.dagger_state import STATE_FILE as SOURCE_STATE
+    from emonav_drake.learning.dagger_state import read_dagger_state
+    from emonav_drake.learning.dagger_student import Student
+    from emonav_drake.learning.demonstrations import Demonstrations, FrameStore
     from emonav_drake.learning.run_state import (
         check_state,
         config_changes,
