@@ -46,13 +46,13 @@ class RobotParams:
     """The reduced-order (LIP) robot and its command bounds (paper Table I, Eq. 1–2)."""
 
     step_time: float = 0.4  # T, one walking step [s]
-    com_height: float = 1.02  # H [m]
-    gravity: float = 9.81  # g [m/s^2]
-    radius: float = 0.3  # r_robot [m]
+    com_height: float = 1.02  # H, centre-of-mass height of the LIP [m]
+    gravity: float = 9.81  # g, gravitational acceleration [m/s^2]
+    radius: float = 0.3  # r_robot, collision radius [m]
     max_speed: float = 0.4  # ū_v, sagittal speed bound [m/s]
     max_heading_change: float = 0.2  # ū_Δθ, heading change per step bound [rad]
-    start: list[float] = dc.field(default_factory=lambda: [-4.0, 0.0])  # world [m]
-    goal: list[float] = dc.field(default_factory=lambda: [4.0, 0.0])  # world [m]
+    start: list[float] = dc.field(default_factory=lambda: [-4.0, 0.0])  # start, world x, y [m]
+    goal: list[float] = dc.field(default_factory=lambda: [4.0, 0.0])  # goal, world x, y [m]
 
     @property
     def omega(self) -> float:
@@ -69,8 +69,8 @@ NUM_BEAMS = 1800
 class LidarParams:
     """The 2-D LiDAR and the grid maps built from it (docs/lidar_grid_maps.md)."""
 
-    num_beams: int = NUM_BEAMS  # K, over 360°
-    max_range: float = 6.0  # L [m]
+    num_beams: int = NUM_BEAMS  # K, beams over 360°
+    max_range: float = 6.0  # L, maximum range [m]
     min_range: float = 0.27  # nearer hits are raised to this range [m]
     grid_size: int = 100  # M (rings × sectors for the LGM, cells per side for the OGM)
     num_frames: int = 9  # N, frames in the stack
@@ -81,43 +81,45 @@ class CrowdParams:
     """Pedestrians (ORCA), static discs and scenario sampling (paper §IV-B)."""
 
     dt: float = 0.1  # pedestrian dynamics period [s] (10 Hz)
-    pedestrian_radius: float = 0.3  # r_ped [m]
-    preferred_speed: float = 1.0  # [m/s]
-    min_pedestrians: int = 1
-    max_pedestrians: int = 4
-    min_static: int = 1
-    max_static: int = 3
-    static_radius_min: float = 0.2  # [m]
-    static_radius_max: float = 0.4  # [m]
-    circle_radius_min: float = 3.5  # pedestrians start on this circle [m]
-    circle_radius_max: float = 4.5
+    pedestrian_radius: float = 0.3  # r_ped, pedestrian radius [m]
+    preferred_speed: float = 1.0  # pedestrians' preferred (ORCA) speed [m/s]
+    min_pedestrians: int = 1  # fewest pedestrians in a sampled scenario
+    max_pedestrians: int = 4  # most pedestrians in a sampled scenario
+    min_static: int = 1  # fewest static discs in a sampled scenario
+    max_static: int = 3  # most static discs in a sampled scenario
+    static_radius_min: float = 0.2  # static disc radius: lower bound [m]
+    static_radius_max: float = 0.4  # static disc radius: upper bound [m]
+    circle_radius_min: float = 3.5  # radius of the pedestrians' start circle: lower bound [m]
+    circle_radius_max: float = 4.5  # radius of the pedestrians' start circle: upper bound [m]
+    # [low, high] of the static discs' centre x [m]
     static_x_range: list[float] = dc.field(default_factory=lambda: [-3.0, 3.0])
+    # [low, high] of the static discs' centre y [m]
     static_y_range: list[float] = dc.field(default_factory=lambda: [-1.5, 1.5])
     goal_tolerance: float = 0.1  # a pedestrian turns round within this of its goal [m]
     # ORCA (RVO2 semantics), the authors' settings.
-    neighbor_dist: float = 10.0
-    max_neighbors: int = 10
-    time_horizon: float = 5.0
-    time_horizon_obst: float = 5.0
+    neighbor_dist: float = 10.0  # ORCA: neighbours are the pedestrians closer than this [m]
+    max_neighbors: int = 10  # ORCA: at most this many nearest neighbours
+    time_horizon: float = 5.0  # ORCA horizon of pedestrians' velocity obstacles [s]
+    time_horizon_obst: float = 5.0  # ORCA horizon of static discs' velocity obstacles [s]
     safety_space: float = 0.2  # added to every ORCA radius [m]
-    # Emotions: probabilities of happy, neutral, negative at sampling time.
+    # Probabilities of happy, neutral, negative when a pedestrian's emotion is drawn
     emotion_probs: list[float] = dc.field(default_factory=lambda: [1 / 3, 1 / 3, 1 / 3])
     time_varying_emotions: bool = False  # one pedestrian's emotion changes periodically
-    emotion_change_period: float = 2.0  # [s]
+    emotion_change_period: float = 2.0  # time-varying mode: period of the changes [s]
 
 
 @dc.dataclass
 class RewardParams:
     """Rewards, paper Eq. 6–9, and the discomfort distances of §III-C."""
 
-    collision: float = -0.6
-    discomfort: float = -0.1  # counted once per step
-    goal: float = 0.5
-    progress_gain: float = 0.3
-    static_discomfort: float = 0.2  # d_static [m]
-    happy_discomfort: float = 0.2  # [m]
-    neutral_discomfort: float = 0.35  # [m]
-    negative_discomfort: float = 0.5  # [m]
+    collision: float = -0.6  # reward of a collision
+    discomfort: float = -0.1  # reward inside a discomfort zone, counted once per step
+    goal: float = 0.5  # reward of reaching the goal
+    progress_gain: float = 0.3  # reward per metre of progress towards the goal [1/m]
+    static_discomfort: float = 0.2  # d_static, discomfort distance of static discs [m]
+    happy_discomfort: float = 0.2  # discomfort distance of happy pedestrians [m]
+    neutral_discomfort: float = 0.35  # discomfort distance of neutral pedestrians [m]
+    negative_discomfort: float = 0.5  # discomfort distance of negative pedestrians [m]
 
     def emotion_distances(self) -> tuple[float, float, float]:
         """Discomfort distance per emotion code (HAPPY, NEUTRAL, NEGATIVE) [m]."""
@@ -128,23 +130,23 @@ class RewardParams:
 class EpisodeParams:
     """Episode rules (the authors' code): time limit, goal radii, discount."""
 
-    max_steps: int = 125  # 50 s of 0.4 s steps
-    goal_radius: float = 0.1  # d_goal, training [m]
-    eval_goal_radius: float = 0.2  # evaluation [m]
-    discount: float = 0.99  # γ
+    max_steps: int = 125  # time limit in walking steps (50 s of 0.4 s steps)
+    goal_radius: float = 0.1  # d_goal, goal reached within this, training [m]
+    eval_goal_radius: float = 0.2  # d_goal in evaluation [m]
+    discount: float = 0.99  # γ, discount factor
 
 
 @dc.dataclass
 class DwaParams:
     """Dynamic Window Approach on the LIP model (the paper's DWA baseline)."""
 
-    speed_samples: int = 9
-    heading_samples: int = 11
+    speed_samples: int = 9  # candidate speeds, evenly spread over [0, ū_v]
+    heading_samples: int = 11  # candidate heading changes, evenly over [−ū_Δθ, ū_Δθ]
     horizon_steps: int = 5  # walking steps rolled out per candidate
-    goal_weight: float = 1.0
-    clearance_weight: float = 1.0
-    discomfort_weight: float = 3.0
-    speed_weight: float = 0.1
+    goal_weight: float = 1.0  # score of progress to the goal (per horizon's full-speed reach)
+    clearance_weight: float = 1.0  # score of clearance (per clearance_cap)
+    discomfort_weight: float = 3.0  # penalty per metre of discomfort-zone intrusion [1/m]
+    speed_weight: float = 0.1  # score of speed (per ū_v)
     clearance_cap: float = 1.0  # clearance beyond this earns nothing more [m]
     safety_margin: float = 0.05  # extra collision margin in the rollout [m]
     hard_steps: int = 2  # predicted pedestrian contact within this many steps: rejected
@@ -172,22 +174,22 @@ class MpcParams:
     discomfort_margin: float = 0.03  # added to the discomfort zones [m]
     hard_pedestrian_steps: int = 2  # pedestrian contact is a hard constraint this far
     # Guide path around the static discs (grid Dijkstra), followed by the reference.
-    guide_resolution: float = 0.1  # [m]
+    guide_resolution: float = 0.1  # cell size of the guide grid [m]
     guide_padding: float = 3.0  # grid margin around robot, goal and discs [m]
     guide_zone_cost: float = 3.0  # cost factor of cells inside a disc's discomfort zone
     # SCP and initial guess.
     trust_region: float = 0.12  # |u_Δθ − ū_Δθ| per SCP iteration [rad]
     seed_headings: int = 7  # seed headings: offsets spread over ±seed_max_offset
-    seed_max_offset: float = 1.2  # [rad]
+    seed_max_offset: float = 1.2  # largest offset of the seed headings [rad]
     previous_plan_bonus: float = 0.05  # hysteresis for the previous plan (relative cost)
     # Fallback and solver.
     fallback_speed_scale: float = 0.5  # fallback: u_v = this × current speed, keep heading
     osqp_eps: float = 1e-3  # absolute and relative tolerances (solutions are polished)
-    osqp_max_iter: int = 400
+    osqp_max_iter: int = 400  # OSQP iteration limit per QP
     # OSQP's wall-clock limit per QP [s]: a safety only (a QP takes ~1 ms; the work is
     # bounded by osqp_max_iter); each time it fires the plan depends on the load, and the
     # planner counts it (time_limit_hits) and warns
-    time_limit: float = 1.0
+    time_limit: float = 1.0  # OSQP wall-clock limit per QP, a safety only [s]
 
 
 @dc.dataclass
@@ -219,8 +221,8 @@ class WalkingParams:
     swing_finish_fraction: float = 0.85  # swing foot reaches its target (horizontally)
     target_freeze_fraction: float = 0.8  # the swing target is frozen after this·T
     prediction_fraction: float = 0.5  # the logged ALIP end-of-step prediction is made here
-    lateral_step_min: float = 0.12  # lateral step clamp from the stance foot [m]
-    lateral_step_max: float = 0.45
+    lateral_step_min: float = 0.12  # lateral step clamp from the stance foot: lower [m]
+    lateral_step_max: float = 0.45  # lateral step clamp from the stance foot: upper [m]
     max_step_length: float = 0.45  # sagittal step clamp from the stance foot [m]
     lambda_orientation: float = 12.0  # torso orientation [1/s]
     lambda_height: float = 10.0  # torso height [1/s]
@@ -229,9 +231,11 @@ class WalkingParams:
     # K_D per leg joint: hip roll, hip yaw, hip pitch, knee, toe pitch, toe roll. Hip yaw 40
     # (was 20 until December 2026) halves the torso-yaw sway that alternates with the stance
     # foot; 60 and more slows the first turn from standing (docs/walking.md, "Gains").
-    kd_leg: list[float] = dc.field(default_factory=lambda: [60.0, 40.0, 60.0, 60.0, 6.0, 6.0])
-    kd_arm: float = 20.0  # arms held by PD when not welded [N·m·s/rad]
-    kp_arm: float = 200.0  # [N·m/rad]
+    kd_leg: list[float] = dc.field(  # K_D: hip roll/yaw/pitch, knee, toe pitch/roll [N·m·s/rad]
+        default_factory=lambda: [60.0, 40.0, 60.0, 60.0, 6.0, 6.0]
+    )
+    kd_arm: float = 20.0  # PD damping of the arms when held [N·m·s/rad]
+    kp_arm: float = 200.0  # PD stiffness of the arms when held [N·m/rad]
     ankle_torque_fraction: float = 0.8  # stance toe torque bound, fraction of its limit
     # Rates (docs/rates.md, "Fast Digit"): the plant at 4 ms, the controller at every plant
     # step (250 Hz), the footstep planner at 50 Hz walk as the 1 ms / 1 kHz / 200 Hz stack

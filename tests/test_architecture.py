@@ -26,6 +26,7 @@ LAYERS: list[tuple[str, frozenset[str]]] = [
                 "errors",
                 "params",
                 "config_yaml",
+                "config_notes",
                 "param_ranges",
                 "atomic_io",
                 "torch_load",

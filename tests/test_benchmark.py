@@ -256,7 +256,7 @@ def test_named_settings_and_config_show(capsys):
     assert tv.crowd.time_varying_emotions and tv.reward.emotion_distances() == (0.2, 0.35, 0.5)
     assert main(["config", "--show", "--setting", "no_emotion"]) == 0
     text = capsys.readouterr().out
-    assert "neutral_discomfort: 0.2\n" in text
+    assert "neutral_discomfort: 0.2  #" in text
     assert load_config(data=text) == load_setting("no_emotion")
     assert main(["config"]) == 0  # the defaults: --dump is the default action
     assert load_config(data=capsys.readouterr().out) == load_config()

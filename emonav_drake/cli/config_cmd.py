@@ -1,8 +1,13 @@
 """`emonav config`: print the resolved configuration as YAML, or list the shipped settings
 and example scenarios.
 
-emonav config [--dump] [--setting NAME | --config F] [--time-varying]
+emonav config [--dump] [--bare] [--setting NAME | --config F] [--time-varying]
 emonav config --list
+
+The dump is annotated: each field is followed by its unit and meaning as a YAML comment
+(the field's comment in `params.py`, read by `config_notes.py`) and each section is headed
+by the first line of its dataclass's docstring; `--bare` prints the YAML without comments.
+Both load back (`--config`) to the same configuration.
 """
 
 from __future__ import annotations
@@ -29,7 +34,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "--show",
         dest="show",
         action="store_true",
-        help="print the whole configuration, loadable with --config (the default action)",
+        help="print the whole configuration, loadable with --config (the default action); "
+        "each field is annotated with its unit and meaning as a YAML comment",
+    )
+    c.add_argument(
+        "--bare",
+        action="store_true",
+        help="print the configuration without the comments (the plain YAML)",
     )
     c.add_argument(
         "--list", action="store_true", help="list the named settings and example scenarios"
@@ -42,6 +53,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 
 def cmd_config(args: argparse.Namespace) -> int:
     """Print the resolved configuration as YAML (loadable with --config)."""
+    from emonav_drake.config_notes import dump_annotated_yaml
     from emonav_drake.params import dump_config
 
     if args.list:
@@ -49,6 +61,7 @@ def cmd_config(args: argparse.Namespace) -> int:
             flag
             for flag, value in (
                 ("--dump", args.show),
+                ("--bare", args.bare),
                 ("--setting", args.setting),
                 ("--config", args.config),
                 ("--time-varying", args.time_varying),
@@ -63,7 +76,9 @@ def cmd_config(args: argparse.Namespace) -> int:
         sys.stdout.write(_list_examples())
         return 0
     resolved = resolve_config(args)
-    sys.stdout.write(f"# emonav configuration: {resolved.source}\n{dump_config(resolved.config)}")
+    config = resolved.config
+    text = dump_config(config) if args.bare else dump_annotated_yaml(config)
+    sys.stdout.write(f"# emonav configuration: {resolved.source}\n{text}")
     return 0
 
 
