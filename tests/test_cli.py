@@ -158,3 +158,52 @@ def test_sim_and_eval_take_a_named_setting_as_benchmark_does(tmp_path, capsys):
     assert e.value.code == 2
     assert "not allowed with argument" in capsys.readouterr().err
     assert not (tmp_path / "run").exists()
+
+
+def test_the_progress_bar_changes_no_lip_episode(capsys):
+    """`run_episode(progress=True)`: a bar over simulated time on stderr, ended with the
+    outcome; the record and the step log are the same bit for bit."""
+    import dataclasses as dc
+
+    import numpy as np
+
+    from emonav_drake.core.scenario import sample_scenario
+    from emonav_drake.diagrams.navigation import run_episode
+    from emonav_drake.params import load_config
+    from emonav_drake.planners import make_planner
+
+    cfg = load_config()
+    runs = []
+    for progress in (False, True):
+        record, log = run_episode(
+            sample_scenario(3, cfg), cfg, make_planner("dwa", cfg), progress=progress
+        )
+        runs.append((record, log, capsys.readouterr().err))
+    (r0, log0, err0), (r1, log1, err1) = runs
+    assert err0 == "" and dc.asdict(r0) == dc.asdict(r1)
+    for field in dc.fields(log0):
+        a, b = getattr(log0, field.name), getattr(log1, field.name)
+        assert len(a) == len(b) and all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
+    t = r1.steps * cfg.robot.step_time
+    assert f"{t:.1f}/{t:.1f} s simulated" in err1 and r1.outcome in err1
+
+
+def test_sim_on_digit_shows_its_bar_on_a_terminal_only(tmp_path, capsys, monkeypatch):
+    """`emonav sim --plant digit`: the bar on stderr when it is a terminal and --quiet is
+    not given; the --json output is the same file byte for byte either way."""
+    import sys
+
+    cfg = tmp_path / "short.yaml"
+    cfg.write_text("episode: {max_steps: 10}\n")
+    outs = {}
+    for name, tty, extra in (("pipe", False, []), ("tty", True, []), ("quiet", True, ["--quiet"])):
+        monkeypatch.setattr(sys.stderr, "isatty", lambda tty=tty: tty)
+        outs[name] = tmp_path / f"{name}.json"
+        argv = ["sim", "--plant", "digit", "--seed", "3", "--planner", "dwa"]
+        assert main([*argv, "--config", str(cfg), "--json", str(outs[name]), *extra]) == 0
+        captured = capsys.readouterr()
+        assert ("Digit episode" in captured.err) == (name == "tty"), (name, captured.err)
+        assert "s simulated [" not in captured.out
+    texts = {name: p.read_bytes() for name, p in outs.items()}
+    assert texts["pipe"] == texts["tty"] == texts["quiet"]
+    assert json.loads(texts["tty"])["steps"] == 10

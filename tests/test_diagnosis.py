@@ -62,3 +62,150 @@ def test_diagnose_a_run_without_trials(tmp_path, capsys):
     (run / "settings.json").write_text(shipped.read_text())
     assert main(["diagnose", str(run), "--out", str(tmp_path / "diag")]) == 2
     assert "no finished trials" in capsys.readouterr().err
+
+
+def _lip_run(tmp_path):
+    """A tiny LIP run: DWA on seeds 1–3 with 60-step episodes (some reach the goal, some
+    time out)."""
+    cfg = tmp_path / "short.yaml"
+    cfg.write_text("episode: {max_steps: 60}\n")
+    run = tmp_path / "run"
+    argv = ["benchmark", "--planners", "dwa", "--trials", "3", "--first-seed", "1"]
+    argv += ["--workers", "1", "--config", str(cfg), "--out", str(run), "--quiet"]
+    assert main(argv) == 0
+    trials = [json.loads(line) for line in (run / "trials.jsonl").read_text().splitlines()]
+    outcomes = {t["record"]["outcome"] for t in trials}
+    assert "success" in outcomes and outcomes - {"success"}, outcomes  # both kinds
+    return run, trials
+
+
+def _listed(text: str) -> list[tuple[int, str, int, str]]:
+    """(seed, cause, steps, min distance) of the trial lines of a --failures listing."""
+    rows = []
+    for line in text.splitlines():
+        parts = line.split()
+        if len(parts) >= 4 and parts[0].isdigit() and parts[-2].isdigit():
+            rows.append((int(parts[0]), " ".join(parts[1:-2]), int(parts[-2]), parts[-1]))
+    return rows
+
+
+def test_diagnose_lists_the_failures_of_a_lip_run_and_how_to_rerun_them(tmp_path, capsys):
+    import shlex
+
+    run, trials = _lip_run(tmp_path)
+    capsys.readouterr()
+    assert main(["diagnose", str(run), "--failures"]) == 0
+    out = capsys.readouterr().out
+    failed = sorted(
+        (t["seed"], t["record"]["outcome"], t["record"]["steps"], t["record"]["min_ped_distance"])
+        for t in trials
+        if t["record"]["outcome"] != "success"
+    )
+    # every failed trial, and only those, with its record's numbers
+    assert _listed(out) == [(s, o, n, f"{d:.2f}") for s, o, n, d in failed]
+    assert f"dwa: {len(failed)} of 3 trials failed" in out
+    commands = [line.strip() for line in out.splitlines() if line.strip().startswith("emonav sim")]
+    assert len(commands) == len(failed)  # the first 3 of each method
+    # the printed command plays the trial again: the same record
+    argv = shlex.split(commands[0])
+    assert argv[:2] == ["emonav", "sim"] and "--plant" not in argv  # the LIP is sim's default
+    assert argv[argv.index("--config") + 1] == str(tmp_path / "short.yaml")
+    again = tmp_path / "again.json"
+    assert main([*argv[1:], "--json", str(again)]) == 0
+    replayed = json.loads(again.read_text())
+    recorded = next(t["record"] for t in trials if t["seed"] == failed[0][0])
+    assert {k: replayed[k] for k in recorded} == recorded
+    # --rerun 0: the list without commands
+    capsys.readouterr()
+    assert main(["diagnose", str(run), "--failures", "--rerun", "0"]) == 0
+    assert "emonav sim" not in capsys.readouterr().out
+    # neither --failures nor --out: refused
+    assert main(["diagnose", str(run)]) == 2
+    assert "--failures" in capsys.readouterr().err
+    # a LIP run without failures: nothing to re-simulate, and none listed
+    won = [line for line in (run / "trials.jsonl").read_text().splitlines() if '"success"' in line]
+    (run / "trials.jsonl").write_text("\n".join(won) + "\n")
+    assert main(["diagnose", str(run), "--out", str(tmp_path / "none")]) == 2
+    assert f"no failed trials of ['dwa'] to diagnose (all {len(won)} succeeded)" in (
+        capsys.readouterr().err
+    )
+    assert main(["diagnose", str(run), "--failures"]) == 0
+    out = capsys.readouterr().out
+    assert _listed(out) == [] and f"dwa: 0 of {len(won)} trials failed" in out
+
+
+def test_diagnose_re_simulates_a_lip_run_and_skips_the_digit_comparison(tmp_path, capsys):
+    run, trials = _lip_run(tmp_path)
+    out = tmp_path / "diag"
+    assert main(["diagnose", str(run), "--out", str(out)]) == 0
+    rows = json.loads((out / "diagnosis.json").read_text())
+    failed = [t for t in trials if t["record"]["outcome"] != "success"]
+    # the failures only (successes are the reference of Digit's tracking comparison)
+    assert [(r["method"], r["seed"]) for r in rows] == [("dwa", t["seed"]) for t in failed]
+    for r, t in zip(rows, failed, strict=True):
+        assert r["plant"] == "lip" and r["reproduced"] and r["tracking"] is None
+        assert r["cause"] == t["record"]["outcome"] == "timeout"
+        assert {k: r["record"][k] for k in t["record"]} == t["record"]
+    md = (out / "diagnosis.md").read_text()
+    assert f"| dwa | {len(failed)} | timeout {len(failed)} |" in md
+    assert "skipped — on a LIP run" in md and f"All {len(failed)} re-simulated" in md
+    assert "LIP position error" not in md
+    assert (out / "diagnosis.png").stat().st_size > 5_000
+    assert (out / "run_config.yaml").read_text() == json.loads((run / "settings.json").read_text())[
+        "config_yaml"
+    ]
+    assert _listed((out / "failures.md").read_text()) == [
+        (r["seed"], r["cause"], r["steps"], f"{r['min_ped_distance']:.2f}") for r in rows
+    ]
+    printed = capsys.readouterr().out
+    assert "skipped — on a LIP run" in printed and "failures.md" in printed
+
+
+def test_failure_listing_names_causes_and_a_changed_configuration():
+    """Collisions name what was hit, falls their reason; a run whose configuration source
+    no longer gives its configuration (hash) is re-run from run_config.yaml; a learned
+    method with another checkpoint is re-run as `policy` with it."""
+    from emonav_drake.evaluation.diagnosis import format_failures, rerun_command
+
+    def trial(method, seed, outcome, **extra):
+        record = {"outcome": outcome, "steps": 7 + seed, "min_ped_distance": 0.25 * seed}
+        return {"method": method, "seed": seed, "record": record | extra}
+
+    settings = {
+        "plant": "digit",
+        "planners": ["mine", "dwa"],
+        "methods": {
+            "mine": {"name": "mine", "planner": "policy", "checkpoint": "/x/mine.pt"}
+            | {"checkpoint_sha256": "0" * 64},
+            "dwa": {"name": "dwa", "planner": "dwa", "checkpoint": None},
+        },
+        "config_source": "--setting var_dd",
+        "config_sha256": "not the hash of var_dd",
+        "first_seed": 1,
+        "trials": 4,
+        "emotion_estimate_yaml": None,
+    }
+    trials = [
+        trial("mine", 1, "collision", collided_with="negative"),
+        trial("mine", 2, "success"),
+        trial("mine", 3, "fall", fall_reason="torso at 0.512 m"),
+        trial("dwa", 1, "success"),
+        trial("dwa", 4, "timeout"),
+    ]
+    text = format_failures(settings, trials, ["mine", "dwa"], "RUN", rerun=1)
+    assert _listed(text) == [
+        (1, "collision: negative", 8, "0.25"),
+        (3, "fall: torso at 0.512 m", 10, "0.75"),
+        (4, "timeout", 11, "1.00"),
+    ]
+    assert "mine: 2 of 3 trials failed (collision 1, fall 1)" in text
+    assert "RUN/settings.json" in text and "> run_config.yaml" in text
+    assert rerun_command(settings, "mine", 1) == (
+        "emonav sim --planner policy --checkpoint /x/mine.pt --seed 1 --plant digit "
+        "--config run_config.yaml"
+    )
+    assert rerun_command(settings, "dwa", 4, {"config": "d/run_config.yaml"}) == (
+        "emonav sim --planner dwa --seed 4 --plant digit --config d/run_config.yaml"
+    )
+    commands = [line.strip() for line in text.splitlines() if "emonav sim" in line]
+    assert commands == [rerun_command(settings, m, s) for m, s in (("mine", 1), ("dwa", 4))]

@@ -4,6 +4,7 @@ import json
 import logging
 import math
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -125,3 +126,45 @@ def test_meshcat_html_replay(tmp_path):
     text = out.read_text()
     assert text.lstrip().lower().startswith("<!doctype html") or "<html" in text[:2000].lower()
     assert len(text) > 10_000
+
+
+def _walk_fields(r) -> str:
+    """A walk's result, bit for bit (floats by repr), but its wall time."""
+    import dataclasses as dc
+
+    fields = dc.asdict(r)
+    del fields["wall_seconds"]
+    return json.dumps(fields, sort_keys=True)
+
+
+def test_the_progress_bar_changes_no_walk(capsys):
+    """`progress=True` advances the simulator in chunks under a bar on stderr: the same
+    walk bit for bit, also when a fall ends it early (the bar then ends at the fall)."""
+    for kwargs, note in (
+        ({"seconds": 2.3, "seed": 4}, "walked"),  # 0.5, 1.0, …, 2.0, 2.3
+        ({"seconds": 3.0, "command": "stand", "push": (0.0, 2.5, 0.0)}, "fall"),
+    ):
+        quiet = run_walk(**kwargs)
+        assert capsys.readouterr().err == ""
+        shown = run_walk(**kwargs, progress=True)
+        bar = capsys.readouterr().err
+        assert _walk_fields(shown) == _walk_fields(quiet)
+        end = f"{shown.sim_seconds:.1f}/{shown.sim_seconds:.1f} s simulated"
+        assert "walk: 100%" in bar and end in bar and "x real time" in bar and note in bar
+        assert shown.fell == (note == "fall")
+    assert quiet.sim_seconds < 3.0  # the fall ended the last one early
+
+
+def test_cli_walk_shows_its_bar_on_a_terminal_only(tmp_path, capsys, monkeypatch):
+    outs = {}
+    for name, tty, extra in (("pipe", False, []), ("tty", True, []), ("quiet", True, ["--quiet"])):
+        monkeypatch.setattr(sys.stderr, "isatty", lambda tty=tty: tty)
+        outs[name] = tmp_path / f"{name}.json"
+        argv = ["walk", "--seconds", "1.2", "--seed", "3", "--json", str(outs[name])]
+        assert main([*argv, *extra]) == 0
+        err = capsys.readouterr().err
+        assert ("s simulated" in err) == (name == "tty"), (name, err)
+    results = [json.loads(p.read_text()) for p in outs.values()]
+    for r in results:
+        del r["wall_seconds"], r["real_time_factor"]
+    assert results[0] == results[1] == results[2]

@@ -1,11 +1,19 @@
-"""`emonav diagnose`: why a Digit benchmark run's trials failed (cause, tracking errors).
+"""`emonav diagnose`: a benchmark run's failed trials (LIP or Digit) and why they failed.
 
-emonav diagnose RUN [--methods M,…] [--last 5] [--reference 10] --out DIR
+emonav diagnose RUN --failures [--methods M,…] [--rerun 3]
+emonav diagnose RUN [--methods M,…] [--last 5] [--reference 10] --out DIR [--failures]
+
+`--failures` lists, per method, the failed trials from the run's records (seed, outcome
+and cause, steps, smallest pedestrian distance) and the `emonav sim` command that plays
+the first few again; it simulates nothing. `--out` simulates every failure again: its
+cause on both plants, and on Digit the tracking errors against the planner's LIP model
+(skipped on a LIP run, with a line saying so).
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from emonav_drake.params import ConfigError
@@ -15,29 +23,88 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     """Register `emonav diagnose` on the CLI's sub-parsers."""
     d = subparsers.add_parser(
         "diagnose",
-        help="why Digit trials failed: cause and tracking errors (re-simulates failures)",
+        help="a benchmark run's failed trials (LIP or Digit): list them with the commands "
+        "that re-run them (--failures), or re-simulate them for their cause and, on "
+        "Digit, the tracking errors (--out)",
     )
-    d.add_argument("run", type=Path, help="a Digit benchmark run directory")
+    d.add_argument("run", type=Path, help="a benchmark run directory (LIP or Digit)")
     d.add_argument("--methods", help="comma-separated methods (default: all of the run)")
+    d.add_argument(
+        "--failures",
+        action="store_true",
+        help="list the failed trials per method: seed, outcome, steps, min pedestrian "
+        "distance, and the `emonav sim` command of the first few (no simulation)",
+    )
+    d.add_argument(
+        "--rerun",
+        type=int,
+        default=3,
+        metavar="N",
+        help="with --failures: re-run commands printed per method (>= 0, default 3)",
+    )
     d.add_argument("--last", type=int, default=5, help="walking steps before the end (>= 1)")
     d.add_argument(
-        "--reference", type=int, default=10, help="successful trials per method to compare"
+        "--reference",
+        type=int,
+        default=10,
+        help="successful trials per method to compare (Digit runs)",
     )
-    d.add_argument("--out", type=Path, required=True, help="output directory")
+    d.add_argument(
+        "--out",
+        type=Path,
+        help="simulate the failures again and write diagnosis.{json,md,png}, failures.md "
+        "and run_config.yaml into this directory",
+    )
     d.set_defaults(func=cmd_diagnose)
     return d
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    """Re-simulate the run's failures; print the table, write diagnosis.{json,md,png}."""
-    from emonav_drake.evaluation.diagnosis import diagnose_run, diagnosis_table
+    """List the run's failures (--failures) and/or re-simulate them (--out): print the
+    list and the table, write diagnosis.{json,md,png}, failures.md, run_config.yaml."""
+    from emonav_drake.evaluation.diagnosis import (
+        check_methods,
+        diagnose_run,
+        diagnosis_table,
+        format_failures,
+    )
+    from emonav_drake.evaluation.run_directory import load_run
 
-    if args.last < 1 or args.reference < 0:
-        raise ConfigError("--last must be >= 1 and --reference >= 0")
+    if args.last < 1 or args.reference < 0 or args.rerun < 0:
+        raise ConfigError("--last must be >= 1, --reference and --rerun >= 0")
+    if args.out is None and not args.failures:
+        raise ConfigError(
+            "give --failures (list the failed trials) or --out DIR (simulate them again)"
+        )
     if not (args.run / "settings.json").is_file():
         raise ConfigError(f"{args.run}: not a benchmark run directory (no settings.json)")
     methods = args.methods.split(",") if args.methods else None
-    rows = diagnose_run(args.run, args.out, methods, args.last, args.reference)
-    print(diagnosis_table(rows))
-    print(f"written: {args.out}/diagnosis.json, diagnosis.md, diagnosis.png")
+    rows = None
+    if args.out is not None:
+        progress = sys.stderr.isatty()  # its bar as `sim`'s: on a terminal only
+        rows = diagnose_run(args.run, args.out, methods, args.last, args.reference, progress)
+    if args.failures:
+        settings, trials = load_run(args.run)
+        chosen = check_methods(settings, methods)
+        run_files = None
+        causes = None
+        if rows is not None:  # the files written with --out, the re-simulated causes
+            from emonav_drake.evaluation.diagnosis import RUN_CONFIG_FILE, RUN_ESTIMATE_FILE
+
+            run_files = {"config": str(args.out / RUN_CONFIG_FILE)}
+            if settings.get("emotion_estimate_yaml") is not None:
+                run_files["estimate"] = str(args.out / RUN_ESTIMATE_FILE)
+            causes = {(r["method"], r["seed"]): r["cause"] for r in rows if r["reproduced"]}
+        print(
+            format_failures(settings, trials, chosen, args.run, run_files, args.rerun, causes),
+            end="",
+        )
+    if rows is not None:
+        if args.failures:
+            print()
+        print(diagnosis_table(rows), end="")
+        print(
+            f"written: {args.out}/diagnosis.json, diagnosis.md, diagnosis.png, failures.md, "
+            "run_config.yaml"
+        )
     return 0

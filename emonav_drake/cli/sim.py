@@ -3,12 +3,17 @@
 emonav sim  --planner dwa --plant lip --seed S [--scenario F.yaml]
             [--config F.yaml | --setting NAME] [--meshcat [--no-wait] [--meshcat-host H]]
             [--record out.html] [--json out.json] [--steps-out F.csv] [--rays] [--rates]
+            [--quiet]
+
+A progress bar over simulated time (and the real-time factor) goes to stderr while the
+episode runs, when stderr is a terminal and --quiet is not given.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -79,6 +84,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "system (printed, and added to --json as 'rates' and 'wall_time_share')",
     )
     add_episode_flags(s)
+    s.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress bar (there is none either when stderr is not a terminal)",
+    )
     s.set_defaults(func=cmd_sim)
     return s
 
@@ -129,6 +139,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
         rates = RateMeasurement()
     trace: list[dict] = []  # Digit's per-step log: the trajectory of --json
+    progress = show_progress(args)
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:
         # the replay goes to a temporary sibling, renamed when complete
@@ -145,6 +156,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
                 record_html=record_html,
                 rates=rates,
                 trace=trace if args.json or args.steps_out else None,
+                progress=progress,
             )
         else:
             record, step_log = run_episode(
@@ -159,6 +171,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
                 grid_kind=grid_kind,
                 emotion_estimate=estimate,
                 rates=rates,
+                progress=progress,
             )
     wall = time.perf_counter() - t0
     out = record.to_json()
@@ -199,6 +212,12 @@ def cmd_sim(args: argparse.Namespace) -> int:
         caption.set_outcome(record)
         finish_live_view(meshcat, keep_serving=not args.no_wait, caption=caption)
     return 0
+
+
+def show_progress(args: argparse.Namespace) -> bool:
+    """Whether a command shows its progress bar: stderr is a terminal and no --quiet (as
+    `benchmark`); never in a pipe, a log file or a test's captured output."""
+    return not getattr(args, "quiet", False) and sys.stderr.isatty()
 
 
 def _sim_registered_plant(args: argparse.Namespace, cfg: Any, scenario: Any, estimate: Any) -> int:

@@ -3,7 +3,10 @@
 emonav walk --seconds S --seed K [--command random|straight|turn|stand] [--speed V]
             [--config F.yaml] [--meshcat [--no-wait] [--meshcat-host H]]
             [--record out.html] [--json out.json]
-            [--steps-out steps.csv]
+            [--steps-out steps.csv] [--quiet]
+
+A progress bar over simulated time (and the real-time factor) goes to stderr while Digit
+walks, when stderr is a terminal and --quiet is not given.
 
 The steps CSV is written by `common.write_steps_csv` (also `emonav sim --steps-out`).
 """
@@ -13,6 +16,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
+import sys
 from pathlib import Path
 
 from emonav_drake.atomic_io import (
@@ -59,6 +63,12 @@ def _validate_walk_args(args: argparse.Namespace, max_speed: float) -> None:
     check_distinct({"--json": args.json, "--record": args.record, "--steps-out": args.steps_out})
 
 
+def show_progress(args: argparse.Namespace) -> bool:
+    """Whether the walk shows its progress bar: stderr is a terminal and no --quiet (as
+    `sim` and `benchmark`)."""
+    return not args.quiet and sys.stderr.isatty()
+
+
 def _fmt(value: float, digits: int) -> str:
     return f"{value:.{digits}f}" if math.isfinite(value) else "n/a"
 
@@ -90,6 +100,7 @@ def cmd_walk(args: argparse.Namespace) -> int:
             record_html=record,
             realtime_rate=1.0 if args.meshcat else 0.0,
             speed=args.speed,
+            progress=show_progress(args),
         )
     out = result.to_json()
     rms = result.tracking_rms
@@ -159,5 +170,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     w.add_argument("--record", type=Path, help="write a self-contained HTML replay")
     w.add_argument("--json", type=Path, help="write the result as JSON (NaN written as null)")
     w.add_argument("--steps-out", type=Path, metavar="FILE.csv", help=STEPS_OUT_HELP)
+    w.add_argument(
+        "--quiet",
+        action="store_true",
+        help="no progress bar (there is none either when stderr is not a terminal)",
+    )
     w.set_defaults(func=cmd_walk)
     return w

@@ -33,12 +33,15 @@ ignore it.
 
 `build_navigation_diagram` wires it; `run_episode` simulates one episode walking step
 by walking step and returns its `EpisodeRecord` and a per-step trajectory log.
+`SimulationProgress` is the progress bar over simulated time that the episode runners
+(here, `navigation_digit`, `walking`) show with `progress=True`.
 """
 
 from __future__ import annotations
 
 import dataclasses as dc
 import logging
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -65,6 +68,75 @@ if TYPE_CHECKING:
     from emonav_drake.diagrams.rates import RateMeasurement
 
 log = logging.getLogger(__name__)
+
+# what the progress bar shows: simulated seconds of the expected total, the real-time factor
+_BAR_FORMAT = (
+    "{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:.1f} s simulated "
+    "[{elapsed}<{remaining}{postfix}]"
+)
+
+
+class SimulationProgress:
+    """A tqdm progress bar over simulated time, on stderr: simulated seconds of `total`
+    [s] and the real-time factor (simulated over wall seconds since the bar was made).
+
+    The runners call `update(t)` after each `Simulator.AdvanceTo` and `close(t, note)`
+    when the simulation ends; an episode that ends before `total` (goal, collision, fall)
+    completes the bar at the time it reached, with `note` (e.g. the outcome) after it.
+    Disabled (`enabled=False`) it writes nothing and costs nothing. It only reads the
+    simulated time it is given, so it cannot change a simulation."""
+
+    def __init__(self, total: float, desc: str, enabled: bool = True) -> None:
+        self._bar = None
+        self._t0 = time.perf_counter()
+        if enabled:
+            import os
+            import sys
+
+            from tqdm import tqdm
+
+            try:  # a terminal that reports no size (0 × 0) would get an empty bar
+                size = os.get_terminal_size(sys.stderr.fileno())
+                sized = size.columns > 0 and size.lines > 0
+            except (OSError, ValueError):
+                sized = False
+            self._bar = tqdm(
+                total=float(total),
+                desc=desc,
+                file=sys.stderr,
+                bar_format=_BAR_FORMAT,
+                dynamic_ncols=sized,
+                ncols=None if sized else 100,
+                nrows=None if sized else 24,
+            )
+
+    @property
+    def enabled(self) -> bool:
+        """Whether a bar is shown (False after `close`)."""
+        return self._bar is not None
+
+    def _postfix(self, t: float, note: str) -> str:
+        wall = time.perf_counter() - self._t0
+        rtf = f"{t / wall:.2f}x real time" if wall > 0 else ""
+        return ", ".join(x for x in (rtf, note) if x)
+
+    def update(self, t: float) -> None:
+        """The simulation has reached time `t` [s]."""
+        if self._bar is None:
+            return
+        self._bar.set_postfix_str(self._postfix(t, ""), refresh=False)
+        self._bar.update(min(t, self._bar.total) - self._bar.n)  # redrawn at tqdm's pace
+
+    def close(self, t: float, note: str = "") -> None:
+        """End the bar at time `t` [s] (the whole bar if the simulation ended early)."""
+        if self._bar is None:
+            return
+        bar, self._bar = self._bar, None
+        if t < bar.total:
+            bar.total = t
+        bar.n = min(t, bar.total)
+        bar.set_postfix_str(self._postfix(t, note), refresh=False)
+        bar.close()  # draws the final state and ends the line
 
 
 @dc.dataclass
@@ -214,6 +286,7 @@ def run_episode(
     realtime_rate: float = 0.0,
     emotion_estimate: EmotionEstimateParams | None = None,
     rates: RateMeasurement | None = None,
+    progress: bool = False,
 ) -> tuple[EpisodeRecord, StepLog]:
     """Simulate one episode of the navigation diagram.
 
@@ -221,8 +294,10 @@ def run_episode(
     `record_html` the run is recorded in Meshcat and written as a self-contained HTML
     replay (a Meshcat is created if none is given). With `rates`, the simulation runs
     under the profiler of `diagrams.rates` and the per-system rates and wall-time shares
-    are left in `rates.report`. The planner's memory starts from
-    `planner.initial_memory()` in the new diagram's Context (no `reset()` needed).
+    are left in `rates.report`. With `progress`, a `SimulationProgress` bar on stderr
+    follows the simulated time step by step (the same steps either way: the results do
+    not change). The planner's memory starts from `planner.initial_memory()` in the new
+    diagram's Context (no `reset()` needed).
     """
     if record_html is not None and meshcat is None:
         meshcat = make_meshcat(live=False)  # loopback only
@@ -260,19 +335,27 @@ def run_episode(
                 log_.rewards.append(status.last_step.reward)
         return status.done
 
+    bar = SimulationProgress(config.episode.max_steps * T, "LIP episode", progress)
+
     def walk() -> None:
         done = snapshot(0)
         k = 0
         while not done:
             k += 1
             sim.AdvanceTo(k * T)
+            bar.update(ctx.get_time())
             done = snapshot(k)
 
-    if rates is not None:
-        rates.run(sim, nav.diagram, walk)
-    else:
-        walk()
+    try:
+        if rates is not None:
+            rates.run(sim, nav.diagram, walk)
+        else:
+            walk()
+    except BaseException:  # Ctrl-C included: end the bar's line
+        bar.close(ctx.get_time())
+        raise
     record = status_port.Eval(nav.monitor.GetMyContextFromRoot(ctx)).record
+    bar.close(ctx.get_time(), record.outcome)
     if record_html is not None:
         meshcat.StopRecording()
         meshcat.PublishRecording()

@@ -44,7 +44,7 @@ from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
 from emonav_drake.diagrams.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
-from emonav_drake.diagrams.navigation import AddNavigationStack
+from emonav_drake.diagrams.navigation import AddNavigationStack, SimulationProgress
 from emonav_drake.diagrams.rates import RateMeasurement
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.protocol import Planner
@@ -141,6 +141,7 @@ def run_digit_episode(
     record_html: str | Path | None = None,
     rates: RateMeasurement | None = None,
     trace: list[dict] | None = None,
+    progress: bool = False,
 ) -> EpisodeRecord:
     """Simulate one navigation episode with the full-order Digit; returns its record
     (outcome success | collision | timeout | fall).
@@ -148,7 +149,8 @@ def run_digit_episode(
     With `rates`, the simulation runs under the profiler of `diagrams.rates` and the
     per-system rates and wall-time shares are left in `rates.report`. With `trace`, the
     robot state and held command at every planner instant are appended to it
-    (`simulate_digit_episode`)."""
+    (`simulate_digit_episode`). With `progress`, a progress bar on stderr follows the
+    simulated time (`SimulationProgress`; the record does not change)."""
     if record_html is not None and meshcat is None:
         meshcat = make_meshcat(live=False)  # loopback only
     nd = build_digit_navigation_diagram(scenario, config, planner, meshcat, grid_kind, goal_radius)
@@ -159,9 +161,11 @@ def run_digit_episode(
         live = meshcat.GetNumActiveConnections() > 0
         meshcat.StartRecording(set_visualizations_while_recording=live)
     if rates is not None:
-        record = rates.run(sim, nd.diagram, lambda: simulate_digit_episode(sim, nd, config, trace))
+        record = rates.run(
+            sim, nd.diagram, lambda: simulate_digit_episode(sim, nd, config, trace, progress)
+        )
     else:
-        record = simulate_digit_episode(sim, nd, config, trace)
+        record = simulate_digit_episode(sim, nd, config, trace, progress)
     if record_html is not None:
         meshcat.StopRecording()
         meshcat.PublishRecording()
@@ -175,6 +179,7 @@ def simulate_digit_episode(
     nd: DigitNavigationDiagram,
     config: EmoNavConfig,
     trace: list[dict] | None = None,
+    progress: bool = False,
 ) -> EpisodeRecord:
     """Run `sim` (built on `nd`, its context at the episode's start) walking step by
     walking step until the episode monitor ends the episode or the robot falls.
@@ -184,15 +189,36 @@ def simulate_digit_episode(
     [m], torso yaw [rad], sagittal CoM speed [m/s], world frame W), "held": the command
     held since t_{k−1}, u_{k−1} = [u_v, u_Δθ], "pedestrians": [[x, y], ...] (world [m]),
     "emotions": [code, ...] (true emotion codes in force)}; the last entry is the
-    episode's end."""
+    episode's end. With `progress`, a `SimulationProgress` bar on stderr is updated after
+    every walking step and ended with the outcome (it only reads the time: the record is
+    the same)."""
+    ctx = sim.get_mutable_context()
+    T = config.robot.step_time
+    sim.Initialize()
+    bar = SimulationProgress(config.episode.max_steps * T, "Digit episode", progress)
+    try:
+        record = _walk_episode(sim, nd, T, trace, bar)
+    except BaseException:  # Ctrl-C included: end the bar's line
+        bar.close(ctx.get_time())
+        raise
+    bar.close(ctx.get_time(), record.outcome)
+    return record
+
+
+def _walk_episode(
+    sim: Simulator,
+    nd: DigitNavigationDiagram,
+    T: float,
+    trace: list[dict] | None,
+    bar: SimulationProgress,
+) -> EpisodeRecord:
+    """The loop of `simulate_digit_episode`: one `AdvanceTo` per walking step."""
     ctx = sim.get_mutable_context()
     status_port = nd.monitor.GetOutputPort("status")
     fall_port = nd.station.GetOutputPort("fall")
     robot_port = nd.station.GetOutputPort("robot_state")
     command_port = nd.planner.GetOutputPort("command")
     crowd_port = nd.crowd.GetOutputPort("crowd")
-    T = config.robot.step_time
-    sim.Initialize()
     k = round(ctx.get_time() / T)
     while True:
         if trace is not None:
@@ -222,3 +248,4 @@ def simulate_digit_episode(
             record = status_port.Eval(nd.monitor.GetMyContextFromRoot(ctx)).record
             record.outcome, record.fall_reason = FALL, f"simulation stopped: {e}"
             return record
+        bar.update(ctx.get_time())

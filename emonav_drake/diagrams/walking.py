@@ -7,10 +7,10 @@
                                       └──────────────────────────────────────────┘
 
 `build_walking_diagram` wires it; `run_walk` simulates it and returns the issue's JSON
-fields. A fall — detected by the station's `FallMonitor` (non-finite state, torso below
-`walking.fall_height`, or any body but a foot touching the ground, checked every
-`walking.fall_check_period`) — ends the run with the outcome "fall"; it is an outcome,
-never an exception.
+fields (with `progress=True`, under a progress bar over simulated time). A fall — detected
+by the station's `FallMonitor` (non-finite state, torso below `walking.fall_height`, or
+any body but a foot touching the ground, checked every `walking.fall_check_period`) —
+ends the run with the outcome "fall"; it is an outcome, never an exception.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams, Role
-from pydrake.systems.analysis import Simulator
+from pydrake.systems.analysis import Simulator, SimulatorStatus
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 
@@ -33,6 +33,7 @@ from emonav_drake.core.tracking import column as tracking_column
 from emonav_drake.core.tracking import step_tracking
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
 from emonav_drake.diagrams.meshcat_viewing import make_meshcat
+from emonav_drake.diagrams.navigation import SimulationProgress
 from emonav_drake.params import EmoNavConfig, load_config, pendulum_frequency
 from emonav_drake.systems.alip_footstep_planner import (
     LOG_COM,
@@ -54,6 +55,10 @@ log = logging.getLogger(__name__)
 # time on one core and its step logs keep ~2 MB per simulated minute (~120 MB at this
 # bound); the per-step command sequence is allocated up front (16 B per 0.4 s step).
 MAX_WALK_SECONDS = 3600.0
+
+# With a progress bar, `run_walk` advances the simulator in chunks of this much simulated
+# time [s] and updates the bar after each (the trajectory is the same: tests/test_walking.py).
+PROGRESS_CHUNK = 0.5
 
 
 @dc.dataclass
@@ -246,6 +251,7 @@ def run_walk(
     heading_change: float | None = None,
     script: list[tuple[float, float]] | None = None,
     push: tuple[float, float, float] | None = None,
+    progress: bool = False,
 ) -> WalkResult:
     """Simulate Digit walking for `seconds` [s] under a command mode; never raises on a fall.
 
@@ -260,6 +266,9 @@ def run_walk(
         record_timing: keep the controller tick durations in the result.
         speed, heading_change, script: see `command_sequence`.
         push: an initial torso velocity v_WT [m/s] (world), e.g. to provoke a fall.
+        progress: show a progress bar over simulated time on stderr (`SimulationProgress`):
+            the simulator then advances in chunks of `PROGRESS_CHUNK`, which changes no
+            result.
     """
     if not (math.isfinite(seconds) and 0 < seconds <= MAX_WALK_SECONDS):
         raise ValueError(f"seconds must be in (0, {MAX_WALK_SECONDS:g}], got {seconds}")
@@ -295,15 +304,23 @@ def run_walk(
         meshcat.StartRecording(set_visualizations_while_recording=live)
     reason = ""
     t0 = time.perf_counter()
+    bar = SimulationProgress(seconds, "walk", progress)
     try:
         sim.Initialize()
-        sim.AdvanceTo(seconds)
+        if bar.enabled:
+            _advance_in_chunks(sim, seconds, bar)
+        else:
+            sim.AdvanceTo(seconds)
     except RuntimeError as e:  # a solver failure after a fall is still a fall
         reason = f"simulation stopped: {e}"
+    except BaseException:  # Ctrl-C included: end the bar's line
+        bar.close(ctx.get_time())
+        raise
     wall = time.perf_counter() - t0
     t_end = ctx.get_time()
     fall = station.GetOutputPort("fall").Eval(station.GetMyContextFromRoot(ctx))
     reason = fall.reason if fall.fallen else reason
+    bar.close(t_end, f"{FALL} ({reason})" if reason else "walked")
     if meshcat is not None and record_html is not None:
         meshcat.StopRecording()
         meshcat.PublishRecording()
@@ -328,6 +345,20 @@ def run_walk(
         clipped_commands=station.planner.clipped_commands(planner_ctx),
         tick_seconds=list(station.controller.tick_seconds),
     )
+
+
+def _advance_in_chunks(sim: Simulator, seconds: float, bar: SimulationProgress) -> None:
+    """`sim.AdvanceTo(seconds)` in chunks of `PROGRESS_CHUNK` simulated seconds, updating
+    `bar` after each; stops where the simulation stops (a fall's termination event)."""
+    k = 0
+    while True:
+        k += 1
+        boundary = min(k * PROGRESS_CHUNK, seconds)
+        status = sim.AdvanceTo(boundary)
+        bar.update(sim.get_context().get_time())
+        reached = status.reason() == SimulatorStatus.ReturnReason.kReachedBoundaryTime
+        if not reached or boundary >= seconds:
+            return
 
 
 def step_records(wd: WalkingDiagram, root_context) -> list[StepRecord]:
