@@ -2,6 +2,9 @@
 predict, on the held-out episodes of the shipped calibration (docs/learning.md).
 
     python scripts/plot_step_response.py [--traces F] [--model M] [--out PNG]
+
+Colours: `core/palette.py` (Digit black, the LIP reddish purple, the fitted model blue,
+commands grey); a trace's method is named as in every figure (`palette.method_label`).
 """
 
 from __future__ import annotations
@@ -16,7 +19,15 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from emonav_drake.core import palette  # noqa: E402
 from emonav_drake.core import step_response as sr  # noqa: E402
+from emonav_drake.core.palette import (  # noqa: E402
+    COMMAND_RGB,
+    FITTED_RGB,
+    LIP_DELAYED_RGB,
+    LIP_RGB,
+    MEASURED_RGB,
+)
 from emonav_drake.params import EmoNavConfig  # noqa: E402
 from emonav_drake.planners.model_aware import DIGIT_RESPONSE, read_response  # noqa: E402
 
@@ -46,18 +57,20 @@ def main() -> None:
 
     fig, axes = plt.subplots(2, 2, figsize=(11, 6.5), constrained_layout=True)
     ax = axes[0, 0]
-    ax.step(k, data.commands[:, 2, 1], where="post", color="0.6", label="command $u_{Δθ,k}$")
-    ax.plot(k, y[:, 2], "k.-", label="Digit: turn over step k")
-    ax.plot(k, lip0[:, 2], "C3x--", label="LIP (Eq. 1): turns by $u_{Δθ,k}$")
-    ax.plot(k, fitted[:, 2], "C0o:", mfc="none", label="fitted model")
+    ax.step(k, data.commands[:, 2, 1], where="post", color=COMMAND_RGB, label="command $u_{Δθ,k}$")
+    ax.plot(k, y[:, 2], ".-", color=MEASURED_RGB, label="Digit: turn over step k")
+    ax.plot(k, lip0[:, 2], "x--", color=LIP_RGB, label="LIP (Eq. 1): turns by $u_{Δθ,k}$")
+    ax.plot(k, fitted[:, 2], "o:", color=FITTED_RGB, mfc="none", label="fitted model")
     ax.set(xlabel="walking step k", ylabel="heading change [rad]",
            title="turn: in the step it was planned for")  # fmt: skip
     ax.legend(fontsize=8)
     ax = axes[0, 1]
-    ax.step(k, data.commands[:, 2, 0], where="post", color="0.6", label="command $u_{v,k}$")
-    ax.plot(k, y[:, 3], "k.-", label="Digit: step-averaged speed $\\bar v_{k+1}$")
-    ax.plot(k, lip0[:, 3], "C3x--", label="LIP: $u_{v,k}$ reached at $t_{k+1}$")
-    ax.plot(k, fitted[:, 3], "C0o:", mfc="none", label="fitted model")
+    ax.step(k, data.commands[:, 2, 0], where="post", color=COMMAND_RGB, label="command $u_{v,k}$")
+    ax.plot(
+        k, y[:, 3], ".-", color=MEASURED_RGB, label="Digit: step-averaged speed $\\bar v_{k+1}$"
+    )
+    ax.plot(k, lip0[:, 3], "x--", color=LIP_RGB, label="LIP: $u_{v,k}$ reached at $t_{k+1}$")
+    ax.plot(k, fitted[:, 3], "o:", color=FITTED_RGB, mfc="none", label="fitted model")
     ax.set(xlabel="walking step k", ylabel="speed [m/s]", title="speed: one step late (the ALIP's)")
     ax.legend(fontsize=8)
     ax = axes[1, 0]
@@ -65,10 +78,10 @@ def main() -> None:
     scale = np.array([100, 100, 100, 100])
     ho = report["held_out"]
     rows = [
-        ("LIP (Eq. 1), $u_k$", ho["rms_lip"], "C3"),
-        ("LIP driven by $u_{k-1}$", ho["rms_lip_delay1"], "0.55"),
-        ("LIP driven by $u_{k-2}$", ho["rms_lip_delay2"], "0.8"),
-        ("fitted model", ho["rms_model"], "C0"),
+        ("LIP (Eq. 1), $u_k$", ho["rms_lip"], LIP_RGB),
+        ("LIP driven by $u_{k-1}$", ho["rms_lip_delay1"], LIP_DELAYED_RGB[0]),
+        ("LIP driven by $u_{k-2}$", ho["rms_lip_delay2"], LIP_DELAYED_RGB[1]),
+        ("fitted model", ho["rms_model"], FITTED_RGB),
     ]
     width = 0.2
     for i, (label, d, color) in enumerate(rows):
@@ -87,12 +100,13 @@ def main() -> None:
     e_fit = sr.evaluate(model, all_data)[:, 2]
     lim = max(0.05, float(np.percentile(np.abs(np.concatenate([e_lip, e_fit])), 99.5)))
     bins = np.linspace(-lim, lim, 41)
-    ax.hist(e_lip, bins, color="C3", alpha=0.6, label="LIP (Eq. 1)")
-    ax.hist(e_fit, bins, color="C0", alpha=0.6, label="fitted model")
+    ax.hist(e_lip, bins, color=LIP_RGB, alpha=0.6, label="LIP (Eq. 1)")
+    ax.hist(e_fit, bins, color=FITTED_RGB, alpha=0.6, label="fitted model")
     ax.set(xlabel="turn error per step [rad]", ylabel="steps", title="held-out turn errors")
     ax.legend(fontsize=8)
     fig.suptitle(
-        f"Digit's response to navigation commands ({episode['method']} episode, seed "
+        f"Digit's response to navigation commands ({palette.method_label(episode['method'])} "
+        f"episode, seed "
         f"{episode['seed']}, held out of the fit)"
     )
     args.out.parent.mkdir(parents=True, exist_ok=True)

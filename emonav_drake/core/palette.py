@@ -1,29 +1,191 @@
-"""The colours of the navigation world, shared by every view of it (Meshcat, figures).
+"""Every colour emonav draws with, by role: one definition for every view of the world.
 
-RGB triples in [0, 1]. Plain Python (no numpy, drake or matplotlib), so that the Drake
-visualiser (`systems/navigation_meshcat.py`) and the matplotlib figures
-(`evaluation/grid_map_figure.py`, `evaluation/trajectory_plot.py`,
-`evaluation/benchmark_plots.py`) read one definition.
+The Drake visualiser (`systems/navigation_meshcat.py`, its replay legend in
+`diagrams/meshcat_viewing.py`), the matplotlib figures (`evaluation/trajectory_plot.py`,
+`grid_map_figure.py`, `benchmark_plots.py`, `learning_curve.py`), `scripts/*.py` and the
+notebooks take their colours from here, by name; `tests/test_palette.py` fails on a colour
+written anywhere else in them, and on roles that collide.
+
+RGB triples in [0, 1]; plain Python (no numpy, drake or matplotlib), so that every view
+can import it. Alphas are the views' own business (`(*ROBOT_RGB, 0.3)`).
+
+The colour-blind-safe set is Okabe & Ito's (2008, "Color Universal Design",
+https://jfly.uni-koeln.de/color/): eight colours that stay apart under protanopia,
+deuteranopia and tritanopia. The three emotions keep their intuitive reading:
+
+==========================  ==========================================================
+role                        colour
+==========================  ==========================================================
+happy / neutral / negative  bluish green #009E73 / orange #E69F00 / vermillion #D55E00
+robot, its trail and path   blue #0072B2 (its path: light → dark blue with time)
+goal, goal radius           black (a star in the figures, a pole and ring in Meshcat)
+static discs, their zones   dark grey
+LiDAR rays                  light grey (hit points: dark grey)
+discomfort zones            the colour of their pedestrian (or static disc), dashed or
+                            faded; in a legend, dark grey
+footstep targets            left sky blue #56B4E9, right reddish purple #CC79A7
+commands                    mid grey
+heading marks, ink          black; labels near black; paper white
+==========================  ==========================================================
+
+The goal and the rays carry no hue, so they can be mistaken for no emotion; nor can the
+robot's blue or the footsteps' sky blue and reddish purple (checked under simulated
+colour blindness by `tests/test_palette.py`). Charts that are not the scene (methods of a
+benchmark, model against measurement, series of seeds) have their own entries below.
 """
 
 from __future__ import annotations
 
+from pathlib import PurePath
+
 RGB = tuple[float, float, float]
+
+
+def _hex(code: str) -> RGB:
+    """'#RRGGBB' → an RGB triple in [0, 1]."""
+    return tuple(int(code[i : i + 2], 16) / 255 for i in (1, 3, 5))  # type: ignore[return-value]
+
+
+# Okabe & Ito's eight colours (the colour-blind-safe set everything below picks from)
+OKABE_ITO: dict[str, RGB] = {
+    "black": _hex("#000000"),
+    "orange": _hex("#E69F00"),
+    "sky_blue": _hex("#56B4E9"),
+    "bluish_green": _hex("#009E73"),
+    "yellow": _hex("#F0E442"),
+    "blue": _hex("#0072B2"),
+    "vermillion": _hex("#D55E00"),
+    "reddish_purple": _hex("#CC79A7"),
+}
+
+
+def _grey(level: float) -> RGB:
+    return (level, level, level)
+
+
+# --- the scene --------------------------------------------------------------------------
 
 # Indexed by emotion code (HAPPY 0, NEUTRAL 1, NEGATIVE 2; `params.EMOTION_NAMES`).
 EMOTION_RGB: tuple[RGB, RGB, RGB] = (
-    (0.20, 0.75, 0.30),  # happy: green
-    (0.95, 0.70, 0.15),  # neutral: amber
-    (0.85, 0.15, 0.15),  # negative: red
+    OKABE_ITO["bluish_green"],  # happy
+    OKABE_ITO["orange"],  # neutral
+    OKABE_ITO["vermillion"],  # negative
 )
-ROBOT_RGB: RGB = (0.25, 0.45, 0.85)  # the robot: blue (Meshcat's LIP column)
-STATIC_RGB: RGB = (0.50, 0.50, 0.50)  # static discs: grey
+UNKNOWN_EMOTION_RGB: RGB = _grey(0.20)  # a pedestrian drawn without its emotion
 
-# Figures only: colours that must not be mistaken for an emotion or the robot.
-GOAL_RGB: RGB = (0.55, 0.25, 0.70)  # the goal: purple
-LIDAR_HIT_RGB: RGB = (0.05, 0.05, 0.05)  # LiDAR hit points: near black
+ROBOT_RGB: RGB = OKABE_ITO["blue"]  # the robot, its trail (Meshcat) and its path
+ROBOT_LIGHT_RGB: RGB = (0.72, 0.85, 0.94)  # the robot's path at its start (light blue)
+ROBOT_DARK_RGB: RGB = (0.00, 0.19, 0.33)  # ... at its end (dark blue), its time labels
+TRAIL_RGB: RGB = ROBOT_RGB
+
+GOAL_RGB: RGB = OKABE_ITO["black"]  # the goal: a black star / pole, no emotion's hue
+GOAL_RADIUS_RGB: RGB = GOAL_RGB  # the goal radius: a dotted (figures) / drawn (Meshcat) ring
+
+STATIC_RGB: RGB = _grey(0.40)  # static discs and their d_static rings
+ZONE_EDGE_RGB: RGB = _grey(0.30)  # "discomfort zone edge" in a legend (any colour's)
+
+LIDAR_RAY_RGB: RGB = _grey(0.75)  # LiDAR rays (Meshcat) and the range circle (figures)
+LIDAR_HIT_RGB: RGB = _grey(0.15)  # LiDAR hit points (figures)
+
+FOOTSTEP_RGB: tuple[RGB, RGB] = (OKABE_ITO["sky_blue"], OKABE_ITO["reddish_purple"])  # L, R
+COMMAND_RGB: RGB = _grey(0.60)  # a command held over a step (step plots)
+
+INK_RGB: RGB = OKABE_ITO["black"]  # heading marks, outlines, collision/fall marks, error bars
+TEXT_RGB: RGB = _grey(0.10)  # labels drawn on the scene
+PAPER_RGB: RGB = (1.0, 1.0, 1.0)  # the background; halos around marks drawn on paths
+
 # The grid maps' cell values (0 free, 127 discomfort zone, 255 collision area): white,
 # light blue, dark navy — one hue, darker = worse, distinct from the emotion colours.
-GRID_FREE_RGB: RGB = (1.0, 1.0, 1.0)
+GRID_FREE_RGB: RGB = PAPER_RGB
 GRID_DISCOMFORT_RGB: RGB = (0.60, 0.75, 0.95)
 GRID_COLLISION_RGB: RGB = (0.10, 0.15, 0.40)
+
+# How an episode ended, for charts of outcomes (`evaluation/diagnosis.py`): collisions
+# take the colour of what was hit (an emotion, STATIC_RGB), these the rest.
+OUTCOME_RGB: dict[str, RGB] = {"timeout": OKABE_ITO["reddish_purple"], "fall": INK_RGB}
+
+# The HTML overlay of a Meshcat replay (caption and legend)
+CAPTION_BOX_RGB: RGB = PAPER_RGB
+CAPTION_TEXT_RGB: RGB = _grey(0.13)
+CAPTION_NOTE_RGB: RGB = _grey(0.40)
+
+# --- charts -----------------------------------------------------------------------------
+
+# Methods of a benchmark (bars, lines): never an emotion's colour, since the IDT chart
+# groups its bars by emotion. Unlisted methods take `METHOD_CYCLE` in turn.
+METHOD_RGB: dict[str, RGB] = {
+    "policy": OKABE_ITO["blue"],
+    "mpc": OKABE_ITO["reddish_purple"],
+    "dwa": OKABE_ITO["sky_blue"],
+}
+METHOD_CYCLE: tuple[RGB, ...] = (
+    OKABE_ITO["yellow"],
+    _grey(0.35),
+    _grey(0.65),
+    OKABE_ITO["black"],
+)
+
+# Model against measurement (`scripts/plot_step_response.py`, tracking notebook)
+MEASURED_RGB: RGB = INK_RGB  # what Digit did
+LIP_RGB: RGB = OKABE_ITO["reddish_purple"]  # the LIP step map (Eq. 1) under u_k
+LIP_DELAYED_RGB: tuple[RGB, RGB] = (_grey(0.55), _grey(0.80))  # ... under u_{k-1}, u_{k-2}
+FITTED_RGB: RGB = OKABE_ITO["blue"]  # the fitted step-response model
+DATA_RGB: RGB = OKABE_ITO["blue"]  # a chart's single data series
+REFERENCE_RGB: RGB = _grey(0.55)  # a second series drawn for reference beside the main one
+SHADE_RGB: RGB = _grey(0.85)  # a shaded span (a part left out of the statistics)
+# Several series of one kind (seeds, rates): Okabe & Ito's order
+SERIES_RGB: tuple[RGB, ...] = tuple(
+    OKABE_ITO[n]
+    for n in (
+        "blue",
+        "orange",
+        "bluish_green",
+        "vermillion",
+        "reddish_purple",
+        "sky_blue",
+        "yellow",
+        "black",
+    )
+)
+
+
+# --- names of methods -------------------------------------------------------------------
+
+# Run directories written before the planner rename call the shipped policy "sac" (it is
+# a DAgger student: `--planner policy`, docs/results.md); the figures say "policy".
+SHIPPED_POLICY_FILE = "policy_lgm.pt"
+METHOD_LABELS: dict[str, str] = {"sac": "policy"}
+
+
+def method_label(name: str, checkpoint: str | None = None) -> str:
+    """The name a figure gives a benchmark method: "sac" of an old run (the shipped policy)
+    is "policy"; with its `checkpoint` known, only when that is the shipped policy's file
+    (a SAC-trained actor of today's `--planner sac` keeps its name)."""
+    if name not in METHOD_LABELS:
+        return name
+    if checkpoint is not None and PurePath(checkpoint).name != SHIPPED_POLICY_FILE:
+        return name
+    return METHOD_LABELS[name]
+
+
+def method_colours(labels: list[str]) -> list[RGB]:
+    """One colour per method label, in order: `METHOD_RGB` for the known ones, the others
+    `METHOD_CYCLE` in turn (skipping colours the known ones use)."""
+    taken = {METHOD_RGB[m] for m in labels if m in METHOD_RGB}
+    spare = [c for c in (*METHOD_CYCLE, *SERIES_RGB) if c not in taken and c not in EMOTION_RGB]
+    out, i = [], 0
+    for m in labels:
+        if m in METHOD_RGB:
+            out.append(METHOD_RGB[m])
+        else:
+            out.append(spare[i % len(spare)])
+            i += 1
+    return out
+
+
+def css(rgb: RGB, alpha: float | None = None) -> str:
+    """An RGB triple as a CSS colour: '#rrggbb', or 'rgba(r,g,b,a)' with an alpha."""
+    if alpha is None:
+        return "#" + "".join(f"{round(255 * v):02x}" for v in rgb)
+    r, g, b = (round(255 * v) for v in rgb)
+    return f"rgba({r},{g},{b},{alpha:g})"

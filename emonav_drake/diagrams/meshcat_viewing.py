@@ -25,6 +25,7 @@ from pathlib import Path
 
 from pydrake.geometry import Meshcat, MeshcatParams
 
+from emonav_drake.core import palette
 from emonav_drake.systems import navigation_meshcat as nm
 
 log = logging.getLogger(__name__)
@@ -32,7 +33,7 @@ log = logging.getLogger(__name__)
 
 def _css(rgba) -> str:
     """A Drake `Rgba` as a CSS colour (opaque)."""
-    return "#" + "".join(f"{round(255 * v):02x}" for v in (rgba.r(), rgba.g(), rgba.b()))
+    return palette.css((rgba.r(), rgba.g(), rgba.b()))
 
 
 # (label, CSS colour) of the legend: the colours `NavigationMeshcatVisualizer` draws with
@@ -51,8 +52,8 @@ FOOTSTEP_LEGEND = (
 )
 # the legend in words, for Meshcat's control panel (no colours there; ~44 characters fit)
 LIVE_LEGEND = (
-    "happy green, neutral amber, negative red",
-    "static discs grey, robot blue, goal green",
+    "happy green, neutral orange, negative red",
+    "static discs grey, robot blue, goal black",
 )
 
 
@@ -197,13 +198,14 @@ def caption_overlay(caption: ReplayCaption) -> str:
     )
     return (
         '<div id="emonav-caption" style="position:fixed;top:8px;left:8px;z-index:10;'
-        "background:rgba(255,255,255,0.85);padding:8px 12px;border-radius:6px;"
-        'font:13px/1.45 sans-serif;color:#222;pointer-events:none">'
+        f"background:{palette.css(palette.CAPTION_BOX_RGB, 0.85)};padding:8px 12px;"
+        "border-radius:6px;font:13px/1.45 sans-serif;"
+        f'color:{palette.css(palette.CAPTION_TEXT_RGB)};pointer-events:none">'
         f'<div style="font-weight:bold">{html.escape(caption.title())}</div>'
         f"<div>{html.escape(caption.outcome_line())}</div>"
         f'<div style="margin-top:4px">{rows}</div>'
-        '<div style="margin-top:4px;color:#666">play / pause / time: Open Controls, '
-        "Animations</div></div>"
+        f'<div style="margin-top:4px;color:{palette.css(palette.CAPTION_NOTE_RGB)}">'
+        "play / pause / time: Open Controls, Animations</div></div>"
     )
 
 

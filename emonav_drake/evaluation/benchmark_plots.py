@@ -1,11 +1,16 @@
 """Figures of a benchmark run (`notebooks/benchmark.ipynb`): rates with their 95 %
 intervals and the trajectories of chosen trials.
 
-* `plot_summary(trials, methods)`: SR per method with its Wilson interval; DT and IDT per
-  trial (mean over the trials with a 95 % Student-t interval of the mean).
+* `plot_summary(trials, methods, labels)`: SR per method with its Wilson interval; DT and
+  IDT per trial (mean over the trials with a 95 % Student-t interval of the mean).
 * `plot_trajectory(ax, scenario, step_log, config)`: the robot's path, every pedestrian's
   path coloured by its emotion at each step (a time-varying emotion changes colour along
   the path), the static discs with their discomfort rings, start and goal.
+* `run_labels(settings)`: the name each method of a run is shown under (the shipped
+  policy is "policy", also in old runs that call it "sac": `palette.method_label`).
+
+Colours: the shared palette (`core/palette.py`): the scene's roles as in every view, the
+methods `palette.METHOD_RGB` (never an emotion's colour).
 """
 
 from __future__ import annotations
@@ -15,12 +20,34 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from emonav_drake.core.palette import EMOTION_RGB
+from emonav_drake.core import palette
+from emonav_drake.core.palette import (
+    EMOTION_RGB,
+    GOAL_RADIUS_RGB,
+    GOAL_RGB,
+    INK_RGB,
+    PAPER_RGB,
+    ROBOT_RGB,
+    STATIC_RGB,
+)
 from emonav_drake.evaluation import tables
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 
 EMOTION_COLORS = dict(zip(EMOTION_NAMES, EMOTION_RGB, strict=True))  # the shared palette
 IDT_LABELS = ("static", "happy", "neutral", "negative")
+
+
+def run_labels(settings: dict) -> dict[str, str]:
+    """Method → the label a figure shows for it (`palette.method_label`, judged by the
+    method's checkpoint in the run's `settings.json`); a label two methods would share
+    leaves both under their own names."""
+    methods = settings.get("methods", {})
+    labels = {
+        m: palette.method_label(m, (methods.get(m) or {}).get("checkpoint"))
+        for m in settings["planners"]
+    }
+    taken = list(labels.values())
+    return {m: lab if taken.count(lab) == 1 else m for m, lab in labels.items()}
 
 
 def mean_interval(values: Sequence[float]) -> tuple[float, float]:
@@ -34,22 +61,35 @@ def mean_interval(values: Sequence[float]) -> tuple[float, float]:
     return float(x.mean()), float(half)
 
 
-def plot_summary(trials: Sequence[dict], methods: Sequence[str] | None = None):
-    """A figure with SR (Wilson 95 %), DT per trial and IDT per trial (t 95 %) by method."""
+def plot_summary(
+    trials: Sequence[dict],
+    methods: Sequence[str] | None = None,
+    labels: dict[str, str] | None = None,
+):
+    """A figure with SR (Wilson 95 %), DT per trial and IDT per trial (t 95 %) by method.
+
+    Args:
+        trials: the run's trials (`load_run`).
+        methods: the methods to show, in order (default: all, in the trials' order).
+        labels: method → shown name (`run_labels`); default `palette.method_label`.
+    """
     import matplotlib.pyplot as plt
 
     summary = tables.summarize_methods(trials, methods)
     names = list(summary)
+    shown = [(labels or {}).get(m) or palette.method_label(m) for m in names]
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8), gridspec_kw={"width_ratios": [1, 1, 2]})
     x = np.arange(len(names))
-    colors = [f"C{i}" for i in range(len(names))]
+    colors = palette.method_colours(shown)
 
     sr = np.array([summary[m]["SR"] for m in names])
     ci = np.array([summary[m]["SR_ci"] for m in names])
     ax = axes[0]
     ax.bar(x, sr, color=colors)
-    ax.errorbar(x, sr, yerr=[sr - ci[:, 0], ci[:, 1] - sr], fmt="none", ecolor="k", capsize=4)
-    ax.set_xticks(x, [f"{m}\n(n={summary[m]['episodes']})" for m in names])
+    ax.errorbar(x, sr, yerr=[sr - ci[:, 0], ci[:, 1] - sr], fmt="none", ecolor=INK_RGB, capsize=4)
+    ax.set_xticks(
+        x, [f"{s}\n(n={summary[m]['episodes']})" for m, s in zip(names, shown, strict=True)]
+    )
     ax.set_ylim(0, 1.05)
     ax.set_ylabel("success rate")
     ax.set_title("SR (95 % Wilson interval)")
@@ -58,8 +98,10 @@ def plot_summary(trials: Sequence[dict], methods: Sequence[str] | None = None):
     ax = axes[1]
     dt = [mean_interval([t["record"]["discomfort_steps"] for t in per[m]]) for m in names]
     ax.bar(x, [d[0] for d in dt], color=colors)
-    ax.errorbar(x, [d[0] for d in dt], yerr=[d[1] for d in dt], fmt="none", ecolor="k", capsize=4)
-    ax.set_xticks(x, names)
+    ax.errorbar(
+        x, [d[0] for d in dt], yerr=[d[1] for d in dt], fmt="none", ecolor=INK_RGB, capsize=4
+    )
+    ax.set_xticks(x, shown)
     ax.set_ylabel("discomfort steps per trial")
     ax.set_title("DT per trial (95 % t interval)")
 
@@ -68,9 +110,14 @@ def plot_summary(trials: Sequence[dict], methods: Sequence[str] | None = None):
     for j, m in enumerate(names):
         idt = [mean_interval([t["record"]["idt"][i] for t in per[m]]) for i in range(4)]
         pos = np.arange(4) + (j - (len(names) - 1) / 2) * width
-        ax.bar(pos, [v[0] for v in idt], width, color=colors[j], label=m)
+        ax.bar(pos, [v[0] for v in idt], width, color=colors[j], label=shown[j])
         ax.errorbar(
-            pos, [v[0] for v in idt], yerr=[v[1] for v in idt], fmt="none", ecolor="k", capsize=3
+            pos,
+            [v[0] for v in idt],
+            yerr=[v[1] for v in idt],
+            fmt="none",
+            ecolor=INK_RGB,
+            capsize=3,
         )
     ax.set_xticks(np.arange(4), IDT_LABELS)
     ax.set_ylabel("steps per trial")
@@ -91,8 +138,16 @@ def _emotion_at(ped, k: int, step_time: float, period: float) -> str:
     return ped.emotion_schedule[i]
 
 
-def plot_trajectory(ax, scenario, step_log, config: EmoNavConfig, title: str = "") -> None:
-    """Draw one episode: robot path, pedestrians coloured by emotion, discs, start, goal."""
+def plot_trajectory(
+    ax,
+    scenario,
+    step_log,
+    config: EmoNavConfig,
+    title: str = "",
+    goal_radius: float | None = None,
+) -> None:
+    """Draw one episode: robot path, pedestrians coloured by emotion, discs, start, goal
+    (with its goal radius: `goal_radius`, default `config.episode.eval_goal_radius`)."""
     from matplotlib.collections import LineCollection
     from matplotlib.lines import Line2D
     from matplotlib.patches import Circle
@@ -103,9 +158,11 @@ def plot_trajectory(ax, scenario, step_log, config: EmoNavConfig, title: str = "
     rd = config.reward
     for ob in scenario.obstacles:
         c, r = ob.center, ob.radius
-        ax.add_patch(Circle(c, r, color="0.45", zorder=2))
+        ax.add_patch(Circle(c, r, color=STATIC_RGB, zorder=2))
         ax.add_patch(
-            Circle(c, r + rd.static_discomfort, fill=False, ls="--", ec="0.45", lw=0.8, zorder=2)
+            Circle(
+                c, r + rd.static_discomfort, fill=False, ls="--", ec=STATIC_RGB, lw=0.8, zorder=2
+            )
         )
     dist = dict(zip(EMOTION_NAMES, rd.emotion_distances(), strict=True))
     rp = config.crowd.pedestrian_radius
@@ -123,13 +180,18 @@ def plot_trajectory(ax, scenario, step_log, config: EmoNavConfig, title: str = "
             Circle(path[-1], rp + dist[end], fc="none", ec=EMOTION_COLORS[end], ls=":", zorder=4)
         )
         ax.plot(*path[0], "o", color=EMOTION_COLORS[ped.emotion], ms=4, zorder=4)
-    ax.plot(*robot.T, color="k", lw=2.2, zorder=5)
-    ax.add_patch(Circle(robot[-1], config.robot.radius, fc="none", ec="k", lw=1.5, zorder=5))
-    ax.plot(*scenario.robot_start, "ks", ms=7, zorder=6)
-    ax.plot(*scenario.robot_goal, "k*", ms=14, zorder=6)
-    handles = [Line2D([], [], color="k", lw=2.2, label="robot")]
+    ax.plot(*robot.T, color=ROBOT_RGB, lw=2.2, zorder=5)
+    ax.add_patch(Circle(robot[-1], config.robot.radius, fc="none", ec=ROBOT_RGB, lw=1.5, zorder=5))
+    ax.plot(*scenario.robot_start, "s", color=ROBOT_RGB, mec=INK_RGB, ms=7, zorder=6)
+    radius = config.episode.eval_goal_radius if goal_radius is None else goal_radius
+    ax.add_patch(
+        Circle(scenario.robot_goal, radius, fill=False, ls=":", ec=GOAL_RADIUS_RGB, zorder=6)
+    )
+    ax.plot(*scenario.robot_goal, "*", color=GOAL_RGB, mec=PAPER_RGB, mew=0.8, ms=15, zorder=7)
+    handles = [Line2D([], [], color=ROBOT_RGB, lw=2.2, label="robot")]
     handles += [Line2D([], [], color=c, lw=2, label=e) for e, c in EMOTION_COLORS.items()]
-    handles.append(Line2D([], [], color="0.45", marker="o", ls="none", label="static disc"))
+    handles.append(Line2D([], [], color=STATIC_RGB, marker="o", ls="none", label="static disc"))
+    handles.append(Line2D([], [], color=GOAL_RGB, marker="*", ms=9, ls="none", label="goal"))
     ax.legend(handles=handles, loc="lower left", fontsize=7, ncol=2)
     ax.set_aspect("equal")
     ax.set_xlim(-5.5, 5.5)

@@ -1,11 +1,12 @@
 """The paper's Fig. 3 for one scene: the LiDAR scan, its LGM and its OGM, written as a PNG.
 
 Panel (a) is the scene from above in the world frame, in the shared palette
-(`core/palette.py`): the robot blue with a black heading arrow, pedestrians green / amber /
-red by emotion (happy / neutral / negative) with their discomfort zones dashed in the same
-colour, static discs grey with their dashed d_static rings, the LiDAR's hit points black,
-its range dotted, the goal a purple star — or, when the goal lies beyond the panel, a
-purple arrow at the panel's edge pointing to it, labelled with its distance. Panels (b)
+(`core/palette.py`, Okabe–Ito): the robot blue with a black heading arrow, pedestrians
+bluish green / orange / vermillion by emotion (happy / neutral / negative) with their
+discomfort zones dashed in the same colour, static discs grey with their dashed d_static
+rings, the LiDAR's hit points dark grey, its range dotted light grey, the goal a black
+star — or, when the goal lies beyond the panel, a black arrow at the panel's edge
+pointing to it, labelled with its distance. Panels (b)
 and (c) colour the grid values: 0 free (white), 127 discomfort zone (light blue: the hit
 of the scan of the discs inflated by their discomfort margins), 255 collision area (dark
 navy: the hit of the real scan). Each panel has its legend under it.
@@ -33,9 +34,14 @@ from emonav_drake.core.palette import (
     GRID_COLLISION_RGB,
     GRID_DISCOMFORT_RGB,
     GRID_FREE_RGB,
+    INK_RGB,
     LIDAR_HIT_RGB,
+    LIDAR_RAY_RGB,
+    PAPER_RGB,
     ROBOT_RGB,
     STATIC_RGB,
+    UNKNOWN_EMOTION_RGB,
+    ZONE_EDGE_RGB,
 )
 from emonav_drake.params import EMOTION_NAMES, NUM_BEAMS
 
@@ -44,7 +50,7 @@ STATIC, PEDESTRIAN = 0, 1
 # 0 free, 127 discomfort zone, 255 collision area (palette: white, light blue, dark navy).
 _GRID_CMAP = ListedColormap([GRID_FREE_RGB, GRID_DISCOMFORT_RGB, GRID_COLLISION_RGB])
 _GRID_NORM = BoundaryNorm([0, 64, 192, 256], _GRID_CMAP.N)
-_UNKNOWN_PEDESTRIAN_RGB = (0.30, 0.30, 0.30)  # a pedestrian drawn without its emotion
+_GRID_EDGE_RGB = STATIC_RGB  # the outline of a grid value's legend patch
 
 
 def render_grid_map_figure(
@@ -82,7 +88,8 @@ def render_grid_map_figure(
         title: optional figure title.
         dpi: PNG resolution.
         emotions: optional (n,) emotion codes (0 happy, 1 neutral, 2 negative; ignored for
-            static discs) colouring the pedestrians; without them pedestrians are dark grey.
+            static discs) colouring the pedestrians; without them pedestrians are dark grey
+            (`palette.UNKNOWN_EMOTION_RGB`).
 
     Returns:
         The written path.
@@ -125,12 +132,12 @@ def render_grid_map_figure(
     seen = ranges < max_range
     world_angles = beam_angles(num_beams)[seen] + heading
     hits = origin + ranges[seen, None] * np.c_[np.cos(world_angles), np.sin(world_angles)]
-    ax_scene.add_patch(Circle(origin, max_range, fill=False, ls=":", color="0.6", lw=0.8))
+    ax_scene.add_patch(Circle(origin, max_range, fill=False, ls=":", color=LIDAR_RAY_RGB, lw=0.8))
     shown_emotions: set[int] = set()
     for i, (center, radius, margin, kind) in enumerate(zip(c, r, mg, kd, strict=True)):
         if int(kind) == PEDESTRIAN:
             if emotions is None:
-                rgb = _UNKNOWN_PEDESTRIAN_RGB
+                rgb = UNKNOWN_EMOTION_RGB
             else:
                 shown_emotions.add(int(emo[i]))
                 rgb = EMOTION_RGB[int(emo[i])]
@@ -140,7 +147,7 @@ def render_grid_map_figure(
             ax_scene.add_patch(Circle(center, radius, color=rgb))
         ax_scene.add_patch(Circle(center, radius + margin, fill=False, ls="--", ec=rgb, lw=1.2))
     ax_scene.plot(hits[:, 0], hits[:, 1], ".", color=LIDAR_HIT_RGB, ms=1.5, zorder=5)
-    ax_scene.add_patch(Circle(origin, robot_radius, fc=ROBOT_RGB, ec="k", lw=0.8, zorder=6))
+    ax_scene.add_patch(Circle(origin, robot_radius, fc=ROBOT_RGB, ec=INK_RGB, lw=0.8, zorder=6))
     arrow = 2.0 * robot_radius
     ax_scene.arrow(
         origin[0],
@@ -148,7 +155,7 @@ def render_grid_map_figure(
         arrow * math.cos(heading),
         arrow * math.sin(heading),
         width=0.03,
-        color="k",
+        color=INK_RGB,
         length_includes_head=True,
         zorder=7,
     )
@@ -164,20 +171,22 @@ def render_grid_map_figure(
     ax_scene.set_ylabel("y [m] (world)")
     ax_scene.set_title("(a) LiDAR scan (world frame)")
     handles = [
-        Line2D([], [], ls="none", marker="o", ms=10, mfc=ROBOT_RGB, mec="k", label="robot"),
-        Line2D([], [], color="k", lw=1.5, marker=">", ms=5, label="heading"),
+        Line2D([], [], ls="none", marker="o", ms=10, mfc=ROBOT_RGB, mec=INK_RGB, label="robot"),
+        Line2D([], [], color=INK_RGB, lw=1.5, marker=">", ms=5, label="heading"),
         Line2D([], [], ls="none", marker=".", color=LIDAR_HIT_RGB, ms=6, label="LiDAR hits"),
-        Line2D([], [], ls=":", color="0.6", label=f"LiDAR range ({max_range:g} m)"),
+        Line2D([], [], ls=":", color=LIDAR_RAY_RGB, label=f"LiDAR range ({max_range:g} m)"),
     ]
     if emotions is None:
-        handles.append(_disc_handle(_UNKNOWN_PEDESTRIAN_RGB, "pedestrian"))
+        handles.append(_disc_handle(UNKNOWN_EMOTION_RGB, "pedestrian"))
     for e in sorted(shown_emotions) if emotions is not None else []:
         handles.append(_disc_handle(EMOTION_RGB[e], f"{EMOTION_NAMES[e]} pedestrian"))
     if np.any(kd != PEDESTRIAN):
         handles.append(
             Line2D([], [], ls="none", marker="o", ms=10, color=STATIC_RGB, label="static disc")
         )
-    handles.append(Line2D([], [], ls="--", color="0.35", label="discomfort zone (radius + margin)"))
+    handles.append(
+        Line2D([], [], ls="--", color=ZONE_EDGE_RGB, label="discomfort zone (radius + margin)")
+    )
     if goal_handle is not None:
         handles.append(goal_handle)
     key_scene.legend(handles=handles, loc="upper center", ncol=3, fontsize=8, frameon=False)
@@ -224,7 +233,7 @@ def render_grid_map_figure(
     )
     cell = 2.0 * max_range / m
     centre = m / 2 - 0.5  # the robot sits on the corner between the four middle cells
-    ax_ogm.plot(centre, centre, "^", ms=9, mfc=ROBOT_RGB, mec="k", zorder=5)
+    ax_ogm.plot(centre, centre, "^", ms=9, mfc=ROBOT_RGB, mec=INK_RGB, zorder=5)
     ax_ogm.secondary_xaxis(
         "top",
         functions=(lambda j: (centre - j) * cell, lambda y: centre - y / cell),
@@ -238,15 +247,15 @@ def render_grid_map_figure(
     ax_ogm.set_title("(c) occupancy grid map (OGM, robot frame)")
 
     grid_handles = [
-        Patch(fc=GRID_FREE_RGB, ec="0.5", label="0: free"),
+        Patch(fc=GRID_FREE_RGB, ec=_GRID_EDGE_RGB, label="0: free"),
         Patch(
             fc=GRID_DISCOMFORT_RGB,
-            ec="0.5",
+            ec=_GRID_EDGE_RGB,
             label=f"{DISCOMFORT_VALUE}: discomfort zone (hit of the inflated scan)",
         ),
         Patch(
             fc=GRID_COLLISION_RGB,
-            ec="0.5",
+            ec=_GRID_EDGE_RGB,
             label=f"{COLLISION_VALUE}: collision area (hit of the real scan)",
         ),
     ]
@@ -254,7 +263,9 @@ def render_grid_map_figure(
         handles=grid_handles
         + [
             Line2D([], [], color=ROBOT_RGB, ls=":", label="(b) straight ahead"),
-            Line2D([], [], ls="none", marker="^", ms=8, mfc=ROBOT_RGB, mec="k", label="(c) robot"),
+            Line2D(
+                [], [], ls="none", marker="^", ms=8, mfc=ROBOT_RGB, mec=INK_RGB, label="(c) robot"
+            ),
         ],
         loc="upper center",
         ncol=3,
@@ -281,8 +292,8 @@ def _draw_goal(ax, origin: np.ndarray, goal: np.ndarray, half: float) -> Line2D:
     arrow at the panel's edge pointing to it, labelled with its distance; the legend entry."""
     offset = goal - origin
     if np.all(np.abs(offset) <= half - 0.2):
-        ax.plot(*goal, "*", ms=16, color=GOAL_RGB, mec="k", mew=0.6, zorder=8)
-        return Line2D([], [], ls="none", marker="*", ms=12, color=GOAL_RGB, mec="k", label="goal")
+        ax.plot(*goal, "*", ms=16, color=GOAL_RGB, mec=PAPER_RGB, mew=0.8, zorder=8)
+        return Line2D([], [], ls="none", marker="*", ms=12, color=GOAL_RGB, label="goal")
     distance = float(np.hypot(*offset))
     u = offset / distance
     tip = origin + u * ((half - 0.25) / np.max(np.abs(u)))  # on the edge, 0.25 m inside
@@ -302,7 +313,7 @@ def _draw_goal(ax, origin: np.ndarray, goal: np.ndarray, half: float) -> Line2D:
         fontsize=8,
         color=GOAL_RGB,
         fontweight="bold",
-        bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.85),
+        bbox=dict(boxstyle="round,pad=0.15", fc=PAPER_RGB, ec="none", alpha=0.85),
         zorder=8,
     )
     return Line2D([], [], color=GOAL_RGB, lw=2.5, marker=">", ms=6, label="goal (beyond the panel)")

@@ -171,13 +171,14 @@ def plot_curve(
     route_name: str = "training world (selection seeds)",
     title: str = "",
 ) -> None:
-    """SR with its 95 % interval per point; `route` (label → SR) drawn beside it."""
+    """SR with its 95 % interval per point (the robot's blue); `route` (label → SR) drawn
+    beside it (`palette.REFERENCE_RGB`)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from emonav_drake.core.palette import ROBOT_RGB
+    from emonav_drake.core.palette import REFERENCE_RGB, ROBOT_RGB
 
     x = range(len(curve.labels))
     sr = [curve.summary[lab]["SR"] for lab in curve.labels]
@@ -192,7 +193,7 @@ def plot_curve(
     if route:
         pts = [(i, route[lab]) for i, lab in enumerate(curve.labels) if lab in route]
         if pts:
-            ax.plot(*zip(*pts, strict=True), "s--", color="0.55", label=route_name)
+            ax.plot(*zip(*pts, strict=True), "s--", color=REFERENCE_RGB, label=route_name)
     ax.set_xticks(list(x), curve.labels)
     ax.set_ylabel("success rate")
     lowest = min(curve.summary[lab]["SR_ci"][0] for lab in curve.labels)

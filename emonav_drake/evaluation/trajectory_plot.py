@@ -2,8 +2,9 @@
 
 Both read a `Trajectory` (`evaluation/trajectory.py`, the `"trajectory"` section of
 `emonav sim --json`) and draw in the world frame (x towards the goal, y left, metres),
-with the shared palette (`core/palette.py`): the robot blue, pedestrians green / amber /
-red for happy / neutral / negative, static discs grey, the goal purple.
+with the shared palette (`core/palette.py`, Okabe–Ito): the robot blue, pedestrians bluish
+green / orange / vermillion for happy / neutral / negative, static discs grey, the goal a
+black star in its dotted goal-radius ring.
 
 * `render_trajectory_figure`: the robot's path coloured by time (dots at every walking
   step t_k), every pedestrian's path coloured by the emotion in force along it (a
@@ -32,13 +33,25 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle
 
-from emonav_drake.core.palette import EMOTION_RGB, GOAL_RGB, ROBOT_RGB, STATIC_RGB
+from emonav_drake.core.palette import (
+    EMOTION_RGB,
+    GOAL_RADIUS_RGB,
+    GOAL_RGB,
+    INK_RGB,
+    PAPER_RGB,
+    ROBOT_DARK_RGB,
+    ROBOT_LIGHT_RGB,
+    ROBOT_RGB,
+    STATIC_RGB,
+    TEXT_RGB,
+    ZONE_EDGE_RGB,
+)
 from emonav_drake.evaluation.trajectory import Trajectory
 from emonav_drake.params import EMOTION_NAMES
 
-# The robot's path: light → dark blue with time (no green or yellow: those are emotions).
+# The robot's path: light → dark blue with time (no green or orange: those are emotions).
 ROBOT_TIME_CMAP = LinearSegmentedColormap.from_list(
-    "robot_time", [(0.70, 0.82, 0.97), ROBOT_RGB, (0.05, 0.12, 0.40)]
+    "robot_time", [ROBOT_LIGHT_RGB, ROBOT_RGB, ROBOT_DARK_RGB]
 )
 _OUTCOME_TEXT = {
     "success": "reached the goal",
@@ -83,11 +96,14 @@ def _draw_static(ax, traj: Trajectory) -> None:
     for c, r in zip(traj.obstacle_centers, traj.obstacle_radii, strict=True):
         ax.add_patch(Circle(c, r, color=STATIC_RGB, zorder=2))
         ax.add_patch(Circle(c, r + ring, fill=False, ls="--", ec=STATIC_RGB, lw=1.0, zorder=2))
-    ax.plot(*traj.start, "s", color=ROBOT_RGB, mec="k", ms=8, zorder=7)
+    ax.plot(*traj.start, "s", color=ROBOT_RGB, mec=INK_RGB, ms=8, zorder=7)
     ax.add_patch(
-        Circle(traj.goal, traj.goal_radius, fill=False, ls=":", ec=GOAL_RGB, lw=1.2, zorder=6)
+        Circle(
+            traj.goal, traj.goal_radius, fill=False, ls=":", ec=GOAL_RADIUS_RGB, lw=1.2, zorder=6
+        )
     )
-    ax.plot(*traj.goal, "*", color=GOAL_RGB, mec="k", mew=0.6, ms=16, zorder=7)
+    # above the robot's path (which ends in it), a white rim against the path's dark end
+    ax.plot(*traj.goal, "*", color=GOAL_RGB, mec=PAPER_RGB, mew=0.8, ms=16, zorder=8.5)
 
 
 def _pedestrian_segments(traj: Trajectory, i: int, upto: int | None = None):
@@ -120,7 +136,7 @@ def _draw_person(ax, xy, radius: float, margin: float, rgb, label: str | None, a
     ax.add_patch(Circle(xy, radius, fc=(*rgb, 0.45), ec=rgb, lw=1.4, zorder=4))
     ax.add_patch(Circle(xy, radius + margin, fill=False, ls="--", ec=rgb, lw=1.1, zorder=4))
     if label:
-        _label(ax, xy, label, above, "0.1", 9)
+        _label(ax, xy, label, above, TEXT_RGB, 9)
 
 
 def _draw_robot(ax, traj: Trajectory, k: int, label: str | None):
@@ -128,22 +144,22 @@ def _draw_robot(ax, traj: Trajectory, k: int, label: str | None):
     x, y, th = traj.robot[k, :3]
     r = traj.robot_radius
     ax.add_patch(Circle((x, y), r, fc=(*ROBOT_RGB, 0.30), ec=ROBOT_RGB, lw=1.6, zorder=5))
-    ax.plot([x, x + r * math.cos(th)], [y, y + r * math.sin(th)], color="k", lw=1.2, zorder=5)
+    ax.plot([x, x + r * math.cos(th)], [y, y + r * math.sin(th)], color=INK_RGB, lw=1.2, zorder=5)
     if label:
-        _label(ax, (x, y), label, False, (0.05, 0.12, 0.40), 9)
+        _label(ax, (x, y), label, False, ROBOT_DARK_RGB, 9)
 
 
 def _mark_end(ax, traj: Trajectory) -> str | None:
     """The collision point or the fall; returns a note for the title, if any."""
     if traj.outcome == "collision" and traj.collision:
         px, py = traj.collision["point"]
-        ax.plot(px, py, "X", color="k", mec="w", mew=1.2, ms=14, zorder=9)
+        ax.plot(px, py, "X", color=INK_RGB, mec=PAPER_RGB, mew=1.2, ms=14, zorder=9)
         with_ = traj.collision.get("with") or ""
         what = {"static": "a static disc", "": "an object"}.get(with_, f"a {with_} pedestrian")
         return f"collided with {what} at t = {_fmt_time(float(traj.collision['t']))}"
     if traj.outcome == "fall":
         x, y = traj.robot[-1, :2]
-        ax.plot(x, y, "v", color="k", mec="w", mew=1.2, ms=13, zorder=9)
+        ax.plot(x, y, "v", color=INK_RGB, mec=PAPER_RGB, mew=1.2, ms=13, zorder=9)
         return f"fell at t = {_fmt_time(float(traj.t[-1]))}"
     return None
 
@@ -172,8 +188,9 @@ def _legend_handles(traj: Trajectory, snapshot_note: str, still: bool = True) ->
             mec=ROBOT_RGB,
             label=f"robot {snapshot_note}",
         ),
-        Line2D([], [], ls="none", marker="s", color=ROBOT_RGB, mec="k", ms=7, label="start"),
-        Line2D([], [], ls="none", marker="*", color=GOAL_RGB, mec="k", ms=12, label="goal"),
+        Line2D([], [], ls="none", marker="s", color=ROBOT_RGB, mec=INK_RGB, ms=7, label="start"),
+        Line2D([], [], ls="none", marker="*", color=GOAL_RGB, ms=12, label="goal"),
+        Line2D([], [], ls=":", color=GOAL_RADIUS_RGB, lw=1.2, label="goal radius"),
     ]
     for name, rgb in zip(EMOTION_NAMES, EMOTION_RGB, strict=True):
         h.append(
@@ -188,10 +205,19 @@ def _legend_handles(traj: Trajectory, snapshot_note: str, still: bool = True) ->
                 label=f"{name} pedestrian (zone {traj.discomfort.get(name, 0):g} m)",
             )
         )
-    h.append(Line2D([], [], color="0.3", ls="--", lw=1.1, label="discomfort zone edge"))
+    h.append(Line2D([], [], color=ZONE_EDGE_RGB, ls="--", lw=1.1, label="discomfort zone edge"))
     if still and np.any(np.diff(traj.emotions, axis=0) != 0):
         h.append(
-            Line2D([], [], ls="none", marker="D", ms=6, mfc="w", mec="0.2", label="emotion change")
+            Line2D(
+                [],
+                [],
+                ls="none",
+                marker="D",
+                ms=6,
+                mfc=PAPER_RGB,
+                mec=ZONE_EDGE_RGB,
+                label="emotion change",
+            )
         )
     if len(traj.obstacle_radii):
         h.append(
@@ -207,10 +233,21 @@ def _legend_handles(traj: Trajectory, snapshot_note: str, still: bool = True) ->
         )
     if traj.outcome == "collision":
         h.append(
-            Line2D([], [], ls="none", marker="X", color="k", mec="w", ms=11, label="collision")
+            Line2D(
+                [],
+                [],
+                ls="none",
+                marker="X",
+                color=INK_RGB,
+                mec=PAPER_RGB,
+                ms=11,
+                label="collision",
+            )
         )
     if traj.outcome == "fall":
-        h.append(Line2D([], [], ls="none", marker="v", color="k", mec="w", ms=10, label="fall"))
+        h.append(
+            Line2D([], [], ls="none", marker="v", color=INK_RGB, mec=PAPER_RGB, ms=10, label="fall")
+        )
     return h
 
 
@@ -238,7 +275,7 @@ def plot_trajectory(ax, traj: Trajectory, times: Sequence[float] | None = None):
                 *traj.pedestrians[k, i],
                 "D",
                 ms=5.5,
-                mfc="w",
+                mfc=PAPER_RGB,
                 mew=1.4,
                 mec=EMOTION_RGB[int(traj.emotions[k, i])],
                 zorder=6,
@@ -362,7 +399,7 @@ def render_trajectory_animation(
     ]
     (robot_trail,) = ax.plot([], [], color=ROBOT_RGB, lw=2.2, zorder=8)
     robot = ax.add_patch(Circle((0, 0), rr, fc=(*ROBOT_RGB, 0.35), ec=ROBOT_RGB, lw=1.6, zorder=8))
-    (nose,) = ax.plot([], [], color="k", lw=1.4, zorder=8)
+    (nose,) = ax.plot([], [], color=INK_RGB, lw=1.4, zorder=8)
     end_marks: list = []
     head = title_of(traj)
 

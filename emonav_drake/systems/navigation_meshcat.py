@@ -9,23 +9,26 @@ Input ports:
         Digit's footstep planner output (swing-foot landing target and yaw, W); leave
         unconnected for the LIP robot.
 
-What is drawn (all under `/emonav`, world frame W, z up):
-    * every `publish_period` (default 0.1 s): the robot (blue column with a heading
+What is drawn (all under `/emonav`, world frame W, z up), in the shared palette
+(`core/palette.py`; the names of the colours here are its roles):
+    * every `publish_period` (default 0.1 s): the robot (blue column with a black heading
       marker; off when the full-order Digit is drawn by Drake's `MeshcatVisualizer`),
       the pedestrians and their discomfort rings, coloured by their emotion now (happy
-      green, neutral amber, negative red). Each pedestrian has one body and one ring per
-      emotion and only the current emotion's pair is visible: an emotion change is a
-      change of the "visible" property, which a Meshcat recording animates (a recorded
-      "color" property is not: three.js finds no `color` on the object and ignores it);
-    * once per walking step t_k = kT: the robot's trail (one segment from its position
-      at t_{k−1} to t_k, bright for `TRAIL_RECENT_STEPS` steps, then pale) and, with
-      `show_rays`, the LiDAR rays of t_k (every `RAY_STRIDE`-th beam, one line-segment
-      object per step, visible from t_k to t_{k+1});
+      bluish green, neutral orange, negative vermillion). Each pedestrian has one body and
+      one ring per emotion and only the current emotion's pair is visible: an emotion
+      change is a change of the "visible" property, which a Meshcat recording animates (a
+      recorded "color" property is not: three.js finds no `color` on the object and
+      ignores it);
+    * once per walking step t_k = kT: the robot's trail (blue, one segment from its
+      position at t_{k−1} to t_k, bright for `TRAIL_RECENT_STEPS` steps, then pale) and,
+      with `show_rays`, the LiDAR rays of t_k (light grey, every `RAY_STRIDE`-th beam, one
+      line-segment object per step, visible from t_k to t_{k+1});
     * with `footstep_targets` connected: a foot-sized marker at each planned footstep
-      (left cyan, right violet), following the target while the planner re-plans it and
-      pale once `FOOTSTEPS_RECENT` newer steps have started;
-    * static: the static discs (grey) with their d_static rings and the goal (a green
-      pad of the goal radius and a 2 m pole topped by a sphere, seen above the rays).
+      (left sky blue, right reddish purple), following the target while the planner
+      re-plans it and pale once `FOOTSTEPS_RECENT` newer steps have started;
+    * static: the static discs (grey) with their d_static rings and the goal (black: a
+      dark pad ringed at the goal radius and a 2 m pole topped by a sphere, seen above
+      the rays).
 
 Recording. Every dynamic call passes the simulation time, so with
 `Meshcat.StartRecording` the episode is recorded frame by frame and
@@ -45,19 +48,26 @@ from pydrake.geometry import Box, Cylinder, Meshcat, Rgba, Sphere
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import Context, EventStatus, LeafSystem
 
+from emonav_drake.core import palette
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 
-EMOTION_RGBA = (
-    Rgba(0.20, 0.75, 0.30, 1.0),
-    Rgba(0.95, 0.70, 0.15, 1.0),
-    Rgba(0.85, 0.15, 0.15, 1.0),
-)
-STATIC_RGBA = Rgba(0.5, 0.5, 0.5, 1.0)
-ROBOT_RGBA = Rgba(0.25, 0.45, 0.85, 1.0)
-GOAL_RGBA = Rgba(0.10, 0.80, 0.20, 1.0)
-RAY_RGBA = Rgba(0.90, 0.20, 0.20, 0.45)
-FOOT_RGBA = (Rgba(0.10, 0.75, 0.85, 0.9), Rgba(0.55, 0.35, 0.90, 0.9))  # left, right
+
+def _rgba(rgb: palette.RGB, alpha: float = 1.0) -> Rgba:
+    """A palette colour as a Drake `Rgba`."""
+    return Rgba(*rgb, alpha)
+
+
+# The palette's roles as Drake colours (the replay's legend reads them too)
+EMOTION_RGBA = tuple(_rgba(rgb) for rgb in palette.EMOTION_RGB)
+STATIC_RGBA = _rgba(palette.STATIC_RGB)
+ROBOT_RGBA = _rgba(palette.ROBOT_RGB)
+HEADING_RGBA = _rgba(palette.INK_RGB)  # the robot's heading marker
+TRAIL_RGBA = _rgba(palette.TRAIL_RGB)
+GOAL_RGBA = _rgba(palette.GOAL_RGB)
+GOAL_RADIUS_RGBA = _rgba(palette.GOAL_RADIUS_RGB)
+RAY_RGBA = _rgba(palette.LIDAR_RAY_RGB, 0.8)
+FOOT_RGBA = tuple(_rgba(rgb, 0.9) for rgb in palette.FOOTSTEP_RGB)  # left, right
 PREFIX = "/emonav"
 TRAIL_RECENT_STEPS = 10  # trail segments drawn bright for this many walking steps
 FOOTSTEPS_RECENT = 6  # footstep markers drawn bright until this many newer steps
@@ -141,7 +151,7 @@ class NavigationMeshcatVisualizer(LeafSystem):
         if self._draw_robot:
             m.SetObject(f"{PREFIX}/robot/body", Cylinder(c.robot.radius, 1.0), ROBOT_RGBA)
             m.SetTransform(f"{PREFIX}/robot/body", RigidTransform([0, 0, 0.5]))
-            m.SetObject(f"{PREFIX}/robot/nose", Sphere(0.08), Rgba(0.1, 0.1, 0.1, 1.0))
+            m.SetObject(f"{PREFIX}/robot/nose", Sphere(0.08), HEADING_RGBA)
             m.SetTransform(f"{PREFIX}/robot/nose", RigidTransform([c.robot.radius, 0, 0.9]))
             x0, y0 = scenario.robot_start
             m.SetTransform(
@@ -149,8 +159,14 @@ class NavigationMeshcatVisualizer(LeafSystem):
                 RigidTransform(RotationMatrix.MakeZRotation(scenario.robot_heading), [x0, y0, 0.0]),
             )
         goal = scenario.robot_goal
-        m.SetObject(f"{PREFIX}/goal/pad", Cylinder(self._goal_radius, 0.02), _faded(GOAL_RGBA, 0.7))
+        m.SetObject(
+            f"{PREFIX}/goal/pad", Cylinder(self._goal_radius, 0.02), _faded(GOAL_RGBA, 0.35)
+        )
         m.SetTransform(f"{PREFIX}/goal/pad", RigidTransform([0, 0, 0.01]))
+        ang = np.linspace(0.0, 2.0 * np.pi, 49)
+        ring = np.vstack([np.cos(ang), np.sin(ang), np.zeros_like(ang)]) * self._goal_radius
+        ring[2] = 0.025  # just above the pad
+        m.SetLine(f"{PREFIX}/goal/radius", ring, 2.0, GOAL_RADIUS_RGBA)
         m.SetObject(f"{PREFIX}/goal/pole", Cylinder(0.03, _GOAL_POLE), GOAL_RGBA)
         m.SetTransform(f"{PREFIX}/goal/pole", RigidTransform([0, 0, _GOAL_POLE / 2]))
         m.SetObject(f"{PREFIX}/goal/top", Sphere(0.15), GOAL_RGBA)
@@ -283,7 +299,7 @@ class NavigationMeshcatVisualizer(LeafSystem):
         n = self._trail_count
         self._trail_count += 1
         path = f"{PREFIX}/trail/{n}"
-        self._add_fading(path, Box(length, 0.08, 0.004), ROBOT_RGBA, 0.35, t)
+        self._add_fading(path, Box(length, 0.08, 0.004), TRAIL_RGBA, 0.35, t)
         mid = 0.5 * (start + point)
         self._meshcat.SetTransform(
             path,
