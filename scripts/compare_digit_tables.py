@@ -1,9 +1,12 @@
-"""Digit Table II before and after the new walking stack: per method, the old run against
-benchmarks/results/digit_table2_v2 on the seeds both ran (Wilson intervals, McNemar exact).
+"""Digit Table II before and after a change of the walking stack: per method, an old run
+against a new one on the seeds both ran (Wilson intervals, McNemar exact).
 
-    python scripts/compare_digit_tables.py
+    python scripts/compare_digit_tables.py                       # old timing vs the default
+    python scripts/compare_digit_tables.py --old digit_table2_v2 # every method vs that run
 
-Prints a Markdown table (quoted in docs/results.md).
+By default each method's run with the old walking timing (`PAIRS`) against
+benchmarks/results/digit_table2_v3; with `--old RUN`, every method of the new run against
+the same method in RUN. Prints a Markdown table (quoted in docs/results.md).
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ from emonav_drake.evaluation.run_directory import read_trials
 from emonav_drake.evaluation.tables import format_p, mcnemar_exact, wilson_interval
 
 RESULTS = Path(__file__).resolve().parent.parent / "benchmarks" / "results"
-NEW = "digit_table2_v2"
+NEW = "digit_table2_v3"
 # (label, old run, its method name, the method name in the new run)
 PAIRS = (
     ("shipped policy (LIP-trained)", "digit_table2", "sac", "policy"),
@@ -36,12 +39,24 @@ def _sr(k: int, n: int) -> str:
 
 
 def main() -> None:
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--new", default=NEW, help="run directory under benchmarks/results")
+    ap.add_argument("--old", default=None, help="compare every method with this run")
+    args = ap.parse_args()
+    pairs = PAIRS
+    if args.old is not None:
+        methods = dict.fromkeys(
+            t["method"] for t in read_trials(RESULTS / args.new / "trials.jsonl")
+        )
+        pairs = tuple((m, args.old, m, m) for m in methods)
     print(
         "| method | seeds (n) | old SR [95 % CI] (run) | new SR [95 % CI] | old only | new only |"
     )
     print("|---|---|---|---|---|---|")
-    for label, run, old_method, new_method in PAIRS:
-        old, new = _successes(run, old_method), _successes(NEW, new_method)
+    for label, run, old_method, new_method in pairs:
+        old, new = _successes(run, old_method), _successes(args.new, new_method)
         seeds = sorted(set(old) & set(new))
         n = len(seeds)
         k_old, k_new = sum(old[s] for s in seeds), sum(new[s] for s in seeds)
