@@ -165,7 +165,7 @@ def test_failure_listing_names_causes_and_a_changed_configuration():
     """Collisions name what was hit, falls their reason; a run whose configuration source
     no longer gives its configuration (hash) is re-run from run_config.yaml; a learned
     method with another checkpoint is re-run as `policy` with it."""
-    from emonav_drake.evaluation.diagnosis import format_failures, rerun_command
+    from emonav_drake.evaluation.failures import format_failures, rerun_command
 
     def trial(method, seed, outcome, **extra):
         record = {"outcome": outcome, "steps": 7 + seed, "min_ped_distance": 0.25 * seed}

@@ -62,12 +62,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 def cmd_diagnose(args: argparse.Namespace) -> int:
     """List the run's failures (--failures) and/or re-simulate them (--out): print the
     list and the table, write diagnosis.{json,md,png}, failures.md, run_config.yaml."""
-    from emonav_drake.evaluation.diagnosis import (
-        check_methods,
-        diagnose_run,
-        diagnosis_table,
-        format_failures,
-    )
+    from emonav_drake.evaluation.diagnosis import check_methods, diagnose_run, diagnosis_table
+    from emonav_drake.evaluation.failures import format_failures
     from emonav_drake.evaluation.run_directory import load_run
 
     if args.last < 1 or args.reference < 0 or args.rerun < 0:
@@ -89,7 +85,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         run_files = None
         causes = None
         if rows is not None:  # the files written with --out, the re-simulated causes
-            from emonav_drake.evaluation.diagnosis import RUN_CONFIG_FILE, RUN_ESTIMATE_FILE
+            from emonav_drake.evaluation.failures import RUN_CONFIG_FILE, RUN_ESTIMATE_FILE
 
             run_files = {"config": str(args.out / RUN_CONFIG_FILE)}
             if settings.get("emotion_estimate_yaml") is not None:
