@@ -31,6 +31,7 @@ LAYERS: list[tuple[str, frozenset[str]]] = [
                 "atomic_io",
                 "torch_load",
                 "provenance",
+                "registry",
                 "parallel",
                 "configs",
                 "scenarios",

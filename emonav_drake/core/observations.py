@@ -31,6 +31,7 @@ from emonav_drake.core.grid_maps import FrameStack, lgm_frame
 from emonav_drake.core.kinematic_maps import drlvo_image
 from emonav_drake.core.lidar import scan_discs
 from emonav_drake.params import EmoNavConfig, LidarParams
+from emonav_drake.registry import Registry
 
 if TYPE_CHECKING:
     from emonav_drake.core.lip import LipState
@@ -114,20 +115,17 @@ class ObservationKind:
         return frame[None] if self.single_frame else frame
 
 
-_KINDS: dict[str, ObservationKind] = {}
+_KINDS: Registry[ObservationKind] = Registry("observation kind")
 
 
 def register_observation(kind: ObservationKind, replace: bool = False) -> ObservationKind:
     """Add an observation kind (`ValueError` if the name is taken and not `replace`)."""
-    if kind.name in _KINDS and not replace:
-        raise ValueError(f"an observation kind called {kind.name!r} is registered already")
-    _KINDS[kind.name] = kind
-    return kind
+    return _KINDS.add(kind.name, kind, replace)
 
 
 def unregister_observation(name: str) -> None:
     """Remove an observation kind (tests that register a throw-away one)."""
-    _KINDS.pop(name, None)
+    _KINDS.remove(name)
 
 
 def observation_kinds() -> tuple[str, ...]:

@@ -22,6 +22,7 @@ from emonav_drake.core.scenario import Scenario
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
+from emonav_drake.registry import Registry
 
 # run(scenario, config, planner, grid_kind, goal_radius, emotion_estimate) -> record
 EpisodeRunner = Callable[
@@ -75,36 +76,34 @@ def _run_digit(scenario, config, planner, grid_kind, goal_radius, emotion_estima
     )
 
 
-PLANTS: dict[str, Plant] = {
-    p.name: p
-    for p in (
-        Plant("lip", "LIP", _run_lip, can_fall=False, emotion_estimates=True, footsteps=False),
-        Plant(
-            "digit",
-            "Digit (full order)",
-            _run_digit,
-            can_fall=True,
-            emotion_estimates=False,
-            footsteps=True,
-        ),
-    )
-}
+PLANTS: Registry[Plant] = Registry("plant")
+PLANTS.add(
+    "lip", Plant("lip", "LIP", _run_lip, can_fall=False, emotion_estimates=True, footsteps=False)
+)
+PLANTS.add(
+    "digit",
+    Plant(
+        "digit",
+        "Digit (full order)",
+        _run_digit,
+        can_fall=True,
+        emotion_estimates=False,
+        footsteps=True,
+    ),
+)
 
 
 def register_plant(plant: Plant, replace: bool = False) -> Plant:
     """Add a plant (`ValueError` if its name is taken and not `replace`): `emonav eval`,
     `emonav benchmark` and `emonav sim` (its record; the replay, trajectory and step
     outputs are those of the LIP and Digit diagrams) then run it by name."""
-    if plant.name in PLANTS and not replace:
-        raise ValueError(f"a plant called {plant.name!r} is registered already")
-    PLANTS[plant.name] = plant
-    return plant
+    return PLANTS.add(plant.name, plant, replace)
 
 
 def unregister_plant(name: str) -> None:
     """Remove a plant (tests that register a throw-away one); the built-in ones stay."""
     if name not in ("lip", "digit"):
-        PLANTS.pop(name, None)
+        PLANTS.remove(name)
 
 
 def plant_named(name: str, flag: str = "--plant") -> Plant:

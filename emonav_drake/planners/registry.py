@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.registry import Registry
 
 # build(config, checkpoint, device) -> the planner; `checkpoint` None for model planners
 Builder = Callable[[EmoNavConfig, "str | Path | None", str], Any]
@@ -44,22 +45,19 @@ class PlannerKind:
     summary: str = ""
 
 
-_KINDS: dict[str, PlannerKind] = {}
+_KINDS: Registry[PlannerKind] = Registry("planner")
 
 
 def register(kind: PlannerKind, replace: bool = False) -> PlannerKind:
     """Add `kind` to the registry (`ValueError` if its name is taken and not `replace`)."""
     if not kind.name or not kind.name.replace("_", "").isalnum():
         raise ValueError(f"planner name {kind.name!r}: letters, digits and '_' only")
-    if kind.name in _KINDS and not replace:
-        raise ValueError(f"a planner called {kind.name!r} is registered already")
-    _KINDS[kind.name] = kind
-    return kind
+    return _KINDS.add(kind.name, kind, replace)
 
 
 def unregister(name: str) -> None:
     """Remove a planner (tests that register a throw-away one)."""
-    _KINDS.pop(name, None)
+    _KINDS.remove(name)
 
 
 def planner_names() -> tuple[str, ...]:
