@@ -205,63 +205,104 @@ def _run_image(args: argparse.Namespace, classifier: Any) -> int:
 
 
 def _run_video(args: argparse.Namespace, classifier: Any) -> int:
-    from emonav_drake.perception.face_emotion import FaceEmotion, annotate, frame_label
+    """Classify a video's frames; print the summary, write --json and --annotate."""
+    suffix = args.annotate.suffix.lower() if args.annotate else ""
+    with contextlib.ExitStack() as stack:
+        # an annotated video goes to a temporary sibling, renamed only when complete
+        video_out = (
+            stack.enter_context(atomic_output(args.annotate)) if suffix in VIDEO_WRITERS else None
+        )
+        frames_out, best, scale, wall = _classify_video(args, classifier, video_out)
+    _report_video(args, frames_out, scale, wall)
+    if args.annotate and suffix not in VIDEO_WRITERS:
+        if best is None:
+            raise ValueError(f"{args.path}: no frame to annotate")
+        _write_image(args.annotate, best)
+    if args.annotate:
+        print(f"annotation written to {args.annotate}")
+    return 0
+
+
+def _classify_video(
+    args: argparse.Namespace, classifier: Any, video_out: Path | None
+) -> tuple[list[dict], np.ndarray | None, float, float]:
+    """Classify every --every-th frame (up to --max-frames), tracking and smoothing the
+    faces; with `video_out`, write each annotated frame to it. Returns the frames' JSON
+    entries, the annotated frame with the most faces (image --annotate; else None), the
+    last frame's downscaling and the wall time [s]."""
+    from emonav_drake.perception.face_emotion import annotate
     from emonav_drake.perception.face_tracking import EmotionSmoother, FaceTracker
     from emonav_drake.perception.image_io import fit_pixels, video_frames
 
     tracker, smoother = FaceTracker(), EmotionSmoother(args.smooth)
     frames_out: list[dict] = []
     best: tuple[int, np.ndarray | None] = (-1, None)
-    suffix = args.annotate.suffix.lower() if args.annotate else ""
     scale, size = 1.0, None
-    with contextlib.ExitStack() as stack:
-        # an annotated video goes to a temporary sibling, renamed only when complete
-        video_out = (
-            stack.enter_context(atomic_output(args.annotate)) if suffix in VIDEO_WRITERS else None
-        )
-        writer = None
-        t0 = time.perf_counter()
-        try:
-            for index, t, frame in video_frames(args.path, every=args.every):
-                if args.max_frames is not None and len(frames_out) >= args.max_frames:
-                    break
-                if size is None:
-                    size = (frame.shape[1], frame.shape[0])
-                frame, scale = fit_pixels(frame, args.max_pixels)
-                if scale != 1.0 and not frames_out:
-                    _note_downscaled(args.path, size, frame.shape, args.max_pixels)
-                raw = classifier.classify(frame)
-                ids = tracker.update([f.box for f in raw])
-                faces = [
-                    FaceEmotion(f.box, smoother.update(k, f.probabilities))
-                    for f, k in zip(raw, ids, strict=True)
-                ]
-                smoother.forget(ids)
-                label = EMOTION_NAMES[frame_label(faces)]
-                reported = _original_coordinates(faces, scale)
-                frames_out.append(
-                    {
-                        "index": index,
-                        "time": None if np.isnan(t) else round(t, 4),
-                        "faces": [
-                            {**f.to_json(), "track": k} for f, k in zip(reported, ids, strict=True)
-                        ],
-                        "label": label,
-                    }
-                )
-                if video_out is not None:
-                    drawn = annotate(frame, faces)
-                    if writer is None:
-                        writer = _open_writer(video_out, args.path, drawn.shape, args.every)
-                    writer.write(drawn)
-                elif args.annotate and len(faces) > best[0]:
-                    best = (len(faces), annotate(frame, faces))
-        finally:
-            if writer is not None:
-                writer.release()
-        wall = time.perf_counter() - t0
-        if video_out is not None and writer is None:
-            raise ValueError(f"{args.path}: no frame to annotate")
+    writer = None
+    t0 = time.perf_counter()
+    try:
+        for index, t, frame in video_frames(args.path, every=args.every):
+            if args.max_frames is not None and len(frames_out) >= args.max_frames:
+                break
+            if size is None:
+                size = (frame.shape[1], frame.shape[0])
+            frame, scale = fit_pixels(frame, args.max_pixels)
+            if scale != 1.0 and not frames_out:
+                _note_downscaled(args.path, size, frame.shape, args.max_pixels)
+            faces, entry = _classify_frame(classifier, (tracker, smoother), frame, scale, index, t)
+            frames_out.append(entry)
+            if video_out is not None:
+                drawn = annotate(frame, faces)
+                if writer is None:
+                    writer = _open_writer(video_out, args.path, drawn.shape, args.every)
+                writer.write(drawn)
+            elif args.annotate and len(faces) > best[0]:
+                best = (len(faces), annotate(frame, faces))
+    finally:
+        if writer is not None:
+            writer.release()
+    wall = time.perf_counter() - t0
+    if video_out is not None and writer is None:
+        raise ValueError(f"{args.path}: no frame to annotate")
+    return frames_out, best[1], scale, wall
+
+
+def _classify_frame(
+    classifier: Any,
+    tracking: tuple[Any, Any],
+    frame: np.ndarray,
+    scale: float,
+    index: int,
+    t: float,
+) -> tuple[list, dict]:
+    """Frame `index` at time `t` [s] (NaN if unknown): its faces, tracked and smoothed by
+    `tracking` = (`FaceTracker`, `EmotionSmoother`), and its JSON entry (boxes in the
+    original's pixels: `frame` is the original downscaled by `scale`)."""
+    from emonav_drake.perception.face_emotion import FaceEmotion, frame_label
+
+    tracker, smoother = tracking
+    raw = classifier.classify(frame)
+    ids = tracker.update([f.box for f in raw])
+    faces = [
+        FaceEmotion(f.box, smoother.update(k, f.probabilities))
+        for f, k in zip(raw, ids, strict=True)
+    ]
+    smoother.forget(ids)
+    label = EMOTION_NAMES[frame_label(faces)]
+    reported = _original_coordinates(faces, scale)
+    entry = {
+        "index": index,
+        "time": None if np.isnan(t) else round(t, 4),
+        "faces": [{**f.to_json(), "track": k} for f, k in zip(reported, ids, strict=True)],
+        "label": label,
+    }
+    return faces, entry
+
+
+def _report_video(
+    args: argparse.Namespace, frames_out: list[dict], scale: float, wall: float
+) -> None:
+    """Print the video's summary line and write --json."""
     counts = Counter(f["label"] for f in frames_out)
     with_faces = sum(1 for f in frames_out if f["faces"])
     n = len(frames_out)
@@ -287,13 +328,6 @@ def _run_video(args: argparse.Namespace, classifier: Any) -> int:
                 },
             },
         )
-    if args.annotate and suffix not in VIDEO_WRITERS:
-        if best[1] is None:
-            raise ValueError(f"{args.path}: no frame to annotate")
-        _write_image(args.annotate, best[1])
-    if args.annotate:
-        print(f"annotation written to {args.annotate}")
-    return 0
 
 
 def _open_writer(path: Path, source: Path, shape: tuple, every: int) -> Any:

@@ -13,8 +13,10 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses as dc
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -113,10 +115,64 @@ def cmd_sim(args: argparse.Namespace) -> int:
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
     from emonav_drake.planners import configure_for, make_planner
 
+    run = run_digit_episode if args.plant == "digit" else run_episode
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
     cfg, grid_kind = configure_for(planner, cfg)
     if hasattr(planner, "describe"):
         print(f"planner {args.planner}: {planner.describe()}")
+    meshcat, caption = _open_viewer(args, cfg, scenario)
+    rates = None
+    if args.rates:
+        from emonav_drake.diagrams.rates import RateMeasurement
+
+        rates = RateMeasurement()
+    trace: list[dict] = []  # Digit's per-step log: the trajectory of --json
+    episode = _SimEpisode(scenario, cfg, planner, grid_kind, estimate, meshcat, rates, trace)
+    progress = show_progress(args)
+    t0 = time.perf_counter()
+    record, step_log = _run_sim_episode(args, episode, run, progress)
+    wall = time.perf_counter() - t0
+    out = record.to_json()
+    out["seed"] = scenario.seed
+    if rates is not None and rates.report is not None:
+        out.update(rates.report.to_json())
+        print(_format_rates(rates.report))
+    print(
+        f"seed {scenario.seed}: {record.outcome} after {record.steps} steps "
+        f"({record.nav_time:.1f} s simulated, {wall:.2f} s wall), path "
+        f"{record.path_length:.2f} m, min pedestrian distance "
+        f"{record.min_ped_distance:.2f} m, discomfort steps {record.discomfort_steps}, "
+        f"IDT {record.idt}"
+    )
+    if args.record:
+        print(f"replay written to {Path(args.record).resolve()} (open it in a browser)")
+    _write_sim_outputs(args, episode, record, step_log, out)
+    if caption is not None:  # live: the outcome in Meshcat, served until Ctrl-C
+        from emonav_drake.diagrams.meshcat_viewing import finish_live_view
+
+        caption.set_outcome(record)
+        finish_live_view(meshcat, keep_serving=not args.no_wait, caption=caption)
+    return 0
+
+
+@dc.dataclass
+class _SimEpisode:
+    """What `cmd_sim` runs: the scenario, its configuration and planner, the viewer, the
+    profiler (`--rates`) and Digit's per-step log (filled by its run)."""
+
+    scenario: Any
+    cfg: Any
+    planner: Any
+    grid_kind: str
+    estimate: Any
+    meshcat: Any
+    rates: Any
+    trace: list[dict]
+
+
+def _open_viewer(args: argparse.Namespace, cfg: Any, scenario: Any) -> tuple[Any, Any]:
+    """The Meshcat of --meshcat / --record (None without them) and, live, its caption
+    (started, and waiting for a browser unless --no-wait); (None, None) without a viewer."""
     meshcat = caption = None
     if args.meshcat or args.record:
         from emonav_drake.diagrams.meshcat_viewing import (
@@ -133,85 +189,75 @@ def cmd_sim(args: argparse.Namespace) -> int:
             plant = "Digit" if args.plant == "digit" else "LIP"
             caption = ReplayCaption(args.planner, plant, scenario.seed, rays=args.rays)
             start_live_view(meshcat, wait=not args.no_wait, caption=caption)
-    rates = None
-    if args.rates:
-        from emonav_drake.diagrams.rates import RateMeasurement
+    return meshcat, caption
 
-        rates = RateMeasurement()
-    trace: list[dict] = []  # Digit's per-step log: the trajectory of --json
-    progress = show_progress(args)
-    t0 = time.perf_counter()
+
+def _run_sim_episode(
+    args: argparse.Namespace, ep: _SimEpisode, run: Callable[..., Any], progress: bool
+) -> tuple[Any, Any]:
+    """Run the episode with `run` (the LIP's `run_episode` or Digit's `run_digit_episode`,
+    imported by `cmd_sim` before the planner is built); its record and, on the LIP, its step
+    log (None on Digit, whose per-step log goes to `ep.trace` with --json / --steps-out)."""
+    cfg = ep.cfg
+    step_log = None
     with contextlib.ExitStack() as stack:
         # the replay goes to a temporary sibling, renamed when complete
         record_html = stack.enter_context(atomic_output(args.record)) if args.record else None
         if args.plant == "digit":
-            record = run_digit_episode(
-                scenario,
+            record = run(
+                ep.scenario,
                 cfg,
-                planner,
-                meshcat=meshcat,
-                grid_kind=grid_kind,
+                ep.planner,
+                meshcat=ep.meshcat,
+                grid_kind=ep.grid_kind,
                 goal_radius=cfg.episode.eval_goal_radius,
                 realtime_rate=1.0 if args.meshcat else 0.0,
                 record_html=record_html,
-                rates=rates,
-                trace=trace if args.json or args.steps_out else None,
+                rates=ep.rates,
+                trace=ep.trace if args.json or args.steps_out else None,
                 progress=progress,
             )
         else:
-            record, step_log = run_episode(
-                scenario,
+            record, step_log = run(
+                ep.scenario,
                 cfg,
-                planner,
-                meshcat=meshcat,
+                ep.planner,
+                meshcat=ep.meshcat,
                 record_html=record_html,
                 show_rays=args.rays,
                 goal_radius=cfg.episode.eval_goal_radius,
                 realtime_rate=1.0 if args.meshcat else 0.0,
-                grid_kind=grid_kind,
-                emotion_estimate=estimate,
-                rates=rates,
+                grid_kind=ep.grid_kind,
+                emotion_estimate=ep.estimate,
+                rates=ep.rates,
                 progress=progress,
             )
-    wall = time.perf_counter() - t0
-    out = record.to_json()
-    out["seed"] = scenario.seed
-    if rates is not None and rates.report is not None:
-        out.update(rates.report.to_json())
-        print(_format_rates(rates.report))
-    print(
-        f"seed {scenario.seed}: {record.outcome} after {record.steps} steps "
-        f"({record.nav_time:.1f} s simulated, {wall:.2f} s wall), path "
-        f"{record.path_length:.2f} m, min pedestrian distance "
-        f"{record.min_ped_distance:.2f} m, discomfort steps {record.discomfort_steps}, "
-        f"IDT {record.idt}"
-    )
-    if args.record:
-        print(f"replay written to {Path(args.record).resolve()} (open it in a browser)")
+    return record, step_log
+
+
+def _write_sim_outputs(
+    args: argparse.Namespace, ep: _SimEpisode, record: Any, step_log: Any, out: dict
+) -> None:
+    """Write --json (`out` with the trajectory) and --steps-out of a finished episode."""
+    cfg, scenario = ep.cfg, ep.scenario
     if args.json:  # the episode step by step, drawn by `emonav plot`
         from emonav_drake.evaluation import trajectory as tj
 
         goal_r = cfg.episode.eval_goal_radius
         out["trajectory"] = (
-            tj.trajectory_from_digit_trace(scenario, cfg, record, trace, args.planner, goal_r)
+            tj.trajectory_from_digit_trace(scenario, cfg, record, ep.trace, args.planner, goal_r)
             if args.plant == "digit"
             else tj.trajectory_from_step_log(scenario, cfg, record, step_log, args.planner, goal_r)
         ).to_json()
         write_json(args.json, out)
     if args.steps_out:  # per planner step: the planner's LIP step vs the robot
         table = (
-            episode_steps_table(cfg, trace=trace)
+            episode_steps_table(cfg, trace=ep.trace)
             if args.plant == "digit"
             else episode_steps_table(cfg, robot=step_log.robot, commands=step_log.commands)
         )
         n = write_steps_csv(args.steps_out, table)
         print(f"{n} steps written to {args.steps_out}")
-    if caption is not None:  # live: the outcome in Meshcat, served until Ctrl-C
-        from emonav_drake.diagrams.meshcat_viewing import finish_live_view
-
-        caption.set_outcome(record)
-        finish_live_view(meshcat, keep_serving=not args.no_wait, caption=caption)
-    return 0
 
 
 def show_progress(args: argparse.Namespace) -> bool:

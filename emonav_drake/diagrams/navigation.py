@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from pydrake.geometry import Meshcat
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
+from pydrake.systems.framework import Context, Diagram, DiagramBuilder, OutputPort
 
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
@@ -58,7 +58,11 @@ from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.emotion_estimate_source import AddEmotionEstimateSource
-from emonav_drake.systems.episode_monitor import EpisodeMonitor, episode_monitor_callback
+from emonav_drake.systems.episode_monitor import (
+    EpisodeMonitor,
+    EpisodeStatus,
+    episode_monitor_callback,
+)
 from emonav_drake.systems.lidar_grid_map_builder import LidarGridMapBuilder
 from emonav_drake.systems.lip_robot_plant import LipRobotPlant
 from emonav_drake.systems.navigation_meshcat import NavigationMeshcatVisualizer
@@ -304,37 +308,11 @@ def run_episode(
     nav = build_navigation_diagram(
         scenario, config, planner, meshcat, show_rays, grid_kind, goal_radius, emotion_estimate
     )
-    sim = Simulator(nav.diagram)
-    sim.set_target_realtime_rate(realtime_rate)
+    sim = _start_simulator(nav, realtime_rate, meshcat if record_html is not None else None)
     ctx = sim.get_mutable_context()
-    sim.set_monitor(episode_monitor_callback(nav.diagram, nav.monitor))
-    if record_html is not None:
-        # a browser already watching sees the episode while it is recorded
-        live = meshcat.GetNumActiveConnections() > 0
-        meshcat.StartRecording(set_visualizations_while_recording=live)
-    sim.Initialize()
     T = config.robot.step_time
     log_ = StepLog()
-    robot_port = nav.robot.GetOutputPort("robot_state")
-    crowd_port = nav.crowd.GetOutputPort("crowd")
-    cmd_port = nav.planner.GetOutputPort("command")
-    status_port = nav.monitor.GetOutputPort("status")
-
-    def snapshot(k: int) -> bool:
-        """Log the world at t_k, before the updates at t_k (the planner still holds
-        u_{k−1}: the command of the step that just ended)."""
-        rc = nav.robot.GetMyContextFromRoot(ctx)
-        log_.robot.append(robot_port.Eval(rc).copy())
-        crowd = crowd_port.Eval(nav.crowd.GetMyContextFromRoot(ctx))
-        log_.pedestrians.append(crowd.positions.copy())
-        log_.emotions.append(crowd.emotions.copy())
-        status = status_port.Eval(nav.monitor.GetMyContextFromRoot(ctx))
-        if k > 0:
-            log_.commands.append(cmd_port.Eval(nav.planner.GetMyContextFromRoot(ctx)).copy())
-            if status.last_step is not None:
-                log_.rewards.append(status.last_step.reward)
-        return status.done
-
+    snapshot = _Snapshots(nav, ctx, log_)
     bar = SimulationProgress(config.episode.max_steps * T, "LIP episode", progress)
 
     def walk() -> None:
@@ -354,7 +332,7 @@ def run_episode(
     except BaseException:  # Ctrl-C included: end the bar's line
         bar.close(ctx.get_time())
         raise
-    record = status_port.Eval(nav.monitor.GetMyContextFromRoot(ctx)).record
+    record = snapshot.status().record
     bar.close(ctx.get_time(), record.outcome)
     if record_html is not None:
         meshcat.StopRecording()
@@ -362,3 +340,50 @@ def run_episode(
         caption = ReplayCaption.for_episode(planner, "LIP", scenario, record, show_rays)
         write_replay_html(meshcat, record_html, caption)
     return record, log_
+
+
+def _start_simulator(
+    nav: NavigationDiagram, realtime_rate: float, recording: Meshcat | None
+) -> Simulator:
+    """The episode's simulator, initialized, with the episode monitor's termination; with a
+    `recording` Meshcat, its recording started first."""
+    sim = Simulator(nav.diagram)
+    sim.set_target_realtime_rate(realtime_rate)
+    sim.set_monitor(episode_monitor_callback(nav.diagram, nav.monitor))
+    if recording is not None:
+        # a browser already watching sees the episode while it is recorded
+        live = recording.GetNumActiveConnections() > 0
+        recording.StartRecording(set_visualizations_while_recording=live)
+    sim.Initialize()
+    return sim
+
+
+class _Snapshots:
+    """Logs the world at each t_k into a `StepLog` (`__call__`); reads the episode status."""
+
+    def __init__(self, nav: NavigationDiagram, ctx: Context, log_: StepLog) -> None:
+        self._nav, self._ctx, self._log = nav, ctx, log_
+        self._robot_port = nav.robot.GetOutputPort("robot_state")
+        self._crowd_port = nav.crowd.GetOutputPort("crowd")
+        self._cmd_port = nav.planner.GetOutputPort("command")
+        self._status_port = nav.monitor.GetOutputPort("status")
+
+    def status(self) -> EpisodeStatus:
+        """The episode monitor's status now (`status.record` is the episode's record)."""
+        return self._status_port.Eval(self._nav.monitor.GetMyContextFromRoot(self._ctx))
+
+    def __call__(self, k: int) -> bool:
+        """Log the world at t_k, before the updates at t_k (the planner still holds
+        u_{k−1}: the command of the step that just ended); whether the episode is done."""
+        nav, ctx, log_ = self._nav, self._ctx, self._log
+        rc = nav.robot.GetMyContextFromRoot(ctx)
+        log_.robot.append(self._robot_port.Eval(rc).copy())
+        crowd = self._crowd_port.Eval(nav.crowd.GetMyContextFromRoot(ctx))
+        log_.pedestrians.append(crowd.positions.copy())
+        log_.emotions.append(crowd.emotions.copy())
+        status = self.status()
+        if k > 0:
+            log_.commands.append(self._cmd_port.Eval(nav.planner.GetMyContextFromRoot(ctx)).copy())
+            if status.last_step is not None:
+                log_.rewards.append(status.last_step.reward)
+        return status.done

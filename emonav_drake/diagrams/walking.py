@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams, Role
 from pydrake.systems.analysis import Simulator, SimulatorStatus
-from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.framework import Context, Diagram, DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 
 from emonav_drake.core.lip import wrap_angle
@@ -270,6 +270,46 @@ def run_walk(
             the simulator then advances in chunks of `PROGRESS_CHUNK`, which changes no
             result.
     """
+    cfg, seq = _walk_commands(seconds, seed, command, config, speed, heading_change, script)
+    if record_html is not None and meshcat is None:
+        meshcat = make_meshcat(live=False)  # loopback only
+    wd = build_walking_diagram(cfg, seq, meshcat=meshcat, record_timing=record_timing)
+    station = wd.station
+    sim = Simulator(wd.diagram)  # the default context stands still
+    ctx = sim.get_mutable_context()
+    if push is not None:
+        _push_torso(station, ctx, push)
+    sim.set_target_realtime_rate(realtime_rate)
+    if meshcat is not None and record_html is not None:
+        # a browser already watching sees the walk while it is recorded
+        live = meshcat.GetNumActiveConnections() > 0
+        meshcat.StartRecording(set_visualizations_while_recording=live)
+    t0 = time.perf_counter()
+    bar = SimulationProgress(seconds, "walk", progress)
+    reason = _simulate_walk(sim, seconds, bar)
+    wall = time.perf_counter() - t0
+    t_end = ctx.get_time()
+    fall = station.GetOutputPort("fall").Eval(station.GetMyContextFromRoot(ctx))
+    reason = fall.reason if fall.fallen else reason
+    bar.close(t_end, f"{FALL} ({reason})" if reason else "walked")
+    if meshcat is not None and record_html is not None:
+        meshcat.StopRecording()
+        meshcat.PublishRecording()
+        Path(record_html).write_text(meshcat.StaticHtml())
+    return _walk_result(wd, ctx, cfg, seed, reason, t_end, wall)
+
+
+def _walk_commands(
+    seconds: float,
+    seed: int,
+    command: str,
+    config: EmoNavConfig | None,
+    speed: float | None,
+    heading_change: float | None,
+    script: list[tuple[float, float]] | None,
+) -> tuple[EmoNavConfig, np.ndarray]:
+    """`seconds` checked; the walk's configuration (standing throughout for "stand") and
+    its per-step command sequence (`command_sequence`, ten steps beyond the end)."""
     if not (math.isfinite(seconds) and 0 < seconds <= MAX_WALK_SECONDS):
         raise ValueError(f"seconds must be in (0, {MAX_WALK_SECONDS:g}], got {seconds}")
     cfg = config if config is not None else load_config()
@@ -285,26 +325,23 @@ def run_walk(
         heading_change=heading_change,
         script=script,
     )
-    if record_html is not None and meshcat is None:
-        meshcat = make_meshcat(live=False)  # loopback only
-    wd = build_walking_diagram(cfg, seq, meshcat=meshcat, record_timing=record_timing)
-    station = wd.station
+    return cfg, seq
+
+
+def _push_torso(
+    station: DigitStation, root_context: Context, push: tuple[float, float, float]
+) -> None:
+    """Set the torso's initial translational velocity v_WT [m/s] (world) to `push`."""
     plant = station.plant
-    sim = Simulator(wd.diagram)  # the default context stands still
-    ctx = sim.get_mutable_context()
-    if push is not None:
-        plant_ctx = plant.GetMyMutableContextFromRoot(ctx)
-        v = plant.GetVelocities(plant_ctx).copy()
-        v[station.model.base_v[3:]] = push
-        plant.SetVelocities(plant_ctx, v)
-    sim.set_target_realtime_rate(realtime_rate)
-    if meshcat is not None and record_html is not None:
-        # a browser already watching sees the walk while it is recorded
-        live = meshcat.GetNumActiveConnections() > 0
-        meshcat.StartRecording(set_visualizations_while_recording=live)
-    reason = ""
-    t0 = time.perf_counter()
-    bar = SimulationProgress(seconds, "walk", progress)
+    plant_ctx = plant.GetMyMutableContextFromRoot(root_context)
+    v = plant.GetVelocities(plant_ctx).copy()
+    v[station.model.base_v[3:]] = push
+    plant.SetVelocities(plant_ctx, v)
+
+
+def _simulate_walk(sim: Simulator, seconds: float, bar: SimulationProgress) -> str:
+    """Initialize and advance `sim` to `seconds` (in chunks with an enabled `bar`); "" or,
+    when the solver stopped the simulation, why (a failure after a fall is still a fall)."""
     try:
         sim.Initialize()
         if bar.enabled:
@@ -312,23 +349,30 @@ def run_walk(
         else:
             sim.AdvanceTo(seconds)
     except RuntimeError as e:  # a solver failure after a fall is still a fall
-        reason = f"simulation stopped: {e}"
+        return f"simulation stopped: {e}"
     except BaseException:  # Ctrl-C included: end the bar's line
-        bar.close(ctx.get_time())
+        bar.close(sim.get_context().get_time())
         raise
-    wall = time.perf_counter() - t0
-    t_end = ctx.get_time()
-    fall = station.GetOutputPort("fall").Eval(station.GetMyContextFromRoot(ctx))
-    reason = fall.reason if fall.fallen else reason
-    bar.close(t_end, f"{FALL} ({reason})" if reason else "walked")
-    if meshcat is not None and record_html is not None:
-        meshcat.StopRecording()
-        meshcat.PublishRecording()
-        Path(record_html).write_text(meshcat.StaticHtml())
-    steps = step_records(wd, ctx)
+    return ""
+
+
+def _walk_result(
+    wd: WalkingDiagram,
+    root_context: Context,
+    cfg: EmoNavConfig,
+    seed: int,
+    reason: str,
+    t_end: float,
+    wall: float,
+) -> WalkResult:
+    """The `WalkResult` of a simulated walk: its foot switches, tracking and counters
+    (`reason`: why it fell, "" if it did not)."""
+    station = wd.station
+    plant = station.plant
+    steps = step_records(wd, root_context)
     omega = pendulum_frequency(station.com_height, cfg.robot.gravity)
     table = tracking_table(steps, omega, cfg.robot.step_time)
-    planner_ctx = station.planner.GetMyContextFromRoot(ctx)
+    planner_ctx = station.planner.GetMyContextFromRoot(root_context)
     return WalkResult(
         fell=bool(reason),
         fall_reason=reason,

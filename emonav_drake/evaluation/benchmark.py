@@ -140,6 +140,47 @@ def run_benchmark(
         RunInterrupted: after Ctrl-C / SIGTERM: the finished trials are kept and the
             tables of them written; running the same call again continues.
     """
+    workers = _check_run_args(
+        plant, trials, first_seed, workers, ray_address, emotion_estimate_yaml
+    )
+    out = check_output_dir(out, "--out")
+    # the same YAML text drives every engine (the driver's and the workers' configs are equal)
+    config = load_config(data=dump_config(config))
+    _check_scenarios(config, first_seed, trials, config_source)
+    spec = _probed_spec(methods, plant, config, emotion_estimate_yaml)
+    settings = make_settings(
+        spec.methods,
+        plant,
+        trials,
+        first_seed,
+        config,
+        setting,
+        config_source,
+        emotion_estimate_yaml,
+    )
+    rd = RunDirectory(out)
+    t0 = time.perf_counter()
+    with rd.locked():
+        settings, done = rd.open(settings)
+        # the directory's method order; this call's checkpoint paths (same hashes)
+        given = {m.name: m for m in spec.methods}
+        spec.methods = [given[n] for n in settings["planners"]]
+        engine = (workers, ray_address)
+        all_trials, new = _run_missing(rd, spec, settings, done, engine, progress, on_trial)
+    rank = {m: i for i, m in enumerate(settings["planners"])}
+    all_trials.sort(key=lambda t: (rank[t["method"]], t["seed"]))
+    return BenchmarkResult(out, settings, all_trials, len(new), time.perf_counter() - t0)
+
+
+def _check_run_args(
+    plant: str,
+    trials: int,
+    first_seed: int,
+    workers: int | None,
+    ray_address: str | None,
+    emotion_estimate_yaml: str | None,
+) -> int | None:
+    """The plant and the run's numbers checked (`ConfigError`); the number of workers to use."""
     robot = plant_named(plant)
     if not 1 <= trials <= MAX_TRIALS:
         raise ConfigError(
@@ -159,76 +200,86 @@ def run_benchmark(
         workers = os.cpu_count() or 1
     if emotion_estimate_yaml is not None and not robot.emotion_estimates:
         raise ConfigError("--emotion-estimate is available with --plant lip only")
-    out = check_output_dir(out, "--out")
-    # the same YAML text drives every engine (the driver's and the workers' configs are equal)
-    config = load_config(data=dump_config(config))
-    _check_scenarios(config, first_seed, trials, config_source)
+    return workers
+
+
+def _probed_spec(
+    methods: Sequence[MethodSpec],
+    plant: str,
+    config: EmoNavConfig,
+    emotion_estimate_yaml: str | None,
+) -> BenchmarkSpec:
+    """The benchmark's spec, every method's observation filled in by building its planner."""
     spec = BenchmarkSpec(list(methods), plant, dump_config(config), emotion_estimate_yaml)
     probe = TrialRunner(spec)  # builds every planner now: a bad checkpoint fails before work
     for m in spec.methods:
         m.observation = probe.observation(m.name)
     del probe
-    settings = make_settings(
-        spec.methods,
-        plant,
-        trials,
-        first_seed,
-        config,
-        setting,
-        config_source,
-        emotion_estimate_yaml,
-    )
-    rd = RunDirectory(out)
-    t0 = time.perf_counter()
-    with rd.locked():
-        settings, done = rd.open(settings)
-        # the directory's method order; this call's checkpoint paths (same hashes)
-        given = {m.name: m for m in spec.methods}
-        spec.methods = [given[n] for n in settings["planners"]]
-        have = {trial_key(t) for t in done}
-        seeds = range(settings["first_seed"], settings["first_seed"] + settings["trials"])
-        tasks = [(m, s) for s in seeds for m in settings["planners"] if (m, s) not in have]
-        all_trials = list(done)
-        new: list[dict] = []
-        bar = _Progress(len(done) + len(tasks), done, settings["planners"], progress)
+    return spec
 
-        def on_result(t: dict) -> None:
-            rd.append(t)
-            all_trials.append(t)
-            new.append(t)
-            bar.update(t)
-            if on_trial is not None:
-                on_trial(t, len(new))
 
-        try:
-            if tasks:
-                if workers == 1 and not ray_address:
-                    run_serial(spec, tasks, on_result)
-                else:
-                    run_trials(spec, tasks, on_result, workers, ray_address)
-        except KeyboardInterrupt:
-            bar.close()
-            md = rd.write_tables(settings, all_trials, interrupted=True)
-            total = len(seeds) * len(settings["planners"])
-            if not all_trials:
-                raise RunInterrupted(
-                    f"interrupted before the first trial finished; {out} holds the settings "
-                    "only; run the same command again to start"
-                ) from None
-            raise RunInterrupted(
-                f"interrupted after {len(new)} new trials ({len(all_trials)} of {total} in "
-                f"{out}); tables of the finished ones in {md}; run the same command again "
-                "to continue"
-            ) from None
-        except BaseException:
-            bar.close()
-            rd.write_tables(settings, all_trials, interrupted=True)
-            raise
+def _run_missing(
+    rd: RunDirectory,
+    spec: BenchmarkSpec,
+    settings: dict,
+    done: list[dict],
+    engine: tuple[int | None, str | None],
+    progress: bool,
+    on_trial: Callable[[dict, int], None] | None,
+) -> tuple[list[dict], list[dict]]:
+    """Run the trials of `settings` that `done` lacks on `engine` = (workers, Ray address),
+    each appended to `rd` as it finishes, then write the tables; the directory's trials
+    (unsorted) and this call's. On an interruption the tables of the finished trials are
+    written first (Ctrl-C / SIGTERM: `RunInterrupted`; anything else is re-raised)."""
+    workers, ray_address = engine
+    have = {trial_key(t) for t in done}
+    seeds = range(settings["first_seed"], settings["first_seed"] + settings["trials"])
+    tasks = [(m, s) for s in seeds for m in settings["planners"] if (m, s) not in have]
+    all_trials = list(done)
+    new: list[dict] = []
+    bar = _Progress(len(done) + len(tasks), done, settings["planners"], progress)
+
+    def on_result(t: dict) -> None:
+        rd.append(t)
+        all_trials.append(t)
+        new.append(t)
+        bar.update(t)
+        if on_trial is not None:
+            on_trial(t, len(new))
+
+    try:
+        if tasks:
+            if workers == 1 and not ray_address:
+                run_serial(spec, tasks, on_result)
+            else:
+                run_trials(spec, tasks, on_result, workers, ray_address)
+    except KeyboardInterrupt:
         bar.close()
-        rd.write_tables(settings, all_trials)
-    rank = {m: i for i, m in enumerate(settings["planners"])}
-    all_trials.sort(key=lambda t: (rank[t["method"]], t["seed"]))
-    return BenchmarkResult(out, settings, all_trials, len(new), time.perf_counter() - t0)
+        md = rd.write_tables(settings, all_trials, interrupted=True)
+        total = len(seeds) * len(settings["planners"])
+        raise _interruption(rd.path, md, len(new), len(all_trials), total) from None
+    except BaseException:
+        bar.close()
+        rd.write_tables(settings, all_trials, interrupted=True)
+        raise
+    bar.close()
+    rd.write_tables(settings, all_trials)
+    return all_trials, new
+
+
+def _interruption(out: Path, md: Path, new: int, finished: int, total: int) -> RunInterrupted:
+    """The `RunInterrupted` of a run into `out` stopped after `new` trials of this call,
+    `finished` of the directory's `total`, with the tables of the finished ones in `md`."""
+    if not finished:
+        return RunInterrupted(
+            f"interrupted before the first trial finished; {out} holds the settings "
+            "only; run the same command again to start"
+        )
+    return RunInterrupted(
+        f"interrupted after {new} new trials ({finished} of {total} in "
+        f"{out}); tables of the finished ones in {md}; run the same command again "
+        "to continue"
+    )
 
 
 def _check_scenarios(config: EmoNavConfig, first_seed: int, trials: int, where: str) -> None:

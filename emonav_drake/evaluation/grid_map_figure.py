@@ -20,6 +20,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
@@ -103,16 +104,7 @@ def render_grid_map_figure(
     origin = np.array(as_point(origin_xy))
     heading = float(heading)
     c, r = as_discs(centers, radii)
-    mg = np.asarray(margins, dtype=float).reshape(-1)
-    kd = np.asarray(kinds).reshape(-1)
-    if mg.shape != r.shape or kd.shape != r.shape:
-        raise ValueError(
-            f"margins and kinds must have shape {r.shape}, got {mg.shape} and {kd.shape}"
-        )
-    if emotions is not None:
-        emo = np.asarray(emotions).reshape(-1)
-        if emo.shape != r.shape:
-            raise ValueError(f"emotions must have shape {r.shape}, got {emo.shape}")
+    mg, kd, emo = _check_disc_arrays(r, margins, kinds, emotions)
     settings = dict(
         num_beams=num_beams, grid_size=grid_size, max_range=max_range, min_range=min_range
     )
@@ -120,6 +112,33 @@ def render_grid_map_figure(
     ogm = lgm_frame(origin, heading, c, r, mg, kind="ogm", **settings)
     ranges = scan_discs(origin, heading, c, r, num_beams, max_range, min_range)
 
+    fig, (ax_scene, ax_lgm, ax_ogm), (key_scene, key_grid) = _figure_layout()
+    shown_emotions, goal_handle = _draw_scene(
+        ax_scene,
+        origin,
+        heading,
+        (c, r, mg, kd, emo),
+        ranges,
+        goal_xy,
+        num_beams,
+        max_range,
+        robot_radius,
+    )
+    _scene_legend(key_scene, kd, emo, shown_emotions, goal_handle, max_range)
+    _draw_lgm(ax_lgm, lgm, max_range)
+    _draw_ogm(ax_ogm, ogm, max_range)
+    _grid_legend(key_grid)
+
+    if title:
+        fig.suptitle(title)
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=dpi, format="png")
+    return out
+
+
+def _figure_layout() -> tuple[Figure, tuple[Axes, Axes, Axes], tuple[Axes, Axes]]:
+    """The figure on an Agg canvas, its three panels and, under them, the two legend axes."""
     fig = Figure(figsize=(16, 6.8), layout="constrained")
     FigureCanvasAgg(fig)
     grid = fig.add_gridspec(2, 3, height_ratios=[1.0, 0.13])
@@ -127,29 +146,62 @@ def render_grid_map_figure(
     key_scene, key_grid = fig.add_subplot(grid[1, 0]), fig.add_subplot(grid[1, 1:])
     key_scene.axis("off")
     key_grid.axis("off")
+    return fig, (ax_scene, ax_lgm, ax_ogm), (key_scene, key_grid)
 
-    # (a) scene, world frame
+
+def _check_disc_arrays(
+    r: np.ndarray, margins: object, kinds: object, emotions: object | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """The margins, kinds and emotions (None if not given) as flat arrays shaped as `r`."""
+    mg = np.asarray(margins, dtype=float).reshape(-1)
+    kd = np.asarray(kinds).reshape(-1)
+    if mg.shape != r.shape or kd.shape != r.shape:
+        raise ValueError(
+            f"margins and kinds must have shape {r.shape}, got {mg.shape} and {kd.shape}"
+        )
+    emo = None
+    if emotions is not None:
+        emo = np.asarray(emotions).reshape(-1)
+        if emo.shape != r.shape:
+            raise ValueError(f"emotions must have shape {r.shape}, got {emo.shape}")
+    return mg, kd, emo
+
+
+def _draw_scene(
+    ax: Axes,
+    origin: np.ndarray,
+    heading: float,
+    discs: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None],
+    ranges: np.ndarray,
+    goal_xy: object | None,
+    num_beams: int,
+    max_range: float,
+    robot_radius: float,
+) -> tuple[set[int], Line2D | None]:
+    """Panel (a), the scene in the world frame, from `discs` = (centres, radii, margins,
+    kinds, emotions or None); returns the emotions drawn and the goal's legend entry."""
+    c, r, mg, kd, emo = discs
     seen = ranges < max_range
     world_angles = beam_angles(num_beams)[seen] + heading
     hits = origin + ranges[seen, None] * np.c_[np.cos(world_angles), np.sin(world_angles)]
-    ax_scene.add_patch(Circle(origin, max_range, fill=False, ls=":", color=LIDAR_RAY_RGB, lw=0.8))
+    ax.add_patch(Circle(origin, max_range, fill=False, ls=":", color=LIDAR_RAY_RGB, lw=0.8))
     shown_emotions: set[int] = set()
     for i, (center, radius, margin, kind) in enumerate(zip(c, r, mg, kd, strict=True)):
         if int(kind) == PEDESTRIAN:
-            if emotions is None:
+            if emo is None:
                 rgb = UNKNOWN_EMOTION_RGB
             else:
                 shown_emotions.add(int(emo[i]))
                 rgb = EMOTION_RGB[int(emo[i])]
-            ax_scene.add_patch(Circle(center, radius, fc=(*rgb, 0.45), ec=rgb, lw=1.5))
+            ax.add_patch(Circle(center, radius, fc=(*rgb, 0.45), ec=rgb, lw=1.5))
         else:
             rgb = STATIC_RGB
-            ax_scene.add_patch(Circle(center, radius, color=rgb))
-        ax_scene.add_patch(Circle(center, radius + margin, fill=False, ls="--", ec=rgb, lw=1.2))
-    ax_scene.plot(hits[:, 0], hits[:, 1], ".", color=LIDAR_HIT_RGB, ms=1.5, zorder=5)
-    ax_scene.add_patch(Circle(origin, robot_radius, fc=ROBOT_RGB, ec=INK_RGB, lw=0.8, zorder=6))
+            ax.add_patch(Circle(center, radius, color=rgb))
+        ax.add_patch(Circle(center, radius + margin, fill=False, ls="--", ec=rgb, lw=1.2))
+    ax.plot(hits[:, 0], hits[:, 1], ".", color=LIDAR_HIT_RGB, ms=1.5, zorder=5)
+    ax.add_patch(Circle(origin, robot_radius, fc=ROBOT_RGB, ec=INK_RGB, lw=0.8, zorder=6))
     arrow = 2.0 * robot_radius
-    ax_scene.arrow(
+    ax.arrow(
         origin[0],
         origin[1],
         arrow * math.cos(heading),
@@ -160,25 +212,37 @@ def render_grid_map_figure(
         zorder=7,
     )
     half = max_range + 0.3  # the panel's half width [m]
-    ax_scene.set_xlim(origin[0] - half, origin[0] + half)
-    ax_scene.set_ylim(origin[1] - half, origin[1] + half)
+    ax.set_xlim(origin[0] - half, origin[0] + half)
+    ax.set_ylim(origin[1] - half, origin[1] + half)
     goal_handle = None
     if goal_xy is not None:
         goal = np.array(as_point(goal_xy, "goal_xy"))
-        goal_handle = _draw_goal(ax_scene, origin, goal, half)
-    ax_scene.set_aspect("equal")
-    ax_scene.set_xlabel("x [m] (world)")
-    ax_scene.set_ylabel("y [m] (world)")
-    ax_scene.set_title("(a) LiDAR scan (world frame)")
+        goal_handle = _draw_goal(ax, origin, goal, half)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m] (world)")
+    ax.set_ylabel("y [m] (world)")
+    ax.set_title("(a) LiDAR scan (world frame)")
+    return shown_emotions, goal_handle
+
+
+def _scene_legend(
+    key: Axes,
+    kd: np.ndarray,
+    emo: np.ndarray | None,
+    shown_emotions: set[int],
+    goal_handle: Line2D | None,
+    max_range: float,
+) -> None:
+    """The legend of panel (a), drawn on the axes `key` under it."""
     handles = [
         Line2D([], [], ls="none", marker="o", ms=10, mfc=ROBOT_RGB, mec=INK_RGB, label="robot"),
         Line2D([], [], color=INK_RGB, lw=1.5, marker=">", ms=5, label="heading"),
         Line2D([], [], ls="none", marker=".", color=LIDAR_HIT_RGB, ms=6, label="LiDAR hits"),
         Line2D([], [], ls=":", color=LIDAR_RAY_RGB, label=f"LiDAR range ({max_range:g} m)"),
     ]
-    if emotions is None:
+    if emo is None:
         handles.append(_disc_handle(UNKNOWN_EMOTION_RGB, "pedestrian"))
-    for e in sorted(shown_emotions) if emotions is not None else []:
+    for e in sorted(shown_emotions) if emo is not None else []:
         handles.append(_disc_handle(EMOTION_RGB[e], f"{EMOTION_NAMES[e]} pedestrian"))
     if np.any(kd != PEDESTRIAN):
         handles.append(
@@ -189,11 +253,14 @@ def render_grid_map_figure(
     )
     if goal_handle is not None:
         handles.append(goal_handle)
-    key_scene.legend(handles=handles, loc="upper center", ncol=3, fontsize=8, frameon=False)
+    key.legend(handles=handles, loc="upper center", ncol=3, fontsize=8, frameon=False)
 
-    # (b) LGM: array rows are sectors, columns rings -> transpose for x = sector
+
+def _draw_lgm(ax: Axes, lgm: np.ndarray, max_range: float) -> None:
+    """Panel (b), the LGM: x = sector (rotational index), y = ring (radial index)."""
+    # array rows are sectors, columns rings -> transpose for x = sector
     m = lgm.shape[0]
-    ax_lgm.imshow(
+    ax.imshow(
         lgm.T,
         origin="lower",
         cmap=_GRID_CMAP,
@@ -203,7 +270,7 @@ def render_grid_map_figure(
     )
     # sector s covers beam angles [−180° + s·360°/M, …): ticks at the sector edges
     edges = np.array([0, m / 4, m / 2, 3 * m / 4, m]) - 0.5
-    ax_lgm.set_xticks(
+    ax.set_xticks(
         edges,
         [
             "0\n−180° behind",
@@ -214,17 +281,21 @@ def render_grid_map_figure(
         ],
         fontsize=8,
     )
-    ax_lgm.axvline(m / 2 - 0.5, color=ROBOT_RGB, ls=":", lw=1.0)
+    ax.axvline(m / 2 - 0.5, color=ROBOT_RGB, ls=":", lw=1.0)
     ring = max_range / m
-    ax_lgm.secondary_yaxis(
+    ax.secondary_yaxis(
         "right", functions=(lambda j: (j + 0.5) * ring, lambda d: d / ring - 0.5)
     ).set_ylabel("range [m]")
-    ax_lgm.set_xlabel("rotational index (sector; beam direction from the heading, CCW)")
-    ax_lgm.set_ylabel("radial index (ring; 0 = at the robot)")
-    ax_lgm.set_title("(b) LiDAR grid map (LGM)")
+    ax.set_xlabel("rotational index (sector; beam direction from the heading, CCW)")
+    ax.set_ylabel("radial index (ring; 0 = at the robot)")
+    ax.set_title("(b) LiDAR grid map (LGM)")
 
-    # (c) OGM: rows grow forward, columns grow to the robot's right
-    ax_ogm.imshow(
+
+def _draw_ogm(ax: Axes, ogm: np.ndarray, max_range: float) -> None:
+    """Panel (c), the OGM in the robot frame, the robot at its centre."""
+    # rows grow forward, columns grow to the robot's right
+    m = ogm.shape[0]
+    ax.imshow(
         ogm,
         origin="lower",
         cmap=_GRID_CMAP,
@@ -233,19 +304,22 @@ def render_grid_map_figure(
     )
     cell = 2.0 * max_range / m
     centre = m / 2 - 0.5  # the robot sits on the corner between the four middle cells
-    ax_ogm.plot(centre, centre, "^", ms=9, mfc=ROBOT_RGB, mec=INK_RGB, zorder=5)
-    ax_ogm.secondary_xaxis(
+    ax.plot(centre, centre, "^", ms=9, mfc=ROBOT_RGB, mec=INK_RGB, zorder=5)
+    ax.secondary_xaxis(
         "top",
         functions=(lambda j: (centre - j) * cell, lambda y: centre - y / cell),
     ).set_xlabel("left of the robot [m]")
-    ax_ogm.secondary_yaxis(
+    ax.secondary_yaxis(
         "right",
         functions=(lambda i: (i - centre) * cell, lambda x: centre + x / cell),
     ).set_ylabel("ahead of the robot [m]")
-    ax_ogm.set_xlabel("X pixel (column; robot's right →)")
-    ax_ogm.set_ylabel("Y pixel (row; forward ↑)")
-    ax_ogm.set_title("(c) occupancy grid map (OGM, robot frame)")
+    ax.set_xlabel("X pixel (column; robot's right →)")
+    ax.set_ylabel("Y pixel (row; forward ↑)")
+    ax.set_title("(c) occupancy grid map (OGM, robot frame)")
 
+
+def _grid_legend(key: Axes) -> None:
+    """The legend of panels (b) and (c), drawn on the axes `key` under them."""
     grid_handles = [
         Patch(fc=GRID_FREE_RGB, ec=_GRID_EDGE_RGB, label="0: free"),
         Patch(
@@ -259,7 +333,7 @@ def render_grid_map_figure(
             label=f"{COLLISION_VALUE}: collision area (hit of the real scan)",
         ),
     ]
-    key_grid.legend(
+    key.legend(
         handles=grid_handles
         + [
             Line2D([], [], color=ROBOT_RGB, ls=":", label="(b) straight ahead"),
@@ -274,13 +348,6 @@ def render_grid_map_figure(
         title="grid values (b, c)",
         title_fontsize=8,
     )
-
-    if title:
-        fig.suptitle(title)
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=dpi, format="png")
-    return out
 
 
 def _disc_handle(rgb: tuple[float, float, float], label: str) -> Line2D:
