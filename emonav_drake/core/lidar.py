@@ -209,8 +209,7 @@ def cast_robot_frame(
     if px.size == 0:
         np.minimum(out, max_range, out=out)
         return out
-    _, cos, sin = beam_table(k)
-    beams_per_rad = 1.0 / beam_step(k)
+    beams = beam_table(k)  # (angles, cos, sin); also checks k
     d2 = px * px + py * py  # (n,)
     r2 = radii * radii  # (C, n)
     # The origin inside the disc or on its circle: the disc is cast on every beam below.
@@ -220,48 +219,85 @@ def cast_robot_frame(
     active = ~encloses & (dist - radii <= max_range + _FAR_SLACK)
     scan_idx, disc_idx = np.nonzero(active)
     if scan_idx.size:
-        ra = radii[scan_idx, disc_idx]
-        da = dist[disc_idx]
-        # Half-width in beams; the clip guards round-off when d is within an ulp of r.
-        half = np.arcsin(np.minimum(ra / da, 1.0)) * beams_per_rad
-        centre = np.arctan2(py[disc_idx], px[disc_idx]) * beams_per_rad + (k - 1) / 2
-        lo = np.floor(centre - half).astype(np.intp) - _WINDOW_MARGIN
-        count = np.ceil(centre + half).astype(np.intp) + (_WINDOW_MARGIN + 1) - lo
-        np.minimum(count, k, out=count)
-        ends = np.cumsum(count)
-        total = int(ends[-1])
-        # Beam index of every (window, position) pair, wrapped across the ±180° seam.
-        beam = np.arange(total, dtype=np.intp)
-        beam += np.repeat(lo - (ends - count), count)
-        beam %= k
-        rep = np.repeat(np.arange(scan_idx.size), count)
-        di = disc_idx[rep]
-        t = px[di] * cos[beam] + py[di] * sin[beam]
-        disc = r2[scan_idx, disc_idx][rep] - (d2[di] - t * t)
-        miss = (disc < 0.0) | (t <= 0.0)
-        np.maximum(disc, 0.0, out=disc)
-        np.sqrt(disc, out=disc)
-        hit = np.subtract(t, disc, out=t)
-        hit[miss] = np.inf
-        beam += scan_idx[rep] * k
-        np.minimum.at(out.reshape(-1), beam, hit)
+        _cast_entry_points(out, beams, px, py, radii, d2, r2, dist, scan_idx, disc_idx)
     if encloses.any():
-        for s, j in zip(*np.nonzero(encloses), strict=True):
-            # Origin inside (d < r): the roots have opposite signs, every beam leaves the disc
-            # at the positive one, b + √(…). Origin on the circle (d = r): the roots are 0 and
-            # 2b; only beams with b > 0 have a positive root (2b = b + √(…)), the rest miss.
-            t = px[j] * cos + py[j] * sin  # b, the centre's projection on every beam (K,)
-            behind = t <= 0.0 if d2[j] == r2[s, j] else None
-            disc = r2[s, j] - (d2[j] - t * t)
-            np.maximum(disc, 0.0, out=disc)
-            np.sqrt(disc, out=disc)
-            hit = np.add(t, disc, out=t)
-            if behind is not None:
-                hit[behind] = np.inf
-            np.minimum(out[s], hit, out=out[s])
+        _cast_exit_points(out, beams, px, py, d2, r2, encloses)
     np.minimum(out, max_range, out=out)
     np.maximum(out, min_range, out=out)
     return out
+
+
+def _cast_entry_points(
+    out: np.ndarray,
+    beams: tuple[np.ndarray, np.ndarray, np.ndarray],
+    px: np.ndarray,
+    py: np.ndarray,
+    radii: np.ndarray,
+    d2: np.ndarray,
+    r2: np.ndarray,
+    dist: np.ndarray,
+    scan_idx: np.ndarray,
+    disc_idx: np.ndarray,
+) -> None:
+    """Lower `out` (C, K) to the entry points of the (scan, disc) pairs `scan_idx`,
+    `disc_idx` whose disc does not contain the origin, on the beams of each disc's angular
+    window only (`beams` = `beam_table(K)`, `d2` = |c|², `r2` = radii², `dist` = |c|)."""
+    _, cos, sin = beams
+    k = cos.size
+    beams_per_rad = 1.0 / beam_step(k)
+    ra = radii[scan_idx, disc_idx]
+    da = dist[disc_idx]
+    # Half-width in beams; the clip guards round-off when d is within an ulp of r.
+    half = np.arcsin(np.minimum(ra / da, 1.0)) * beams_per_rad
+    centre = np.arctan2(py[disc_idx], px[disc_idx]) * beams_per_rad + (k - 1) / 2
+    lo = np.floor(centre - half).astype(np.intp) - _WINDOW_MARGIN
+    count = np.ceil(centre + half).astype(np.intp) + (_WINDOW_MARGIN + 1) - lo
+    np.minimum(count, k, out=count)
+    ends = np.cumsum(count)
+    total = int(ends[-1])
+    # Beam index of every (window, position) pair, wrapped across the ±180° seam.
+    beam = np.arange(total, dtype=np.intp)
+    beam += np.repeat(lo - (ends - count), count)
+    beam %= k
+    rep = np.repeat(np.arange(scan_idx.size), count)
+    di = disc_idx[rep]
+    t = px[di] * cos[beam] + py[di] * sin[beam]
+    disc = r2[scan_idx, disc_idx][rep] - (d2[di] - t * t)
+    miss = (disc < 0.0) | (t <= 0.0)
+    np.maximum(disc, 0.0, out=disc)
+    np.sqrt(disc, out=disc)
+    hit = np.subtract(t, disc, out=t)
+    hit[miss] = np.inf
+    beam += scan_idx[rep] * k
+    np.minimum.at(out.reshape(-1), beam, hit)
+
+
+def _cast_exit_points(
+    out: np.ndarray,
+    beams: tuple[np.ndarray, np.ndarray, np.ndarray],
+    px: np.ndarray,
+    py: np.ndarray,
+    d2: np.ndarray,
+    r2: np.ndarray,
+    encloses: np.ndarray,
+) -> None:
+    """Lower `out` (C, K) to the exit points of the (scan, disc) pairs where `encloses`
+    (the origin inside the disc or on its circle), on all K beams (`beams` =
+    `beam_table(K)`)."""
+    _, cos, sin = beams
+    for s, j in zip(*np.nonzero(encloses), strict=True):
+        # Origin inside (d < r): the roots have opposite signs, every beam leaves the disc
+        # at the positive one, b + √(…). Origin on the circle (d = r): the roots are 0 and
+        # 2b; only beams with b > 0 have a positive root (2b = b + √(…)), the rest miss.
+        t = px[j] * cos + py[j] * sin  # b, the centre's projection on every beam (K,)
+        behind = t <= 0.0 if d2[j] == r2[s, j] else None
+        disc = r2[s, j] - (d2[j] - t * t)
+        np.maximum(disc, 0.0, out=disc)
+        np.sqrt(disc, out=disc)
+        hit = np.add(t, disc, out=t)
+        if behind is not None:
+            hit[behind] = np.inf
+        np.minimum(out[s], hit, out=out[s])
 
 
 def scan_discs(

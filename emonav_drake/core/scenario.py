@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from emonav_drake.config_yaml import ConfigError, dump_typed_yaml, load_typed_yaml_raw
-from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
+from emonav_drake.params import EMOTION_NAMES, CrowdParams, EmoNavConfig
 
 PLACEMENT_TRIES = 1000  # rejection-sampling draws per object
 # The most a scenario may hold: what the sampler can be configured to draw
@@ -86,7 +86,18 @@ class Scenario:
         farther than `goal_radius` from its start, and it must not start overlapping a
         pedestrian's start (disc of `pedestrian_radius`). Pedestrians must not start
         overlapping each other, and their starts and goals must be clear of every obstacle.
+        The checks run in this order (the first failing one is reported): the scenario's
+        own values, the pedestrians' and obstacles' values, the robot's placement, the
+        pedestrians' placement.
         """
+        self._check_own_values()
+        self._check_item_values()
+        self._check_robot_placement(robot_radius, goal_radius)
+        self._check_pedestrian_placement(robot_radius, pedestrian_radius)
+        return self
+
+    def _check_own_values(self) -> None:
+        """The counts, the seed, the robot's start, goal and heading, the emotion period."""
         if len(self.pedestrians) > MAX_PEDESTRIANS:
             raise ConfigError(
                 f"pedestrians: {len(self.pedestrians)} given, at most {MAX_PEDESTRIANS} allowed"
@@ -106,6 +117,9 @@ class Scenario:
             raise ConfigError(f"robot_heading = {self.robot_heading!r} must be finite")
         if not (math.isfinite(self.emotion_change_period) and self.emotion_change_period > 0):
             raise ConfigError(f"emotion_change_period = {self.emotion_change_period!r} must be > 0")
+
+    def _check_item_values(self) -> None:
+        """Each pedestrian's start, goal and emotions; each obstacle's centre and radius."""
         for i, p in enumerate(self.pedestrians):
             _check_point(p.start, f"pedestrians[{i}].start")
             _check_point(p.goal, f"pedestrians[{i}].goal")
@@ -122,6 +136,10 @@ class Scenario:
                 raise ConfigError(
                     f"obstacles[{i}].radius = {o.radius!r} is out of range: allowed [0.01, 5.0]"
                 )
+
+    def _check_robot_placement(self, robot_radius: float, goal_radius: float) -> None:
+        """The robot's start and goal clear of every obstacle, its goal not within
+        `goal_radius` of its start."""
         for name in ("robot_start", "robot_goal"):
             point = getattr(self, name)
             for i, o in enumerate(self.obstacles):
@@ -137,6 +155,10 @@ class Scenario:
                 f"robot_goal = {self.robot_goal!r} is within the goal radius ({goal_radius} m) "
                 f"of robot_start = {self.robot_start!r}: there would be nothing to navigate"
             )
+
+    def _check_pedestrian_placement(self, robot_radius: float, pedestrian_radius: float) -> None:
+        """Per pedestrian, in order: its start clear of the robot's start and of the earlier
+        pedestrians' starts, its start and goal clear of every obstacle."""
         for i, p in enumerate(self.pedestrians):
             gap = math.dist(self.robot_start, p.start) - pedestrian_radius - robot_radius
             if gap < 0:
@@ -160,7 +182,6 @@ class Scenario:
                             f"(center {o.center!r}, radius {o.radius}): the pedestrian (radius "
                             f"{pedestrian_radius} m) must stand clear of it"
                         )
-        return self
 
 
 def _check_point(p: list[float], name: str) -> None:
@@ -245,66 +266,20 @@ def sample_scenario(seed: int, config: EmoNavConfig | None = None) -> Scenario:
     distribution than the configured counts (never the case with the paper's settings).
     In the time-varying mode, one pedestrian's emotion changes every
     `emotion_change_period` seconds to a different one, for the whole episode.
+    The draws, in order: the static discs, the pedestrians, the emotion schedule.
     """
     if not 0 <= seed <= MAX_SEED:
         raise ConfigError(f"seed {seed}: must be in [0, 2**64 - 1]")
     cfg = config or EmoNavConfig()
     c, robot = cfg.crowd, cfg.robot
     rng = np.random.default_rng(seed)
-    gap = 0.2
-    r_ped = c.pedestrian_radius
     # Discs already placed: (x, y, radius); the robot at start and goal.
     placed: list[tuple[float, float, float]] = [
         (*robot.start, robot.radius),
         (*robot.goal, robot.radius),
     ]
-
-    def free(x: float, y: float, r: float) -> bool:
-        return all(math.hypot(x - px, y - py) >= r + pr + gap for px, py, pr in placed)
-
-    obstacles: list[StaticDiscSpec] = []
-    wanted = int(rng.integers(c.min_static, c.max_static + 1))
-    for _ in range(wanted):
-        for _attempt in range(PLACEMENT_TRIES):
-            r = float(rng.uniform(c.static_radius_min, c.static_radius_max))
-            x = float(rng.uniform(*c.static_x_range))
-            y = float(rng.uniform(*c.static_y_range))
-            if free(x, y, r):
-                placed.append((x, y, r))
-                obstacles.append(StaticDiscSpec(center=[x, y], radius=r))
-                break
-        else:
-            raise ScenarioSamplingError(
-                f"seed {seed}: placed only {len(obstacles)} of {wanted} static discs: no free "
-                f"spot in {PLACEMENT_TRIES} tries for a disc of radius in "
-                f"[{c.static_radius_min}, {c.static_radius_max}] m inside crowd.static_x_range "
-                f"{c.static_x_range} x crowd.static_y_range {c.static_y_range}, {gap} m clear "
-                "of the robot's start and goal and of the other discs; enlarge the box or "
-                "lower crowd.max_static / crowd.static_radius_max"
-            )
-
-    pedestrians: list[PedestrianSpec] = []
-    probs = np.asarray(c.emotion_probs, dtype=float)
-    wanted = int(rng.integers(c.min_pedestrians, c.max_pedestrians + 1))
-    for _ in range(wanted):
-        for _attempt in range(PLACEMENT_TRIES):
-            radius = float(rng.uniform(c.circle_radius_min, c.circle_radius_max))
-            angle = float(rng.uniform(0.0, 2.0 * math.pi))
-            sx, sy = radius * math.cos(angle), radius * math.sin(angle)
-            if free(sx, sy, r_ped) and free(-sx, -sy, r_ped):
-                placed += [(sx, sy, r_ped), (-sx, -sy, r_ped)]
-                emotion = EMOTION_NAMES[int(rng.choice(3, p=probs))]
-                pedestrians.append(PedestrianSpec(start=[sx, sy], goal=[-sx, -sy], emotion=emotion))
-                break
-        else:
-            raise ScenarioSamplingError(
-                f"seed {seed}: placed only {len(pedestrians)} of {wanted} pedestrians: no free "
-                f"start/goal pair in {PLACEMENT_TRIES} tries on the circle of radius in "
-                f"[crowd.circle_radius_min {c.circle_radius_min}, crowd.circle_radius_max "
-                f"{c.circle_radius_max}] m, {gap} m clear of the robot, the discs and the other "
-                "pedestrians; widen the circle or lower crowd.max_pedestrians"
-            )
-
+    obstacles = _sample_obstacles(seed, rng, c, placed)
+    pedestrians = _sample_pedestrians(seed, rng, c, placed)
     if c.time_varying_emotions and pedestrians:
         _add_emotion_schedule(pedestrians, rng, cfg, c.emotion_change_period)
 
@@ -317,3 +292,70 @@ def sample_scenario(seed: int, config: EmoNavConfig | None = None) -> Scenario:
         emotion_change_period=c.emotion_change_period,
         seed=int(seed),
     )
+
+
+_SAMPLING_GAP = 0.2  # [m] between any two sampled objects (and the robot) at the start
+
+
+def _is_free(placed: list[tuple[float, float, float]], x: float, y: float, r: float) -> bool:
+    """Whether a disc (x, y, r) keeps `_SAMPLING_GAP` from every disc in `placed`."""
+    gap = _SAMPLING_GAP
+    return all(math.hypot(x - px, y - py) >= r + pr + gap for px, py, pr in placed)
+
+
+def _sample_obstacles(
+    seed: int, rng: np.random.Generator, c: CrowdParams, placed: list[tuple[float, float, float]]
+) -> list[StaticDiscSpec]:
+    """The static discs of `sample_scenario` (crowd settings `c`), added to `placed`."""
+    gap = _SAMPLING_GAP
+    obstacles: list[StaticDiscSpec] = []
+    wanted = int(rng.integers(c.min_static, c.max_static + 1))
+    for _ in range(wanted):
+        for _attempt in range(PLACEMENT_TRIES):
+            r = float(rng.uniform(c.static_radius_min, c.static_radius_max))
+            x = float(rng.uniform(*c.static_x_range))
+            y = float(rng.uniform(*c.static_y_range))
+            if _is_free(placed, x, y, r):
+                placed.append((x, y, r))
+                obstacles.append(StaticDiscSpec(center=[x, y], radius=r))
+                break
+        else:
+            raise ScenarioSamplingError(
+                f"seed {seed}: placed only {len(obstacles)} of {wanted} static discs: no free "
+                f"spot in {PLACEMENT_TRIES} tries for a disc of radius in "
+                f"[{c.static_radius_min}, {c.static_radius_max}] m inside crowd.static_x_range "
+                f"{c.static_x_range} x crowd.static_y_range {c.static_y_range}, {gap} m clear "
+                "of the robot's start and goal and of the other discs; enlarge the box or "
+                "lower crowd.max_static / crowd.static_radius_max"
+            )
+    return obstacles
+
+
+def _sample_pedestrians(
+    seed: int, rng: np.random.Generator, c: CrowdParams, placed: list[tuple[float, float, float]]
+) -> list[PedestrianSpec]:
+    """The pedestrians of `sample_scenario` (crowd settings `c`): a start on the circle,
+    the antipodal goal, an emotion; their starts and goals added to `placed`."""
+    gap, r_ped = _SAMPLING_GAP, c.pedestrian_radius
+    pedestrians: list[PedestrianSpec] = []
+    probs = np.asarray(c.emotion_probs, dtype=float)
+    wanted = int(rng.integers(c.min_pedestrians, c.max_pedestrians + 1))
+    for _ in range(wanted):
+        for _attempt in range(PLACEMENT_TRIES):
+            radius = float(rng.uniform(c.circle_radius_min, c.circle_radius_max))
+            angle = float(rng.uniform(0.0, 2.0 * math.pi))
+            sx, sy = radius * math.cos(angle), radius * math.sin(angle)
+            if _is_free(placed, sx, sy, r_ped) and _is_free(placed, -sx, -sy, r_ped):
+                placed += [(sx, sy, r_ped), (-sx, -sy, r_ped)]
+                emotion = EMOTION_NAMES[int(rng.choice(3, p=probs))]
+                pedestrians.append(PedestrianSpec(start=[sx, sy], goal=[-sx, -sy], emotion=emotion))
+                break
+        else:
+            raise ScenarioSamplingError(
+                f"seed {seed}: placed only {len(pedestrians)} of {wanted} pedestrians: no free "
+                f"start/goal pair in {PLACEMENT_TRIES} tries on the circle of radius in "
+                f"[crowd.circle_radius_min {c.circle_radius_min}, crowd.circle_radius_max "
+                f"{c.circle_radius_max}] m, {gap} m clear of the robot, the discs and the other "
+                "pedestrians; widen the circle or lower crowd.max_pedestrians"
+            )
+    return pedestrians

@@ -226,54 +226,10 @@ def run_digit_rounds(
     """
     import torch
 
-    from emonav_drake.learning.dagger_state import STATE_FILE as SOURCE_STATE
-    from emonav_drake.learning.dagger_state import read_dagger_state
-    from emonav_drake.learning.dagger_student import Student
-    from emonav_drake.learning.demonstrations import Demonstrations, FrameStore
-    from emonav_drake.learning.run_state import (
-        check_state,
-        config_changes,
-        read_run_state,
-        write_run_state,
-    )
-    from emonav_drake.params import EmoNavConfig
-    from emonav_drake.planners.policy import save_policy
-
     cfg.validate()
     out, source = Path(out), Path(source)
-    dcfg, saved, _ = read_dagger_state(source / SOURCE_STATE)
-    env_cfg = EmoNavConfig()
-    env_cfg.lidar.num_frames = dcfg.num_frames
-    n = dcfg.num_frames
-    shape = saved["demos"]["frames"].shape[1:]
-    calibrated = Demonstrations(FrameStore(shape))
-    where = f"{SOURCE_STATE} in {source}"
-    check_state(where, lambda: calibrated.load_plain(saved["demos"], n))
-    digit = Demonstrations(FrameStore(shape))
-    commands = DwaPlanner(env_cfg).candidates.copy()
-    student = Student(dcfg, env_cfg, commands)
-    start_policy = source / "policy.pt"
-    student.load_weights(str(start_policy))
-    rnd, history = 0, []
-    if resume:
-        state, tensors = read_run_state(out / STATE_FILE, DIGIT_ROUNDS_FORMAT)
-        changes = config_changes(state.get("config"), dc.asdict(cfg))
-        if changes:
-            log.warning(
-                "resuming the rounds with settings that differ from the saved ones: %s",
-                ", ".join(changes),
-            )
-
-        def restore() -> tuple[int, list]:
-            digit.load_plain(state["demos"], n)
-            student.model.load_state_dict(tensors["model"])
-            student.optim.load_state_dict(tensors["optim"])
-            done, past = int(state["round"]), list(state["history"])
-            if not 0 <= done == len(past):
-                raise ValueError(f"round {done} with {len(past)} rounds in its history")
-            return done, past
-
-        rnd, history = check_state(f"{STATE_FILE} in {out}", restore, changes)
+    n, calibrated, digit, student, start_policy = _start_from(source)
+    rnd, history = _resume_rounds(out, cfg, digit, student, n) if resume else (0, [])
     out.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(cfg.seed + rnd)
     rng = np.random.default_rng([cfg.seed, rnd])
@@ -287,23 +243,7 @@ def run_digit_rounds(
         t0 = time.perf_counter()
         losses = _train_mixed(student, calibrated, digit, cfg, rng)
         train_s = time.perf_counter() - t0
-        outcomes = [e["outcome"] for e in episodes]
-        entry = {
-            "round": rnd,
-            "beta": cfg.beta * 0.5**rnd,
-            "episodes": len(episodes),
-            "seeds": [episodes[0]["seed"], episodes[-1]["seed"]],
-            "rollout_success": outcomes.count("success") / len(outcomes),
-            "digit_samples": len(digit),
-            "loss": float(np.mean(losses[-100:])),
-            "collect_s": round(collect_s, 1),
-            "train_s": round(train_s, 1),
-            "digit_steps_per_second_per_worker": round(
-                sum(len(e["labels"]) for e in episodes)
-                / max(1e-9, sum(e["wall_seconds"] for e in episodes)),
-                3,
-            ),
-        }
+        entry = _round_entry(rnd, cfg, episodes, len(digit), losses, collect_s, train_s)
         history.append(entry)
         print(
             f"Digit round {rnd}: {len(episodes)} episodes (student SR with β = "
@@ -311,28 +251,129 @@ def run_digit_rounds(
             f"loss {entry['loss']:.3f} [{collect_s:.0f}+{train_s:.0f} s]",
             flush=True,
         )
-        meta = dict(base_meta)
-        meta["provenance"] = {
-            "route": "dagger+digit",
-            "source": str(source),
-            "round": rnd,
-            "config": dc.asdict(cfg),
-            "history": history,
-        }
-        policy = out / f"policy_round{rnd}.pt"
-        save_policy(policy, student.model, meta)
+        policy = _save_round(out, source, cfg, rnd, history, base_meta, student, digit, n)
         rnd += 1
-        write_run_state(
-            out / STATE_FILE,
-            DIGIT_ROUNDS_FORMAT,
-            {
-                "round": rnd,
-                "history": history,
-                "demos": digit.to_plain(n),
-                "config": dc.asdict(cfg),
-            },
-            {"model": student.model.state_dict(), "optim": student.optim.state_dict()},
+    return policy
+
+
+def _start_from(source: Path) -> tuple:
+    """What the rounds start from in the calibrated run `source`: `(num_frames, its
+    demonstrations, empty Digit demonstrations, the student with its weights, the path of
+    its policy)` (`RunStateError` if its DAgger state is missing or refused)."""
+    from emonav_drake.learning.dagger_state import STATE_FILE as SOURCE_STATE
+    from emonav_drake.learning.dagger_state import read_dagger_state
+    from emonav_drake.learning.dagger_student import Student
+    from emonav_drake.learning.demonstrations import Demonstrations, FrameStore
+    from emonav_drake.learning.run_state import check_state
+    from emonav_drake.params import EmoNavConfig
+
+    dcfg, saved, _ = read_dagger_state(source / SOURCE_STATE)
+    env_cfg = EmoNavConfig()
+    env_cfg.lidar.num_frames = dcfg.num_frames
+    n = dcfg.num_frames
+    shape = saved["demos"]["frames"].shape[1:]
+    calibrated = Demonstrations(FrameStore(shape))
+    where = f"{SOURCE_STATE} in {source}"
+    check_state(where, lambda: calibrated.load_plain(saved["demos"], n))
+    digit = Demonstrations(FrameStore(shape))
+    commands = DwaPlanner(env_cfg).candidates.copy()
+    student = Student(dcfg, env_cfg, commands)
+    start_policy = source / "policy.pt"
+    student.load_weights(str(start_policy))
+    return n, calibrated, digit, student, start_policy
+
+
+def _resume_rounds(out: Path, cfg: DigitRoundsConfig, digit, student, n: int) -> tuple[int, list]:
+    """Load `out`'s state of the rounds into `digit` and `student`; returns the rounds
+    done and their history (`RunStateError` if it is missing or damaged)."""
+    from emonav_drake.learning.run_state import check_state, config_changes, read_run_state
+
+    state, tensors = read_run_state(out / STATE_FILE, DIGIT_ROUNDS_FORMAT)
+    changes = config_changes(state.get("config"), dc.asdict(cfg))
+    if changes:
+        log.warning(
+            "resuming the rounds with settings that differ from the saved ones: %s",
+            ", ".join(changes),
         )
+
+    def restore() -> tuple[int, list]:
+        digit.load_plain(state["demos"], n)
+        student.model.load_state_dict(tensors["model"])
+        student.optim.load_state_dict(tensors["optim"])
+        done, past = int(state["round"]), list(state["history"])
+        if not 0 <= done == len(past):
+            raise ValueError(f"round {done} with {len(past)} rounds in its history")
+        return done, past
+
+    return check_state(f"{STATE_FILE} in {out}", restore, changes)
+
+
+def _round_entry(
+    rnd: int,
+    cfg: DigitRoundsConfig,
+    episodes: list[dict],
+    digit_samples: int,
+    losses: list[float],
+    collect_s: float,
+    train_s: float,
+) -> dict:
+    """Round `rnd`'s line of the history (in the policies' provenance and the state)."""
+    outcomes = [e["outcome"] for e in episodes]
+    return {
+        "round": rnd,
+        "beta": cfg.beta * 0.5**rnd,
+        "episodes": len(episodes),
+        "seeds": [episodes[0]["seed"], episodes[-1]["seed"]],
+        "rollout_success": outcomes.count("success") / len(outcomes),
+        "digit_samples": digit_samples,
+        "loss": float(np.mean(losses[-100:])),
+        "collect_s": round(collect_s, 1),
+        "train_s": round(train_s, 1),
+        "digit_steps_per_second_per_worker": round(
+            sum(len(e["labels"]) for e in episodes)
+            / max(1e-9, sum(e["wall_seconds"] for e in episodes)),
+            3,
+        ),
+    }
+
+
+def _save_round(
+    out: Path,
+    source: Path,
+    cfg: DigitRoundsConfig,
+    rnd: int,
+    history: list,
+    base_meta: dict,
+    student,
+    digit,
+    n: int,
+) -> Path:
+    """Write round `rnd`'s `policy_round<rnd>.pt` (with provenance), then the state of the
+    rounds (`rnd + 1` done); returns the policy's path."""
+    from emonav_drake.learning.run_state import write_run_state
+    from emonav_drake.planners.policy import save_policy
+
+    meta = dict(base_meta)
+    meta["provenance"] = {
+        "route": "dagger+digit",
+        "source": str(source),
+        "round": rnd,
+        "config": dc.asdict(cfg),
+        "history": history,
+    }
+    policy = out / f"policy_round{rnd}.pt"
+    save_policy(policy, student.model, meta)
+    write_run_state(
+        out / STATE_FILE,
+        DIGIT_ROUNDS_FORMAT,
+        {
+            "round": rnd + 1,
+            "history": history,
+            "demos": digit.to_plain(n),
+            "config": dc.asdict(cfg),
+        },
+        {"model": student.model.state_dict(), "optim": student.optim.state_dict()},
+    )
     return policy
 
 

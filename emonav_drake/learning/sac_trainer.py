@@ -24,7 +24,6 @@ saved and `RunInterrupted` says where; a second Ctrl-C meanwhile is ignored.
 
 from __future__ import annotations
 
-import csv
 import dataclasses as dc
 import logging
 from pathlib import Path
@@ -34,7 +33,6 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from emonav_drake.atomic_io import write_text_atomic
 from emonav_drake.core.metrics import record_from_json, summarize
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import SacConfig
@@ -54,6 +52,14 @@ from emonav_drake.learning.run_state import (
     write_run_state,
 )
 from emonav_drake.learning.sac import SacAgent
+from emonav_drake.learning.sac_curve import (
+    CHECKPOINT,
+    CURVE,
+    append_curve_row,
+    check_curve,
+    open_tensorboard,
+    truncate_curve,
+)
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import encoder_spec, save_policy, vector_state
 
@@ -62,19 +68,6 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 TRAIN_SEED_OFFSET = 20_000_000
-CHECKPOINT = "checkpoint.pt"
-CURVE = "learning_curve.csv"
-_CURVE_HEADER = [
-    "step",
-    "episodes",
-    "SR",
-    "collision_rate",
-    "timeout_rate",
-    "NT_mean",
-    "DT",
-    "return_mean",
-    "alpha",
-]
 
 
 class _Episode:
@@ -201,7 +194,7 @@ def train_sac(
             )
         saved, tensors = read_run_state(ckpt_path, SAC_FORMAT)  # before any work
         rows = check_state(f"{CHECKPOINT} in {out}", lambda: int(saved["curve_rows"]))
-        _check_curve(out / CURVE, rows)
+        check_curve(out / CURVE, rows)
     out.mkdir(parents=True, exist_ok=True)
     for p in clean_stale_temp_files(out):
         log.info("removed %s, left by a save that was killed", p)
@@ -227,15 +220,89 @@ def _train(
     stop_at: int | None,
     resume_command: str,
 ) -> SacAgent:
-    ckpt_path = out / CHECKPOINT
-    env = envs.spec
-    bounds = (env.config.robot.max_speed, env.config.robot.max_heading_change)
-    agent = SacAgent(cfg, bounds)
-    space = env.observation_space[env.map_key]
-    replay = FrameReplayBuffer(cfg.replay_size, space.shape[1:], space.dtype.type, cfg.num_frames)
-    curve = out / CURVE
-    n_envs = len(envs)
+    """The run in `out`, from its start (or the checkpoint `saved`, `tensors`) to `stop_at`
+    or the end; the steps are `_Run`'s methods.
+
+    One iteration = one environment step, its replay insertion, the updates and the
+    episode reset; the evaluation and checkpoint due at a step run at the top of the next
+    iteration. Ctrl-C is polled between iterations (replay size = step there). An
+    evaluation in progress is abandoned at once and rolled back (it does not change the
+    agent; its random draws are undone), and the checkpoint records that it is due.
+    """
+    run = _Run(out, cfg, envs, rng)
     if saved:
+        run.restore(saved, tensors)
+    else:
+        run.start()
+    truncate_curve(run.curve, run.curve_rows)  # drop rows of evaluations after the checkpoint
+    writer = open_tensorboard(out)
+    end = cfg.total_steps if stop_at is None else min(stop_at, cfg.total_steps)
+    bar = tqdm(
+        total=cfg.total_steps, initial=run.step, desc="SAC", unit="step", disable=not progress
+    )
+    with InterruptGuard() as guard:
+        try:
+            while True:
+                if run.eval_pending and not run.evaluate(guard, writer, bar):
+                    break  # Ctrl-C during the evaluation: rolled back, still due
+                run.checkpoint_if_due()
+                if guard.requested or run.step >= end:
+                    break
+                run.iterate(writer)
+                bar.update(run.n_envs)
+        finally:
+            bar.close()
+            if writer is not None:
+                writer.close()
+        interrupted = guard.requested and (run.step < end or run.eval_pending)
+        if interrupted:
+            log.warning("interrupted at step %d: saving the checkpoint", run.step)
+        if run.saved_at != (run.step, run.eval_pending):
+            run.save()
+        if guard.extra:
+            log.warning("Ctrl-C pressed again while stopping: ignored (the save completed)")
+    if interrupted:
+        raise RunInterrupted(
+            f"interrupted at step {run.step} of {cfg.total_steps}; checkpoint saved in {out}; "
+            f"continue with `{resume_command}`"
+        )
+    return run.agent
+
+
+class _Run:
+    """One SAC run's agent, replay buffer, running episodes and counters: what the steps of
+    `_train` share and the checkpoint holds.
+
+    `step` environment steps taken (= replay insertions), `episodes` finished,
+    `eval_pending` the evaluation due at `step` has not run, `curve_rows` evaluations in
+    the learning curve, `saved_at` the (step, eval_pending) of the last save (None: none).
+    """
+
+    def __init__(self, out: Path, cfg: SacConfig, envs: EnvPool, rng: np.random.Generator) -> None:
+        self.out, self.cfg, self.envs, self.rng = out, cfg, envs, rng
+        self.env = env = envs.spec
+        self.bounds = (env.config.robot.max_speed, env.config.robot.max_heading_change)
+        self.agent = SacAgent(cfg, self.bounds)
+        space = env.observation_space[env.map_key]
+        self.replay = FrameReplayBuffer(
+            cfg.replay_size, space.shape[1:], space.dtype.type, cfg.num_frames
+        )
+        self.curve = out / CURVE
+        self.n_envs = len(envs)
+        self.step, self.episodes, self.eval_pending, self.curve_rows = 0, 0, False, 0
+        self.saved_at: tuple[int, bool] | None = None
+        self.running: list[_Episode] = []
+
+    def start(self) -> None:
+        """A new run: environment i starts with training scenario i."""
+        for i in range(self.n_envs):
+            self.running.append(
+                _Episode(self.replay, self.envs.reset(i, TRAIN_SEED_OFFSET + i), self.bounds)
+            )
+
+    def restore(self, saved: dict, tensors: dict) -> None:
+        """Continue from a checkpoint's state (`RunStateError` if it does not fit)."""
+        cfg, n_envs = self.cfg, self.n_envs
         changes = config_changes(saved.get("config"), dc.asdict(cfg))
         if changes:
             log.warning(
@@ -244,201 +311,136 @@ def _train(
             )
 
         def restore() -> list[_Episode]:
-            agent.load_state_dict(tensors["agent"])
-            replay.load_state_dict(saved["replay"])
-            set_rng_state(rng, saved["rng"], tensors)
+            self.agent.load_state_dict(tensors["agent"])
+            self.replay.load_state_dict(saved["replay"])
+            set_rng_state(self.rng, saved["rng"], tensors)
             # one environment: the keys of checkpoints written before `num_envs`
             env_states = saved["envs"] if "envs" in saved else [saved["env"]]
             running = saved["running"] if "running" in saved else [saved["episode"]]
-            envs.load_state_dicts(env_states)
+            self.envs.load_state_dicts(env_states)
             if len(running) != n_envs:
                 raise ValueError(f"{len(running)} saved episodes for {n_envs} environments")
-            return [_Episode.from_plain(replay, st, bounds) for st in running]
+            return [_Episode.from_plain(self.replay, st, self.bounds) for st in running]
 
-        running = check_state(f"{CHECKPOINT} in {out}", restore, changes)
-        step, episodes = int(saved["step"]), int(saved["episodes"])
-        eval_pending, curve_rows = bool(saved["eval_pending"]), int(saved["curve_rows"])
-        saved_at = (step, eval_pending)
-    else:
-        step, episodes, eval_pending, curve_rows, saved_at = 0, 0, False, 0, None
-        running = []
-        for i in range(n_envs):  # environment i starts with training scenario i
-            running.append(_Episode(replay, envs.reset(i, TRAIN_SEED_OFFSET + i), bounds))
-    _truncate_csv(curve, curve_rows)  # drop rows of evaluations after the checkpoint
+        self.running = check_state(f"{CHECKPOINT} in {self.out}", restore, changes)
+        self.step, self.episodes = int(saved["step"]), int(saved["episodes"])
+        self.eval_pending = bool(saved["eval_pending"])
+        self.curve_rows = int(saved["curve_rows"])
+        self.saved_at = (self.step, self.eval_pending)
 
-    def save() -> None:
-        nonlocal saved_at
-        rng_plain, rng_tensors = rng_state(rng)
+    def save(self) -> None:
+        """Write `checkpoint.pt` and `policy.pt` (module docstring)."""
+        cfg, running = self.cfg, self.running
+        rng_plain, rng_tensors = rng_state(self.rng)
         state = {
             "config": dc.asdict(cfg),
-            "step": step,
-            "episodes": episodes,
-            "eval_pending": eval_pending,  # the evaluation due at `step` has not run
-            "curve_rows": curve_rows,
+            "step": self.step,
+            "episodes": self.episodes,
+            "eval_pending": self.eval_pending,  # the evaluation due at `step` has not run
+            "curve_rows": self.curve_rows,
             "rng": rng_plain,
-            "envs": envs.state_dicts(),
+            "envs": self.envs.state_dicts(),
             "running": [ep.to_plain() for ep in running],
-            "replay": replay.state_dict(windows=[ep.window for ep in running]),
+            "replay": self.replay.state_dict(windows=[ep.window for ep in running]),
         }
-        write_run_state(ckpt_path, SAC_FORMAT, state, {"agent": agent.state_dict()} | rng_tensors)
+        write_run_state(
+            self.out / CHECKPOINT,
+            SAC_FORMAT,
+            state,
+            {"agent": self.agent.state_dict()} | rng_tensors,
+        )
         save_policy(
-            out / "policy.pt",
-            agent.actor,
-            policy_meta(cfg, env)
-            | {"provenance": {"route": "sac", "step": step, "config": dc.asdict(cfg)}},
+            self.out / "policy.pt",
+            self.agent.actor,
+            policy_meta(cfg, self.env)
+            | {"provenance": {"route": "sac", "step": self.step, "config": dc.asdict(cfg)}},
         )
-        saved_at = (step, eval_pending)
+        self.saved_at = (self.step, self.eval_pending)
 
-    writer = _tensorboard(out)
-    end = cfg.total_steps if stop_at is None else min(stop_at, cfg.total_steps)
-    bar = tqdm(total=cfg.total_steps, initial=step, desc="SAC", unit="step", disable=not progress)
-    # One iteration = one environment step, its replay insertion, the updates and the
-    # episode reset; the evaluation and checkpoint due at a step run at the top of the
-    # next iteration. Ctrl-C is polled between iterations (replay size = step there). An
-    # evaluation in progress is abandoned at once and rolled back (it does not change the
-    # agent; its random draws are undone), and the checkpoint records that it is due.
-    with InterruptGuard() as guard:
+    def evaluate(self, guard: InterruptGuard, writer, bar: tqdm) -> bool:
+        """Run the due evaluation and log it; False if Ctrl-C abandoned it (its random
+        draws undone, still due)."""
+        before = rng_state(self.rng)
         try:
-            while True:
-                if eval_pending:
-                    before = rng_state(rng)
-                    try:
-                        with guard.abortable():
-                            summary = evaluate(agent, cfg, cfg.eval_episodes)
-                    except KeyboardInterrupt:
-                        set_rng_state(rng, *before)
-                        break
-                    eval_pending = False
-                    curve_rows += 1
-                    _append_csv(curve, step, episodes, summary, agent)
-                    if writer is not None:
-                        for k in ("SR", "collision_rate", "timeout_rate", "DT", "return_mean"):
-                            writer.add_scalar(f"eval/{k}", summary[k], step)
-                    bar.set_postfix(SR=summary["SR"])
-                if (
-                    step > 0
-                    and _crossed(step, n_envs, cfg.checkpoint_every)
-                    and saved_at != (step, False)
-                ):
-                    save()
-                if guard.requested or step >= end:
-                    break
-                actions = []
-                for i, ep in enumerate(running):
-                    if step + i < cfg.random_steps:
-                        actions.append(rng.uniform(-1.0, 1.0, 2).astype(np.float32))
-                    else:
-                        actions.append(agent.act(ep.obs, ep.state, deterministic=False))
-                results = envs.step([agent.to_command(a) for a in actions])
-                ended = []
-                for i, (ep, action) in enumerate(zip(running, actions, strict=True)):
-                    obs, reward, term, trunc, _ = results[i]
-                    obs_ids, state = ep.window.copy(), ep.state
-                    ep.advance(obs)
-                    replay.add(obs_ids, state, action, reward, ep.window, ep.state, term)
-                    if term or trunc:
-                        ended.append(i)
-                for k in range(n_envs):
-                    if step + k < cfg.random_steps:
-                        continue
-                    for _ in range(cfg.updates_per_step):
-                        info = agent.update(replay.sample(cfg.batch_size, rng, agent.device))
-                    if writer is not None and (step + k) % 100 == 0:
-                        for key, v in info.items():
-                            writer.add_scalar(f"train/{key}", v, step + k)
-                for i in ended:  # the next scenarios, in the order of the environments
-                    episodes += 1
-                    seed = TRAIN_SEED_OFFSET + n_envs - 1 + episodes
-                    running[i] = _Episode(replay, envs.reset(i, seed), bounds)
-                step += n_envs
-                bar.update(n_envs)
-                eval_pending = _crossed(step, n_envs, cfg.eval_every)
-        finally:
-            bar.close()
-            if writer is not None:
-                writer.close()
-        interrupted = guard.requested and (step < end or eval_pending)
-        if interrupted:
-            log.warning("interrupted at step %d: saving the checkpoint", step)
-        if saved_at != (step, eval_pending):
-            save()
-        if guard.extra:
-            log.warning("Ctrl-C pressed again while stopping: ignored (the save completed)")
-    if interrupted:
-        raise RunInterrupted(
-            f"interrupted at step {step} of {cfg.total_steps}; checkpoint saved in {out}; "
-            f"continue with `{resume_command}`"
-        )
-    return agent
+            with guard.abortable():
+                summary = evaluate(self.agent, self.cfg, self.cfg.eval_episodes)
+        except KeyboardInterrupt:
+            set_rng_state(self.rng, *before)
+            return False
+        self.eval_pending = False
+        self.curve_rows += 1
+        append_curve_row(self.curve, self.step, self.episodes, summary, self.agent)
+        if writer is not None:
+            for k in ("SR", "collision_rate", "timeout_rate", "DT", "return_mean"):
+                writer.add_scalar(f"eval/{k}", summary[k], self.step)
+        bar.set_postfix(SR=summary["SR"])
+        return True
+
+    def checkpoint_if_due(self) -> None:
+        """Save if the last iteration crossed a checkpoint period and this state is unsaved."""
+        step = self.step
+        if (
+            step > 0
+            and _crossed(step, self.n_envs, self.cfg.checkpoint_every)
+            and self.saved_at != (step, False)
+        ):
+            self.save()
+
+    def iterate(self, writer) -> None:
+        """One iteration: every environment acts and steps, the transitions go into the
+        replay buffer (env 0's first), the updates, the ended episodes' resets."""
+        actions = self._actions()
+        results = self.envs.step([self.agent.to_command(a) for a in actions])
+        ended = self._store(results, actions)
+        self._update(writer)
+        self._next_episodes(ended)
+        self.step += self.n_envs
+        self.eval_pending = _crossed(self.step, self.n_envs, self.cfg.eval_every)
+
+    def _actions(self) -> list[np.ndarray]:
+        """Each environment's action: uniform during the first `random_steps`, else sampled
+        from the policy."""
+        actions = []
+        for i, ep in enumerate(self.running):
+            if self.step + i < self.cfg.random_steps:
+                actions.append(self.rng.uniform(-1.0, 1.0, 2).astype(np.float32))
+            else:
+                actions.append(self.agent.act(ep.obs, ep.state, deterministic=False))
+        return actions
+
+    def _store(self, results: list, actions: list[np.ndarray]) -> list[int]:
+        """Insert the transitions in the order of the environments; the ones that ended."""
+        ended = []
+        for i, (ep, action) in enumerate(zip(self.running, actions, strict=True)):
+            obs, reward, term, trunc, _ = results[i]
+            obs_ids, state = ep.window.copy(), ep.state
+            ep.advance(obs)
+            self.replay.add(obs_ids, state, action, reward, ep.window, ep.state, term)
+            if term or trunc:
+                ended.append(i)
+        return ended
+
+    def _update(self, writer) -> None:
+        """`updates_per_step` updates per environment step past `random_steps`."""
+        cfg, agent, step = self.cfg, self.agent, self.step
+        for k in range(self.n_envs):
+            if step + k < cfg.random_steps:
+                continue
+            for _ in range(cfg.updates_per_step):
+                info = agent.update(self.replay.sample(cfg.batch_size, self.rng, agent.device))
+            if writer is not None and (step + k) % 100 == 0:
+                for key, v in info.items():
+                    writer.add_scalar(f"train/{key}", v, step + k)
+
+    def _next_episodes(self, ended: list[int]) -> None:
+        """Reset the ended environments to the next scenarios, in the order of the
+        environments."""
+        for i in ended:
+            self.episodes += 1
+            seed = TRAIN_SEED_OFFSET + self.n_envs - 1 + self.episodes
+            self.running[i] = _Episode(self.replay, self.envs.reset(i, seed), self.bounds)
 
 
 def _crossed(step: int, stride: int, period: int) -> bool:
     """Whether the last `stride` steps up to `step` reached a multiple of `period`."""
     return step // period > (step - stride) // period
-
-
-def _check_curve(path: Path, rows: int) -> None:
-    """A resumed run's learning curve: UTF-8 CSV, our header and at least the `rows`
-    evaluations the checkpoint counts; else `RunStateError` naming the file."""
-    if not path.exists():
-        return
-    where = f"{path.name} in {path.parent}"
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-        table = list(csv.reader(lines))
-    except (UnicodeDecodeError, csv.Error) as e:
-        raise RunStateError(f"{where} is damaged ({e}); remove it or restore a copy") from None
-    if table[:1] != [_CURVE_HEADER]:
-        raise RunStateError(
-            f"{where} is damaged: its first line is not the header {','.join(_CURVE_HEADER)}"
-            "; remove it or restore a copy"
-        )
-    if len(table) - 1 < rows:
-        raise RunStateError(
-            f"{where} has {len(table) - 1} evaluations, {CHECKPOINT} counts {rows}: damaged "
-            "or cut; remove it or restore a copy"
-        )
-
-
-def _truncate_csv(path: Path, rows: int) -> None:
-    """Keep the header and the first `rows` rows of a CSV (none: remove the file)."""
-    if not path.exists():
-        return
-    lines = path.read_text().splitlines(keepends=True)
-    keep = lines[: rows + 1] if rows > 0 else []
-    if keep == lines:
-        return
-    if keep:
-        write_text_atomic(path, "".join(keep), durable=True)
-    else:
-        path.unlink()
-
-
-def _append_csv(path: Path, step: int, episodes: int, s: dict, agent: SacAgent) -> None:
-    new = not path.exists()
-    with path.open("a", newline="") as f:
-        w = csv.writer(f)
-        if new:
-            w.writerow(_CURVE_HEADER)
-        w.writerow(
-            [
-                step,
-                episodes,
-                s["SR"],
-                s["collision_rate"],
-                s["timeout_rate"],
-                s["NT_mean"],
-                s["DT"],
-                s["return_mean"],
-                agent.alpha.item(),
-            ]
-        )
-
-
-def _tensorboard(out: Path):
-    try:
-        from torch.utils.tensorboard import SummaryWriter
-    except ImportError:  # tensorboard is optional: the CSV has the learning curve
-        log.warning("tensorboard is not installed: logging to learning_curve.csv only")
-        return None
-    return SummaryWriter(str(out / "tensorboard"))

@@ -193,7 +193,18 @@ class PassivityController(LeafSystem):
         state.get_mutable_discrete_state(self._held).set_value(self._out.Eval(context))
 
     def compute(self, x: np.ndarray, tg: WalkingTargets, t: float) -> np.ndarray:
-        """Joint torques for plant state `x`, planner targets `tg` at time `t` [s]."""
+        """Joint torques for plant state `x`, planner targets `tg` at time `t` [s].
+
+        One piece on purpose: it runs at every controller tick (250 Hz, about a third of
+        the Digit loop's wall time) and every split measured slower. Timed on fixed inputs
+        of each phase, 100-call blocks alternated 300 times with this version on the same
+        instance, one core, paired medians of ≈ 75–90 µs per call: the swing task and the
+        torques as methods +0.2 … +1.3 µs, all four steps as methods +0.7 … +2.1 µs,
+        against −0.2 … +0.4 µs for a second copy of this version. The steps are the
+        `# ----` sections: the base's reference (torso orientation and height, CoM against
+        the ALIP), the stance legs' (stance constraint), the swing leg's (foot pose task),
+        the torques (inverse dynamics, contact wrench, bounds).
+        """
         p = self._p
         plant, ctx = self._plant, self._ctx
         plant.SetPositionsAndVelocities(ctx, x)
@@ -233,6 +244,7 @@ class PassivityController(LeafSystem):
         vr[bv] = VA[:, 0]
         ar[bv] = VA[:, 1]
 
+        # ---- stance legs: J_st v = 0 and J_st v̇ + J̇v = 0 given the base's reference
         stance_legs = (0, 1) if phase < 0 else (phase,)
         Jst = [None, None]
         for i in stance_legs:
@@ -251,6 +263,7 @@ class PassivityController(LeafSystem):
             ar[self._lv[i]] = -sol[:, 1]
             Jst[i] = (Jb, Jl)
 
+        # ---- swing leg: the foot pose task (position and yaw, upright)
         if phase >= 0:
             j = 1 - phase
             frame = self._foot_frames[j]
@@ -288,6 +301,7 @@ class PassivityController(LeafSystem):
             vr[self._lv[j]] = sol[:, 0]
             ar[self._lv[j]] = sol[:, 1]
 
+        # ---- torques: τ = Φᵀ(M q̈_r + C q̇ + G) − K_D s, the stance ankles and all bounded
         # inverse dynamics of the reference motion: M q̈_r + C q̇ − τ_g (O(n) recursion)
         tau = plant.CalcInverseDynamics(ctx, ar, self._forces)
         tau -= plant.CalcGravityGeneralizedForces(ctx)

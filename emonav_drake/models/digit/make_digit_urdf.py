@@ -121,9 +121,24 @@ def _capsule(r: float, length: float) -> str:
 
 
 def _leg(side: str, sign: float) -> tuple[str, list[str]]:
+    """One leg's links and joints, from the torso down (`sign` +1 left, −1 right), and its
+    link names (for the self-collision filter)."""
     s = side
+    out = _hip(s, sign) + _thigh_and_shin(s) + _ankle_and_foot(s)
+    links = [
+        f"{s}_hip_roll_link",
+        f"{s}_hip_yaw_link",
+        f"{s}_hip_pitch_link",
+        f"{s}_shin",
+        f"{s}_toe_pitch_link",
+        f"{s}_foot",
+    ]
+    return "".join(out), links
+
+
+def _hip(s: str, sign: float) -> list[str]:
+    """The hip roll and hip yaw links (motor housings beside the pelvis) and their joints."""
     out = []
-    links = []
     # hip roll link: motor housing beside the pelvis
     out.append(
         _link(
@@ -157,6 +172,13 @@ def _leg(side: str, sign: float) -> tuple[str, list[str]]:
             LEG_JOINTS["hip_yaw"],
         )
     )
+    return out
+
+
+def _thigh_and_shin(s: str) -> list[str]:
+    """The hip pitch link ("thigh") with the hip pitch joint, the fused shin and tarsus
+    with the knee."""
+    out = []
     # hip pitch link ("thigh"): the heavy link with the knee motor near the hip
     out.append(
         _link(
@@ -205,6 +227,13 @@ def _leg(side: str, sign: float) -> tuple[str, list[str]]:
             LEG_JOINTS["knee"],
         )
     )
+    return out
+
+
+def _ankle_and_foot(s: str) -> list[str]:
+    """The toe pitch link (ankle) with its joint, the foot with its sole contact spheres
+    and the toe roll joint."""
+    out = []
     out.append(
         _link(
             f"{s}_toe_pitch_link",
@@ -239,15 +268,7 @@ def _leg(side: str, sign: float) -> tuple[str, list[str]]:
             LEG_JOINTS["toe_roll"],
         )
     )
-    links += [
-        f"{s}_hip_roll_link",
-        f"{s}_hip_yaw_link",
-        f"{s}_hip_pitch_link",
-        f"{s}_shin",
-        f"{s}_toe_pitch_link",
-        f"{s}_foot",
-    ]
-    return "".join(out), links
+    return out
 
 
 def _arm(side: str, sign: float) -> tuple[str, list[str]]:
