@@ -8,6 +8,7 @@ nothing else in the package changed.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -216,6 +217,61 @@ def test_a_registered_plant_runs_in_sim_eval_and_benchmark(half_speed_plant, tmp
     trial = json.loads(line)
     assert trial["plant"] == "lip_half"
     assert trial["record"]["steps"] == runs["lip_half"]["steps"]
+
+
+def _simulate_half_speed(request):
+    lip = PLANTS["lip"]
+    return lip.simulate(dataclasses.replace(request, planner=HalfSpeed(request.planner)))
+
+
+def _run_half_speed_logged(scenario, config, planner, grid_kind, goal_radius, estimate):
+    lip = PLANTS["lip"]
+    return lip.run_logged(scenario, config, HalfSpeed(planner), grid_kind, goal_radius, estimate)
+
+
+@pytest.fixture
+def half_speed_plant_with_outputs():
+    plant = Plant(
+        "lip_half_sim",
+        "LIP at half speed",
+        _run_half_speed,
+        False,
+        True,
+        False,
+        rays=True,
+        run_logged=_run_half_speed_logged,
+        simulate=_simulate_half_speed,
+    )
+    register_plant(plant)
+    yield plant
+    unregister_plant("lip_half_sim")
+
+
+def test_a_registered_plant_with_simulate_gets_the_sim_outputs(
+    half_speed_plant, half_speed_plant_with_outputs, tmp_path
+):
+    runs = {}
+    for plant in ("lip_half", "lip_half_sim"):
+        out = tmp_path / f"{plant}.json"
+        assert main(["sim", "--plant", plant, "--seed", "5", "--json", str(out)]) == 0
+        runs[plant] = json.loads(out.read_text())
+    steps = runs["lip_half"]["steps"]
+    assert runs["lip_half_sim"]["steps"] == steps
+    assert "trajectory" in runs["lip_half_sim"] and "trajectory" not in runs["lip_half"]
+    csv = tmp_path / "steps.csv"
+    argv = ["sim", "--plant", "lip_half_sim", "--seed", "5", "--steps-out", str(csv)]
+    assert main(argv) == 0
+    assert len(csv.read_text().splitlines()) == steps + 1  # header + one row a step
+    assert half_speed_plant_with_outputs.step_log and not half_speed_plant_with_outputs.traces
+
+
+def test_a_plant_without_a_training_environment_is_refused(half_speed_plant):
+    from emonav_drake.learning.config import SacConfig
+    from emonav_drake.learning.env_pool import make_env
+    from emonav_drake.params import ConfigError
+
+    with pytest.raises(ConfigError, match="'lip_half' has no training environment"):
+        make_env(SacConfig(plant="lip_half"))
 
 
 # ---------------------------------------------------------------- a new sub-command

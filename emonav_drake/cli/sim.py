@@ -13,10 +13,8 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import dataclasses as dc
 import sys
 import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -33,7 +31,7 @@ from emonav_drake.cli.common import (
     write_steps_csv,
 )
 from emonav_drake.cli.config import resolve_config, resolve_scenario
-from emonav_drake.diagrams.plants import PLANTS
+from emonav_drake.diagrams.plants import DEFAULT_PLANT, PLANTS, Plant, SimRequest, plant_named
 from emonav_drake.params import ConfigError
 from emonav_drake.planners import planner_names
 
@@ -42,7 +40,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     """Register `emonav sim` on the CLI's sub-parsers."""
     s = subparsers.add_parser("sim", help="run one navigation episode in the Drake diagram")
     s.add_argument("--planner", default="dwa", choices=planner_names())
-    s.add_argument("--plant", default="lip", choices=list(PLANTS))
+    s.add_argument("--plant", default=DEFAULT_PLANT, choices=list(PLANTS))
     s.add_argument("--seed", action=SeedArg, default=0, help="scenario seed, in [0, 2**64 - 1]")
     s.add_argument(
         "--scenario",
@@ -99,38 +97,43 @@ def cmd_sim(args: argparse.Namespace) -> int:
     """Run one episode; print its outcome and write --json / --record / --steps-out."""
     check_outputs(args, "--json", "--record", "--steps-out")
     meshcat_host(args)
-    if args.plant == "digit" and (args.emotion_estimate or args.rays):
-        raise ConfigError(
-            "--plant digit: --rays and --emotion-estimate are available "
-            "with --plant lip only in this version"
-        )
+    robot = plant_named(args.plant)
+    _check_plant_flags(args, robot)
     check_planner_flags(args)
     resolved = resolve_config(args)
     cfg = resolved.config
     scenario = resolve_scenario(args, resolved)
     estimate = load_emotion_estimate(args.emotion_estimate)
-    if args.plant not in ("lip", "digit"):  # a registered plant: its record only
-        return _sim_registered_plant(args, cfg, scenario, estimate)
-    from emonav_drake.diagrams.navigation import run_episode
-    from emonav_drake.diagrams.navigation_digit import run_digit_episode
+    if robot.simulate is None:  # a plant without viewers and per-step outputs: its record
+        return _sim_registered_plant(args, robot, cfg, scenario, estimate)
     from emonav_drake.planners import configure_for, make_planner
 
-    run = run_digit_episode if args.plant == "digit" else run_episode
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
     cfg, grid_kind = configure_for(planner, cfg)
     if hasattr(planner, "describe"):
         print(f"planner {args.planner}: {planner.describe()}")
-    meshcat, caption = _open_viewer(args, cfg, scenario)
+    meshcat, caption = _open_viewer(args, robot, cfg, scenario)
     rates = None
     if args.rates:
         from emonav_drake.diagrams.rates import RateMeasurement
 
         rates = RateMeasurement()
-    trace: list[dict] = []  # Digit's per-step log: the trajectory of --json
-    episode = _SimEpisode(scenario, cfg, planner, grid_kind, estimate, meshcat, rates, trace)
-    progress = show_progress(args)
+    request = SimRequest(
+        scenario,
+        cfg,
+        planner,
+        grid_kind,
+        estimate,
+        meshcat=meshcat,
+        show_rays=args.rays,
+        realtime_rate=1.0 if args.meshcat else 0.0,
+        rates=rates,
+        per_step=bool(args.json or args.steps_out),
+        progress=show_progress(args),
+    )
     t0 = time.perf_counter()
-    record, step_log = _run_sim_episode(args, episode, run, progress)
+    result = _run_sim_episode(args, robot, request)
+    record = result.record
     wall = time.perf_counter() - t0
     out = record.to_json()
     out["seed"] = scenario.seed
@@ -146,7 +149,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     )
     if args.record:
         print(f"replay written to {Path(args.record).resolve()} (open it in a browser)")
-    _write_sim_outputs(args, episode, record, step_log, out)
+    _write_sim_outputs(args, request, result, out)
     if caption is not None:  # live: the outcome in Meshcat, served until Ctrl-C
         from emonav_drake.diagrams.meshcat_viewing import finish_live_view
 
@@ -155,22 +158,22 @@ def cmd_sim(args: argparse.Namespace) -> int:
     return 0
 
 
-@dc.dataclass
-class _SimEpisode:
-    """What `cmd_sim` runs: the scenario, its configuration and planner, the viewer, the
-    profiler (`--rates`) and Digit's per-step log (filled by its run)."""
-
-    scenario: Any
-    cfg: Any
-    planner: Any
-    grid_kind: str
-    estimate: Any
-    meshcat: Any
-    rates: Any
-    trace: list[dict]
+def _check_plant_flags(args: argparse.Namespace, robot: Plant) -> None:
+    """Refuse --rays / --emotion-estimate on a plant with a `simulate` that lacks them (a
+    plant without one is checked by `_sim_registered_plant`)."""
+    if robot.simulate is None:
+        return
+    if (args.emotion_estimate and not robot.emotion_estimates) or (args.rays and not robot.rays):
+        able = [p for p in PLANTS if PLANTS[p].rays and PLANTS[p].emotion_estimates]
+        raise ConfigError(
+            f"--plant {robot.name}: --rays and --emotion-estimate are available "
+            f"with --plant {' or '.join(able)} only in this version"
+        )
 
 
-def _open_viewer(args: argparse.Namespace, cfg: Any, scenario: Any) -> tuple[Any, Any]:
+def _open_viewer(
+    args: argparse.Namespace, robot: Plant, cfg: Any, scenario: Any
+) -> tuple[Any, Any]:
     """The Meshcat of --meshcat / --record (None without them) and, live, its caption
     (started, and waiting for a browser unless --no-wait); (None, None) without a viewer."""
     meshcat = caption = None
@@ -186,75 +189,48 @@ def _open_viewer(args: argparse.Namespace, cfg: Any, scenario: Any) -> tuple[Any
         meshcat = make_meshcat(live=args.meshcat, host=meshcat_host(args))
         set_overview_camera(meshcat, cfg)
         if args.meshcat:
-            plant = "Digit" if args.plant == "digit" else "LIP"
-            caption = ReplayCaption(args.planner, plant, scenario.seed, rays=args.rays)
+            caption = ReplayCaption(
+                args.planner,
+                robot.caption_name,
+                scenario.seed,
+                rays=args.rays,
+                footsteps=robot.footsteps,
+            )
             start_live_view(meshcat, wait=not args.no_wait, caption=caption)
     return meshcat, caption
 
 
-def _run_sim_episode(
-    args: argparse.Namespace, ep: _SimEpisode, run: Callable[..., Any], progress: bool
-) -> tuple[Any, Any]:
-    """Run the episode with `run` (the LIP's `run_episode` or Digit's `run_digit_episode`,
-    imported by `cmd_sim` before the planner is built); its record and, on the LIP, its step
-    log (None on Digit, whose per-step log goes to `ep.trace` with --json / --steps-out)."""
-    cfg = ep.cfg
-    step_log = None
+def _run_sim_episode(args: argparse.Namespace, robot: Plant, request: SimRequest) -> Any:
+    """Run the episode with the plant's `simulate`, the replay (--record) going to a
+    temporary sibling renamed when complete; its `SimResult`."""
     with contextlib.ExitStack() as stack:
-        # the replay goes to a temporary sibling, renamed when complete
-        record_html = stack.enter_context(atomic_output(args.record)) if args.record else None
-        if args.plant == "digit":
-            record = run(
-                ep.scenario,
-                cfg,
-                ep.planner,
-                meshcat=ep.meshcat,
-                grid_kind=ep.grid_kind,
-                goal_radius=cfg.episode.eval_goal_radius,
-                realtime_rate=1.0 if args.meshcat else 0.0,
-                record_html=record_html,
-                rates=ep.rates,
-                trace=ep.trace if args.json or args.steps_out else None,
-                progress=progress,
-            )
-        else:
-            record, step_log = run(
-                ep.scenario,
-                cfg,
-                ep.planner,
-                meshcat=ep.meshcat,
-                record_html=record_html,
-                show_rays=args.rays,
-                goal_radius=cfg.episode.eval_goal_radius,
-                realtime_rate=1.0 if args.meshcat else 0.0,
-                grid_kind=ep.grid_kind,
-                emotion_estimate=ep.estimate,
-                rates=ep.rates,
-                progress=progress,
-            )
-    return record, step_log
+        if args.record:
+            request.record_html = stack.enter_context(atomic_output(args.record))
+        return robot.simulate(request)
 
 
 def _write_sim_outputs(
-    args: argparse.Namespace, ep: _SimEpisode, record: Any, step_log: Any, out: dict
+    args: argparse.Namespace, request: SimRequest, result: Any, out: dict
 ) -> None:
-    """Write --json (`out` with the trajectory) and --steps-out of a finished episode."""
-    cfg, scenario = ep.cfg, ep.scenario
+    """Write --json (`out` with the trajectory) and --steps-out of a finished episode, from
+    its LIP step log or else its per-step trace."""
+    cfg, scenario, record = request.config, request.scenario, result.record
+    step_log, trace = result.step_log, result.trace
     if args.json:  # the episode step by step, drawn by `emonav plot`
         from emonav_drake.evaluation import trajectory as tj
 
         goal_r = cfg.episode.eval_goal_radius
         out["trajectory"] = (
-            tj.trajectory_from_digit_trace(scenario, cfg, record, ep.trace, args.planner, goal_r)
-            if args.plant == "digit"
-            else tj.trajectory_from_step_log(scenario, cfg, record, step_log, args.planner, goal_r)
+            tj.trajectory_from_step_log(scenario, cfg, record, step_log, args.planner, goal_r)
+            if step_log is not None
+            else tj.trajectory_from_digit_trace(scenario, cfg, record, trace, args.planner, goal_r)
         ).to_json()
         write_json(args.json, out)
     if args.steps_out:  # per planner step: the planner's LIP step vs the robot
         table = (
-            episode_steps_table(cfg, trace=ep.trace)
-            if args.plant == "digit"
-            else episode_steps_table(cfg, robot=step_log.robot, commands=step_log.commands)
+            episode_steps_table(cfg, robot=step_log.robot, commands=step_log.commands)
+            if step_log is not None
+            else episode_steps_table(cfg, trace=trace)
         )
         n = write_steps_csv(args.steps_out, table)
         print(f"{n} steps written to {args.steps_out}")
@@ -266,19 +242,20 @@ def show_progress(args: argparse.Namespace) -> bool:
     return not getattr(args, "quiet", False) and sys.stderr.isatty()
 
 
-def _sim_registered_plant(args: argparse.Namespace, cfg: Any, scenario: Any, estimate: Any) -> int:
-    """`sim` on a plant registered beside the LIP and Digit (`diagrams.plants`): its
-    episode runner gives the record (printed, and --json); the viewers and per-step
-    outputs belong to the LIP and Digit diagrams."""
-    from emonav_drake.diagrams.plants import plant_named
+def _sim_registered_plant(
+    args: argparse.Namespace, robot: Plant, cfg: Any, scenario: Any, estimate: Any
+) -> int:
+    """`sim` on a plant without `simulate` (`diagrams.plants`): its episode runner gives
+    the record (printed, and --json); the viewers and per-step outputs need a plant's
+    `simulate` (the LIP's and Digit's)."""
     from emonav_drake.planners import configure_for, make_planner
 
     viewer_flags = {"--meshcat": args.meshcat, "--record": args.record, "--rays": args.rays}
     viewer_flags |= {"--steps-out": args.steps_out, "--rates": args.rates}
     given = [flag for flag, value in viewer_flags.items() if value]
     if given:
-        raise ConfigError(f"--plant {args.plant}: {', '.join(given)} need --plant lip or digit")
-    robot = plant_named(args.plant)
+        able = " or ".join(p for p in PLANTS if PLANTS[p].simulate is not None)
+        raise ConfigError(f"--plant {args.plant}: {', '.join(given)} need --plant {able}")
     if estimate is not None and not robot.emotion_estimates:
         raise ConfigError(f"--plant {args.plant} takes no --emotion-estimate")
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)

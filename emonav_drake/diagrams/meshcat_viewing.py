@@ -149,10 +149,17 @@ class ReplayCaption:
 
     @classmethod
     def for_episode(
-        cls, planner, plant: str, scenario, record=None, rays: bool = False
+        cls,
+        planner,
+        plant: str,
+        scenario,
+        record=None,
+        rays: bool = False,
+        footsteps: bool = False,
     ) -> ReplayCaption:
-        """The caption of an episode: `planner` a `Planner` (its `name`), `scenario` a
-        `Scenario` (its `seed`), `record` its `EpisodeRecord` once it has ended."""
+        """The caption of an episode: `planner` a `Planner` (its `name`), `plant` the
+        robot's caption name (`Plant.caption_name`), `scenario` a `Scenario` (its `seed`),
+        `record` its `EpisodeRecord` once it has ended; `footsteps` as the plant's."""
         name = getattr(planner, "name", type(planner).__name__)
         path = getattr(planner, "path", None)  # a learned policy: its checkpoint file
         cap = cls(
@@ -160,7 +167,7 @@ class ReplayCaption:
             plant=plant,
             seed=getattr(scenario, "seed", None),
             rays=rays,
-            footsteps=plant.lower() == "digit",
+            footsteps=footsteps,
         )
         if record is not None:
             cap.set_outcome(record)

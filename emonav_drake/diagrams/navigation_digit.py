@@ -169,7 +169,7 @@ def run_digit_episode(
     if record_html is not None:
         meshcat.StopRecording()
         meshcat.PublishRecording()
-        caption = ReplayCaption.for_episode(planner, "Digit", scenario, record)
+        caption = ReplayCaption.for_episode(planner, "Digit", scenario, record, footsteps=True)
         write_replay_html(meshcat, record_html, caption)
     return record
 

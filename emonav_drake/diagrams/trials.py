@@ -198,21 +198,22 @@ class TrialRunner:
         return kind.upper() if hasattr(planner, "expected_shape") else "state"
 
     def replay(self, method: str, seed: int):
-        """Re-simulate one LIP trial: (scenario, `EpisodeRecord`, `StepLog`) — for plots."""
+        """Re-simulate one trial of a plant with a step log (the LIP): (scenario,
+        `EpisodeRecord`, `StepLog`) — for plots."""
         from emonav_drake.core.scenario import sample_scenario
-        from emonav_drake.diagrams.navigation import run_episode
+        from emonav_drake.diagrams.plants import PLANTS, plant_named
 
-        if self.spec.plant != "lip":
-            raise ConfigError("replay draws LIP trials only (the Digit run keeps no step log)")
+        robot = plant_named(self.spec.plant)
+        if robot.run_logged is None:
+            able = " or ".join(p for p in PLANTS if PLANTS[p].step_log)
+            raise ConfigError(
+                f"replay draws trials of --plant {able} only (the {robot.label} run keeps "
+                "no step log)"
+            )
         planner, cfg, grid_kind = self.planner(method)
         scenario = sample_scenario(seed, self.config)
-        record, step_log = run_episode(
-            scenario,
-            cfg,
-            planner,
-            goal_radius=cfg.episode.eval_goal_radius,
-            grid_kind=grid_kind,
-            emotion_estimate=self.estimate,
+        record, step_log = robot.run_logged(
+            scenario, cfg, planner, grid_kind, cfg.episode.eval_goal_radius, self.estimate
         )
         return scenario, record, step_log
 

@@ -68,22 +68,25 @@ def tracking_errors(trace: list[dict], config: EmoNavConfig, last: int, model=No
 
 
 def diagnose_trial(runner, method: str, seed: int, last: int, model) -> dict:
-    """Simulate one trial of `runner`'s run again: its cause, and on Digit (traced) the
-    tracking errors over the last `last` steps (`tracking` is None on another plant)."""
+    """Simulate one trial of `runner`'s run again: its cause, and on a plant that traces its
+    episodes (Digit, `Plant.traces`) the tracking errors over the last `last` steps
+    (`tracking` is None on another plant)."""
+    from emonav_drake.diagrams.plants import plant_named
+
     plant = runner.spec.plant
-    if plant == "digit":
+    robot = plant_named(plant)
+    if robot.run_traced is not None:
         from emonav_drake.core.scenario import sample_scenario
-        from emonav_drake.diagrams.navigation_digit import run_digit_episode
 
         planner, cfg, grid_kind = runner.planner(method)
         trace: list[dict] = []
-        record = run_digit_episode(
+        record = robot.run_traced(
             sample_scenario(seed, runner.config),
             cfg,
             planner,
-            grid_kind=grid_kind,
-            goal_radius=cfg.episode.eval_goal_radius,
-            trace=trace,
+            grid_kind,
+            cfg.episode.eval_goal_radius,
+            trace,
         ).to_json()
         tracking = tracking_errors(trace, cfg, last, model)
     else:  # the benchmark's own trial: the same record, nothing to compare the robot with
@@ -114,6 +117,7 @@ def diagnose_run(
     from tqdm import tqdm
 
     from emonav_drake.atomic_io import write_json, write_text_atomic
+    from emonav_drake.diagrams.plants import plant_named
     from emonav_drake.diagrams.trials import TrialRunner
     from emonav_drake.evaluation.run_directory import SETTINGS_FILE, load_run
     from emonav_drake.evaluation.run_settings import spec_from_settings
@@ -131,13 +135,13 @@ def diagnose_run(
             field += " or emotion_estimate_yaml"
         raise ConfigError(f"{where} ({field}): {str(e).removeprefix('<yaml>: ')}") from None
     methods = check_methods(settings, methods)
-    digit = settings["plant"] == "digit"
+    robot = plant_named(settings["plant"], flag=f"{where}: plant")
     model = None
-    if digit:
+    if robot.traces and robot.response is not None:
         from emonav_drake.planners.model_aware import load_response
 
-        model = load_response("digit")
-    else:  # successes are the reference of the tracking comparison, Digit's only
+        model = load_response(robot.response)
+    if not robot.traces:  # successes are the reference of the tracking comparison only
         reference = 0
     todo = []
     for m in methods:

@@ -130,9 +130,11 @@ def rerun_command(
     `config_source` if they still give it (`config_flags`), else `--config` of the file
     `run_files["config"]` (default `run_config.yaml`, see `write_run_files`); the emotion
     estimate from `run_files["estimate"]` (default `run_emotion_estimate.yaml`)."""
+    from emonav_drake.diagrams.plants import DEFAULT_PLANT
+
     files = run_files or {}
     argv = ["emonav", "sim", *_planner_flags(settings["methods"][method]), "--seed", str(seed)]
-    if settings["plant"] != "lip":
+    if settings["plant"] != DEFAULT_PLANT:  # --plant's default needs no flag
         argv += ["--plant", settings["plant"]]
     flags = config_flags(settings)
     if flags is None:

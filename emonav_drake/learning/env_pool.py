@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses as dc
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -21,12 +21,35 @@ import numpy as np
 from emonav_drake.learning.config import SacConfig
 from emonav_drake.learning.env import EmoNavLIPEnv
 from emonav_drake.parallel import Worker, init_ray, ray_get, start_actors
-from emonav_drake.params import EmoNavConfig
+from emonav_drake.params import ConfigError, EmoNavConfig
 
 if TYPE_CHECKING:
     from emonav_drake.learning.digit_env import EmoNavDigitEnv
 
 StepResult = tuple[dict, float, bool, bool, dict]
+
+
+def _digit_env_class() -> type:
+    from emonav_drake.learning.digit_env import EmoNavDigitEnv
+
+    return EmoNavDigitEnv
+
+
+# The training environment class of each plant (`SacConfig.plant`), by plant name; a
+# function giving the class, so that Digit's Drake environment is imported on first use.
+ENV_CLASSES: dict[str, Callable[[], type]] = {
+    "lip": lambda: EmoNavLIPEnv,
+    "digit": _digit_env_class,
+}
+
+
+def env_class_for(plant: str) -> type:
+    """The Gymnasium environment class of `plant`; `ConfigError` for a plant without one."""
+    if plant not in ENV_CLASSES:
+        raise ConfigError(
+            f"plant {plant!r} has no training environment: choose {' or '.join(ENV_CLASSES)}"
+        )
+    return ENV_CLASSES[plant]()
 
 
 def make_env(
@@ -37,10 +60,7 @@ def make_env(
     env_cfg = env_cfg or EmoNavConfig()
     env_cfg.lidar.num_frames = cfg.num_frames
     env_cfg.lidar.grid_size = cfg.grid_size
-    if cfg.plant == "digit":
-        from emonav_drake.learning.digit_env import EmoNavDigitEnv as env_class
-    else:
-        env_class = EmoNavLIPEnv
+    env_class = env_class_for(cfg.plant)
     return env_class(
         env_cfg,
         grid_kind=cfg.grid_kind,
