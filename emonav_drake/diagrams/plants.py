@@ -130,16 +130,7 @@ class Plant:
 
 
 def _run_lip(scenario, config, planner, grid_kind, goal_radius, emotion_estimate):
-    from emonav_drake.diagrams.navigation import run_episode
-
-    record, _ = run_episode(
-        scenario,
-        config,
-        planner,
-        goal_radius=goal_radius,
-        grid_kind=grid_kind,
-        emotion_estimate=emotion_estimate,
-    )
+    record, _ = _run_lip_logged(scenario, config, planner, grid_kind, goal_radius, emotion_estimate)
     return record
 
 
