@@ -135,13 +135,9 @@ def _run_lip(scenario, config, planner, grid_kind, goal_radius, emotion_estimate
 
 
 def _run_digit(scenario, config, planner, grid_kind, goal_radius, emotion_estimate):
-    from emonav_drake.diagrams.navigation_digit import run_digit_episode
-
     if emotion_estimate is not None:
         raise ConfigError("--emotion-estimate is available with --plant lip only")
-    return run_digit_episode(
-        scenario, config, planner, grid_kind=grid_kind, goal_radius=goal_radius
-    )
+    return _run_digit_traced(scenario, config, planner, grid_kind, goal_radius, None)
 
 
 def _run_lip_logged(scenario, config, planner, grid_kind, goal_radius, emotion_estimate):
