@@ -5,15 +5,17 @@ import pytest
 import torch
 
 from emonav_drake.core.dwa import DwaPlanner
+from emonav_drake.core.mpc import MpcPlanner
 from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.learning.config import DaggerConfig, SacConfig
 from emonav_drake.learning.dagger_rollouts import run_episode_collect
 from emonav_drake.learning.dagger_student import Student
-from emonav_drake.learning.demonstrations import Demonstrations, FrameStore
+from emonav_drake.learning.demonstrations import Demonstrations, FrameStore, command_index
 from emonav_drake.learning.sac import SacAgent
 from emonav_drake.learning.sac_trainer import train_sac
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.model_aware import load_response, route_expert
 from emonav_drake.planners.networks import Actor, Critic, LgmEncoder
 from emonav_drake.planners.policy import PolicyError, PolicyPlanner, load_policy, save_policy
 
@@ -271,3 +273,28 @@ def test_planner_names_say_what_the_policy_is(tmp_path, capsys):
     with pytest.raises(ValueError, match="not a SAC actor"):
         parse_methods("sac", [f"sac={DEFAULT_POLICY}"])
     assert parse_methods("policy")[0].checkpoint == str(DEFAULT_POLICY)
+
+
+def test_an_mpc_expert_labels_every_state_with_its_nearest_grid_command():
+    """The MPC expert of a route (`DaggerConfig.expert = "mpc"`) in the calibrated world:
+    each label is the grid command nearest to what the real MPC plans there."""
+    env_cfg = EmoNavConfig()
+    env_cfg.episode.max_steps = 12
+    grid = DwaPlanner(env_cfg).candidates
+    response = load_response("digit")
+    demos = Demonstrations(FrameStore(100))
+
+    def world():
+        return NavigationWorld(
+            sample_scenario(10**6 + 3, env_cfg), env_cfg, goal_radius=0.2, response=response
+        )
+
+    expert = route_expert(env_cfg, "mpc", 0.1, "digit")
+    run_episode_collect(world(), expert, None, 1.0, demos, np.random.default_rng(0), grid=grid)
+    mpc, w, labels = MpcPlanner(env_cfg), world(), []
+    while True:
+        labels.append(command_index(grid, mpc.plan(w.planner_input())))
+        if w.step(grid[labels[-1]])[1] is not None:
+            break
+    assert demos.labels == labels and len(labels) == 12
+    assert len(set(labels)) > 1  # it steers, not one constant command

@@ -33,6 +33,7 @@ from emonav_drake.learning.run_state import (
 )
 from emonav_drake.learning.sac_trainer import train_sac
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.policy import load_policy
 from tests.state_equality import assert_equal_state
 
 DEAD_PID = 2**22 + 12_345  # above Linux's largest pid_max: never a running process
@@ -414,3 +415,31 @@ def test_dagger_ctrl_c_at_a_random_point_then_resume_is_bit_exact(
     assert history == reference[3]
     for key, array in reference[4].items():
         assert np.array_equal(array, demos[key]), key
+
+
+def test_an_mpc_expert_route_stopped_in_its_rollouts_resumes_bit_exact(tmp_path, monkeypatch):
+    """The route of the shipped Digit policy (MPC expert, calibrated world) at tiny scale:
+    one expert round and one DAgger round write a loadable policy; Ctrl-C inside a
+    rollout, then resume, gives the same weights, optimiser, history and demonstrations."""
+    cfg = _dagger_cfg(expert="mpc", response="digit")
+    reference = tmp_path / "reference"
+    calls = []
+    with pytest.MonkeyPatch.context() as mp:
+        _dagger_hooks(mp, calls)
+        policy_path = train_dagger(reference, cfg, _dagger_env())
+    _, meta = load_policy(policy_path)
+    assert meta["provenance"]["config"]["expert"] == "mpc"
+    expected = _dagger_result(reference)
+    last_rollout_step = max(i for i, c in enumerate(calls) if c == "collect")  # round 1
+    run, seen = tmp_path / "run", []
+    _dagger_hooks(monkeypatch, seen, at=last_rollout_step)
+    with pytest.raises(RunInterrupted):
+        train_dagger(run, cfg, _dagger_env())
+    monkeypatch.undo()
+    train_dagger(run, cfg, _dagger_env(), resume=True)
+    got = _dagger_result(run)
+    for i, name in enumerate(("model", "optim", "policy")):
+        assert_equal_state(expected[i], got[i], name)
+    assert got[3] == expected[3]
+    for key, array in expected[4].items():
+        assert np.array_equal(array, got[4][key]), key

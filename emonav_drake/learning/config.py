@@ -51,6 +51,10 @@ class DaggerConfig:
     # Start the student from this policy checkpoint ("" = from scratch; "shipped" = the
     # shipped LGM policy); its network must be the one this configuration builds.
     init_policy: str = ""
+    # The expert that labels the states: "dwa" (DWA with `expert_margin`, planning with
+    # `response`) or "mpc" (the OSQP MPC of core/mpc.py, planning with the LIP model; its
+    # continuous commands are labelled as the nearest command of the student's grid).
+    expert: str = "dwa"
     expert_margin: float = 0.05  # the DWA expert's collision margin (`dwa.safety_margin`) [m]
     heading_noise_prob: float = 0.5  # fraction of training episodes starting off course
     heading_noise: float = 1.5  # their initial heading error, uniform in ± this [rad]
@@ -61,6 +65,7 @@ class DaggerConfig:
         """Raise `ConfigError` naming the field if a value is out of range."""
         validate_ranges(self, _DAGGER_RANGES)
         _check_observation(self.grid_kind, self.encoder, self.num_frames)
+        _choice("expert", self.expert, ("dwa", "mpc"))
         return self
 
 

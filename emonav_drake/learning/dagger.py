@@ -84,8 +84,9 @@ from emonav_drake.learning.run_state import (
     set_rng_state,
 )
 from emonav_drake.params import EmoNavConfig
-from emonav_drake.planners.model_aware import model_aware_expert
+from emonav_drake.planners.model_aware import load_response, route_expert
 from emonav_drake.planners.policy import save_policy
+from emonav_drake.planners.protocol import Planner
 
 log = logging.getLogger(__name__)
 
@@ -95,8 +96,8 @@ class _Route:
     """What the steps of one `train_dagger` call share besides the run's state."""
 
     out: Path  # the run directory
-    expert: DwaPlanner
-    response: StepResponseModel | None  # the expert's, the training world's robot
+    expert: Planner  # labels the states (`DaggerConfig.expert`)
+    response: StepResponseModel | None  # the training world's robot (None: the LIP)
     meta: dict  # of every policy file, but its provenance
     variant: str | None
     command: str | None
@@ -193,16 +194,16 @@ def _interruption(prog: RoundProgress, out: Path, resume_command: str | None) ->
 
 def _start(
     cfg: DaggerConfig, env_cfg: EmoNavConfig, resume: bool
-) -> tuple[DaggerRunState, DwaPlanner, StepResponseModel | None]:
+) -> tuple[DaggerRunState, Planner, StepResponseModel | None]:
     """Seed torch and the run's generator; the expert, its response model, the student
     (on the expert's command grid; from `cfg.init_policy` unless `resume`) and empty
     demonstrations."""
     torch.set_num_threads(cfg.threads)
     torch.manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
-    expert = model_aware_expert(env_cfg, cfg.expert_margin, cfg.response)
-    response = expert.response
-    commands = expert.candidates.copy()
+    expert = route_expert(env_cfg, cfg.expert, cfg.expert_margin, cfg.response)
+    response = load_response(cfg.response)
+    commands = DwaPlanner(env_cfg).candidates.copy()  # the student's grid: the DWA's
     student = Student(cfg, env_cfg, commands)
     if cfg.init_policy and not resume:
         student.load_weights(cfg.init_policy)
@@ -272,7 +273,9 @@ def _collect(
                     sc.robot_heading += float(rng.uniform(-cfg.heading_noise, cfg.heading_noise))
                 world = make_world(sc, env_cfg, cfg, route.response)
                 student = None if rnd == 0 else run.student
-                outcome = run_episode_collect(world, route.expert, student, beta, demos, rng)
+                outcome = run_episode_collect(
+                    world, route.expert, student, beta, demos, rng, grid=run.student.commands
+                )
         except KeyboardInterrupt:
             set_rng_state(rng, *undo[0])
             demos.truncate(undo[1], undo[2])

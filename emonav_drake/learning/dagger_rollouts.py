@@ -21,24 +21,33 @@ from emonav_drake.learning.dagger_student import Student
 from emonav_drake.learning.demonstrations import Demonstrations, command_index
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import vector_state
+from emonav_drake.planners.protocol import Planner
 
 
 def run_episode_collect(
     world: NavigationWorld,
-    expert: DwaPlanner,
+    expert: Planner,
     student: Student | None,
     beta: float,
     demos: Demonstrations | None,
     rng: np.random.Generator,
+    grid: np.ndarray | None = None,
 ) -> str:
-    """One episode; the student acts (expert with probability `beta`); label every state."""
+    """One episode; the student acts (expert with probability `beta`); label every state.
+
+    `expert` is any planner with `reset()` and `plan(PlannerInput)`; its command is
+    labelled as the nearest command of the grid: the student's, else `grid` (N, 2), else
+    the expert's own DWA candidates."""
     n = world.config.lidar.num_frames
     expert.reset()  # a model-aware expert remembers the episode's commands
     obs = world.planner_input()
     frame_ids: list[int] = []
     if demos is not None:
         frame_ids.append(demos.store.add(obs.lgm_stack[-1]))
-    commands = student.commands if student is not None else expert.candidates
+    if student is not None:
+        commands = student.commands
+    else:
+        commands = grid if grid is not None else expert.candidates
     bounds = (world.config.robot.max_speed, world.config.robot.max_heading_change)
     k = 0
     while True:

@@ -52,6 +52,19 @@ def model_aware_expert(config: EmoNavConfig, margin: float, response: str = "dig
     return DwaPlanner(expert_cfg, response=load_response(response))
 
 
+def route_expert(config: EmoNavConfig, kind: str, margin: float, response: str = ""):
+    """The expert of a DAgger route (`DaggerConfig.expert`): "dwa" = `model_aware_expert`
+    (collision margin `margin` [m], planning with `response`); "mpc" = the OSQP MPC of
+    `core.mpc` on the LIP model (its own margins; `margin` and `response` unused)."""
+    if kind == "mpc":
+        from emonav_drake.core.mpc import MpcPlanner
+
+        return MpcPlanner(config)
+    if kind != "dwa":
+        raise ConfigError(f"expert = {kind!r} is invalid: must be one of ['dwa', 'mpc']")
+    return model_aware_expert(config, margin, response)
+
+
 def dwa_digit(config: EmoNavConfig):
     """The Digit/Digit route's expert: `model_aware_expert` with the `expert_margin` [m]
     and `response` of `configs/variants/emobipednav_digit.yaml`."""

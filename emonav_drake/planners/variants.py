@@ -17,8 +17,9 @@ planner name of `emonav sim|eval|benchmark` (`--planner NAME`, `--planners NAME,
 | `lndnl` | LNDNL | 9 raw scans, LSTM |
 | `drlvo` | DRL-VO* | scan OGM + pedestrian velocity maps (1 image) |
 | `emobipednav_digit` | EmoBipedNav, Digit/Digit | 9 LGMs; trained with Digit's dynamics |
+| `emobipednav_digit_mpc` | EmoBipedNav, Digit/Digit | the same, the MPC as the teacher |
 
-The last differs by its training world, not its observation: the shipped policy fine-tuned
+The last two differ by their training world, not its observation: the shipped policy fine-tuned
 in the Digit-calibrated reduced world (`core/step_response.py`, `learning/calibration.py`).
 """
 
@@ -84,6 +85,13 @@ VARIANTS: dict[str, PolicyVariant] = {
             "EmoBipedNav (Digit/Digit)",
             "9 LiDAR grid maps; trained with Digit's step response",
             "policies/emobipednav_digit.pt",
+            route="digit",
+        ),
+        PolicyVariant(
+            "emobipednav_digit_mpc",
+            "EmoBipedNav (Digit/Digit, MPC teacher)",
+            "9 LiDAR grid maps; trained with Digit's step response, labelled by the MPC",
+            "policies/emobipednav_digit_mpc.pt",
             route="digit",
         ),
     )
