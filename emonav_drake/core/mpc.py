@@ -112,6 +112,7 @@ import logging
 
 import numpy as np
 
+from emonav_drake.core.dwa import ResponseMemory
 from emonav_drake.core.mpc_guide import GuidePath
 from emonav_drake.core.mpc_model import HorizonModel
 from emonav_drake.core.mpc_qp import (
@@ -123,7 +124,9 @@ from emonav_drake.core.mpc_qp import (
     solution_accepted,
     solve_qp,
 )
+from emonav_drake.core.mpc_response import ResponseHorizonModel
 from emonav_drake.core.navigation import PlannerInput
+from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.params import EmoNavConfig
 
 log = logging.getLogger(__name__)
@@ -157,6 +160,8 @@ class MpcMemory:
     plan: _Plan | None = None  # the previous step's plan and duals (the warm start)
     guide: GuidePath | None = None  # the guide path of the episode's static discs …
     guide_key: tuple | None = None  # … and what it was built for (goal, discs)
+    # With a step-response model: u_{k−2} and the pose one step ago (v̄ is measured).
+    response: ResponseMemory | None = None
 
 
 class MpcPlanner:
@@ -169,6 +174,10 @@ class MpcPlanner:
 
     Args:
         config: robot bounds and LIP constants, discomfort distances and the `mpc` params.
+        response: None plans with the LIP (paper Eq. 1); a `StepResponseModel` plans with
+            the robot's fitted step response instead (`core/mpc_response.py`): the commands
+            already sent (u_{k−2} from the memory, u_{k−1} = `obs.last_command`) first, the
+            step-averaged speed measured from the memory's previous pose.
 
     Attributes:
         fallbacks: planning steps that fell back to the safe command (never reset).
@@ -182,12 +191,16 @@ class MpcPlanner:
 
     name = "mpc"
 
-    def __init__(self, config: EmoNavConfig) -> None:
+    def __init__(self, config: EmoNavConfig, response: StepResponseModel | None = None) -> None:
         self.config = config
         self.params = config.mpc
+        self.response = response
         # The horizon's constants and solver-free model (rollout, Jacobian, obstacles,
-        # seeds, nonlinear cost): `core/mpc_model.py`.
-        self.model = HorizonModel(config)
+        # seeds, nonlinear cost): `core/mpc_model.py` (`core/mpc_response.py` with a
+        # step-response model).
+        self.model = (
+            HorizonModel(config) if response is None else ResponseHorizonModel(config, response)
+        )
         self.horizon = self.model.horizon
         self.hard_steps = self.model.hard_steps
         # OSQP workspaces: a cache (see the module docstring: a plan does not depend on
@@ -233,6 +246,12 @@ class MpcPlanner:
         p0 = np.array([rb.x, rb.y], dtype=float)
         th0, v0 = float(rb.heading), float(rb.speed)
         last = np.asarray(obs.last_command, dtype=float)
+        model, response_memory = self.model, None
+        if self.response is not None:  # the commands already sent, the speed v̄
+            sent = memory.response or ResponseMemory()
+            v0 = sent.step_speed(rb, self.config.robot.step_time)
+            model = self.model.with_committed(np.stack([sent.command, last]))
+            response_memory = ResponseMemory(last.copy(), np.array([rb.x, rb.y, rb.heading]))
         goal = np.asarray(obs.goal_xy, dtype=float)
         obst = self.model.obstacles(obs.crowd)
         guide, guide_key = self._guide_for(p0, goal, obs, memory)
@@ -249,21 +268,22 @@ class MpcPlanner:
         if prev is not None and prev.step == obs.step - 1 and prev.key == key:
             prev_u = np.vstack([prev.u[1:], prev.u[-1:]])
             y0 = shift_duals(prev.y, layout, self.horizon)
-        u_bar = self._choose_seed(p0, th0, v0, last, target, obst, prev_u)
-        solved, y_sol = self._scp(u_bar, y0, p0, th0, v0, last, target, obst, layout, info)
+        u_bar = self._choose_seed(model, p0, th0, v0, last, target, obst, prev_u)
+        solved, y_sol = self._scp(model, u_bar, y0, p0, th0, v0, last, target, obst, layout, info)
 
         if solved is None:
             self.fallbacks += 1
             info["fallback"] = True
             # No plan for this step: the next one starts cold.
             command = np.array([p.fallback_speed_scale * v0, 0.0])
-            return np.clip(command, lo, hi), MpcMemory(None, guide, guide_key)
+            return np.clip(command, lo, hi), MpcMemory(None, guide, guide_key, response_memory)
         new_plan = _Plan(solved.copy(), y_sol.copy(), key, int(obs.step))
         command = np.clip(solved[0].copy(), lo, hi)
-        return command, MpcMemory(new_plan, guide, guide_key)
+        return command, MpcMemory(new_plan, guide, guide_key, response_memory)
 
     def _scp(
         self,
+        model: HorizonModel,
         u_bar: np.ndarray,
         y0: np.ndarray,
         p0: np.ndarray,
@@ -282,7 +302,7 @@ class MpcPlanner:
         y_sol = y0
         x_warm = None
         for it in range(self.params.scp_iterations):
-            lin = linearise(self.model, u_bar, p0, th0, v0, last, target, obst, layout)
+            lin = linearise(model, u_bar, p0, th0, v0, last, target, obst, layout)
             if x_warm is None:
                 x_warm = np.concatenate([u_bar[:, 0], u_bar[:, 1], lin["s0"]])
             z, y, ok = self._solve(layout, lin, x_warm, y_sol, first=(it == 0), info=info)
@@ -369,6 +389,7 @@ class MpcPlanner:
     # ------------------------------------------------------------------ seeds
     def _choose_seed(
         self,
+        model: HorizonModel,
         p0: np.ndarray,
         th0: float,
         v0: float,
@@ -378,10 +399,10 @@ class MpcPlanner:
         prev_u: np.ndarray | None,
     ) -> np.ndarray:
         """The seed with the lowest nonlinear cost (the previous plan first, with a bonus)."""
-        seeds = self.model.seeds(th0, p0, target)
+        seeds = model.seeds(th0, p0, target)
         if prev_u is not None:
             seeds = np.concatenate([prev_u[None], seeds], axis=0)
-        cost = self.model.nonlinear_cost(seeds, p0, th0, v0, last, target, obst)
+        cost = model.nonlinear_cost(seeds, p0, th0, v0, last, target, obst)
         if prev_u is not None:
             cost[0] -= self.params.previous_plan_bonus * abs(cost[0])
         return seeds[int(np.argmin(cost))].copy()

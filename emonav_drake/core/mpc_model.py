@@ -115,6 +115,14 @@ class HorizonModel:
         jac[:, n:] = np.where(self.tri[..., None], csum[:, None, :] - before[None, :, :], 0.0)
         return jac
 
+    def positions_and_jacobian(
+        self, p0: np.ndarray, th0: float, v0: float, u: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Step-end positions (N, 2) of one plan u (N, 2) and ∂p_{k+1}/∂u (N, 2N, 2): what
+        the QP is linearised with (`mpc_qp.linearise`)."""
+        pos, phi, dx = self.rollout(p0, th0, v0, u[None])
+        return pos[0], self.jacobian(phi[0], dx[0])
+
     # ------------------------------------------------------------------ obstacles
     def obstacles(self, crowd: CrowdSnapshot) -> dict:
         """Predicted centres (N, O, 2), zone and contact radii, slack caps and weights."""

@@ -165,9 +165,7 @@ def linearise(
     p = model.params
     n = model.horizon
     nu = 2 * n
-    pos, phi, dx = model.rollout(p0, th0, v0, u_bar[None])
-    pos, phi, dx = pos[0], phi[0], dx[0]
-    jac = model.jacobian(phi, dx)  # (N, 2N, 2)
+    pos, jac = model.positions_and_jacobian(p0, th0, v0, u_bar)  # (N, 2), (N, 2N, 2)
     ub = np.concatenate([u_bar[:, 0], u_bar[:, 1]])
     # Gauss–Newton goal term: with J2 (2N, 2N) = rows ∂/∂u, columns (k, x|y),
     # Σ_k w_k |p̄_k + J_k (u − ū) − p_k^ref|² = |J2ᵀ u + r|²_W, r = p̄ − p^ref − J2ᵀ ū.

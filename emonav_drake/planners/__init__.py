@@ -10,7 +10,8 @@ workers can build by name; the built-in ones are registered below, one line each
 
 * model planners (no checkpoint): `dwa` and `mpc` (the math in `core/dwa.py`,
   `core/mpc.py`), `dwa_digit` (DWA planning with Digit's step-response model, the
-  Digit/Digit route's expert, `planners/model_aware.py`);
+  Digit/Digit route's expert, `planners/model_aware.py`), `mpc_digit` (the MPC planning
+  with that model, `core/mpc_response.py`);
 * learned planners (a policy checkpoint, `planners/policy.py`): `policy` (any trained
   checkpoint, by default the shipped policy), `sac` (a SAC-trained actor, checkpoint
   required), and every variant of `planners/variants.py` (its shipped policy by default).
@@ -62,6 +63,13 @@ def _mpc(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
     return MpcPlanner(config)
 
 
+def _mpc_digit(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
+    from emonav_drake.core.mpc import MpcPlanner
+    from emonav_drake.planners.model_aware import load_response
+
+    return MpcPlanner(config, response=load_response("digit"))
+
+
 def _dwa_digit(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
     from emonav_drake.planners.model_aware import dwa_digit
 
@@ -102,6 +110,7 @@ def _no_sac_checkpoint() -> Path:
 
 register(PlannerKind("dwa", _dwa, summary="dynamic window approach (paper's baseline)"))
 register(PlannerKind("mpc", _mpc, summary="OSQP social MPC"))
+register(PlannerKind("mpc_digit", _mpc_digit, summary="OSQP MPC with Digit's step response"))
 register(PlannerKind("dwa_digit", _dwa_digit, summary="DWA with Digit's step response"))
 register(
     PlannerKind("policy", _policy, True, _default_policy, "a policy checkpoint (default: shipped)")
