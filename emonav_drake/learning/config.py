@@ -2,8 +2,9 @@
 
 Loadable from YAML with `emonav_drake.params.load_typed_yaml` (no `from __future__
 import annotations` here: Drake's typed loader needs real types). `validate()` checks
-every field against its allowed range (`_DAGGER_RANGES`, `_SAC_RANGES`, in the style of
-`params._RANGES`) and the cross-field rules, raising `ConfigError` naming the field.
+every field against its allowed range (`_DAGGER_RANGES`, `_SAC_RANGES`,
+`_FINETUNE_RANGES`, in the style of `params._RANGES`) and the cross-field rules,
+raising `ConfigError` naming the field.
 """
 
 import dataclasses as dc
@@ -210,4 +211,107 @@ _SAC_RANGES = {
     "num_frames": (1, 64),
     "grid_size": (2, 1000),
     "goal_radius": (0.01, 2.0),
+}
+
+
+# `emonav benchmark`'s evaluation seeds are 0 … EVALUATION_SEEDS − 1 (docs/results.md): a
+# training or selection seed range must stay clear of them.
+EVALUATION_SEEDS = 500
+
+
+@dc.dataclass
+class FinetuneConfig:
+    """Discrete soft actor-critic fine-tuning of a categorical student
+    (`learning/finetune.py`; docs/learning.md, "Fine-tuning a student by SAC")."""
+
+    seed: int = 0
+    device: str = "cpu"
+    threads: int = 1  # batch-1 acting and small MLP updates are fastest on one thread
+    # The training and selection world, as `DaggerConfig.response`: "" = the paper's LIP;
+    # "digit" = the shipped Digit step-response model; or a fitted model JSON.
+    response: str = ""
+    # Episodes end within this goal radius (the DAgger route's, `episode.eval_goal_radius`).
+    goal_radius: float = EpisodeParams.eval_goal_radius
+    total_steps: int = 200_000  # environment (walking) steps; the episode reaching it ends
+    replay_size: int = 200_000  # transitions kept (features, not maps: ≈ 270 B each)
+    learning_starts: int = 5_000  # environment steps collected before the first update
+    # Gradient updates per environment step, made after each training episode (every
+    # episode is collected by a fixed actor; Ctrl-C undoes a partial one).
+    updates_per_step: float = 1.0
+    batch_size: int = 256
+    hidden: int = 256  # the twin critics: two hidden layers of this width
+    state_features: int = 64  # the critics' own vector-state embedding (the actor's: 64)
+    critic_lr: float = 3e-4
+    actor_lr: float = 1e-4  # the student's head moves slowly
+    alpha_lr: float = 3e-4
+    discount: float = 0.99  # γ (the paper's `episode.discount`)
+    tau: float = 0.005  # Polyak rate of the target critics, every update
+    critic_loss: str = "huber"  # "huber" (smooth L1, δ = 1) or "mse" on the soft TD target
+    # The first updates train the critics only (actor and α fixed): a random critic must
+    # not wreck a good actor.
+    critic_warmup: int = 20_000
+    alpha_tuning: bool = True  # tune α to `target_entropy`; False: α = init_alpha, fixed
+    init_alpha: float = 0.01
+    # Target entropy as a fraction of log |A| (log 99 = 4.60 nats): 0.15 → 0.69 nats, about
+    # the DAgger students' own mean entropy (0.57 shipped/LIP, 0.80 Digit/Digit).
+    target_entropy: float = 0.15
+    # + bc_weight · KL(π_init ‖ π): keeps the actor near the student where the critic is
+    # unsure (0 = plain SAC).
+    bc_weight: float = 0.1
+    temperature: float = 1.0  # acting during collection samples softmax(logits / this)
+    eval_every: int = 20_000  # environment steps between selection evaluations
+    eval_episodes: int = 200
+    eval_seed_offset: int = 600_000  # selection seeds offset + i (the DAgger routes')
+    train_seed_offset: int = 2_000_000  # training scenarios: seeds offset + i
+
+    def validate(self) -> "FinetuneConfig":
+        """Raise `ConfigError` naming the field if a value is out of range, or if the
+        training, selection and evaluation seed ranges overlap."""
+        validate_ranges(self, _FINETUNE_RANGES)
+        _choice("critic_loss", self.critic_loss, ("huber", "mse"))
+        # at most one episode per environment step: seeds offset … offset + total_steps − 1
+        ranges = {
+            "train_seed_offset": (self.train_seed_offset, self.total_steps),
+            "eval_seed_offset": (self.eval_seed_offset, self.eval_episodes),
+        }
+        for name, (first, count) in ranges.items():
+            if first < EVALUATION_SEEDS:
+                raise ConfigError(
+                    f"{name} = {first} is invalid: must be >= {EVALUATION_SEEDS} (seeds "
+                    f"0-{EVALUATION_SEEDS - 1} are the evaluation seeds)"
+                )
+        (a, na), (b, nb) = ranges.values()
+        if a < b + nb and b < a + na:
+            raise ConfigError(
+                f"train_seed_offset = {a} is invalid: the training seeds {a}-{a + na - 1} "
+                f"overlap the selection seeds {b}-{b + nb - 1} (eval_seed_offset)"
+            )
+        return self
+
+
+_FINETUNE_RANGES = {
+    "seed": (0, None),
+    "threads": (1, 1024),
+    "goal_radius": (0.01, 2.0),
+    "total_steps": (1, None),
+    "replay_size": (1, None),
+    "learning_starts": (0, None),
+    "updates_per_step": (0.0, 1000.0),
+    "batch_size": (1, None),
+    "hidden": (1, 65536),
+    "state_features": (1, 65536),
+    "critic_lr": (1e-8, 1.0),
+    "actor_lr": (0.0, 1.0),
+    "alpha_lr": (1e-8, 1.0),
+    "discount": (0.0, 1.0),
+    "tau": (1e-6, 1.0),
+    "critic_warmup": (0, None),
+    "init_alpha": (1e-8, 1e3),
+    "target_entropy": (0.0, 1.0),
+    "bc_weight": (0.0, 1e3),
+    "temperature": (1e-3, 1e3),
+    "eval_every": (1, None),
+    "eval_episodes": (1, None),
+    "eval_seed_offset": (0, None),
+    "train_seed_offset": (0, None),
 }
