@@ -43,8 +43,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     b.add_argument(
         "--planners",
         default="policy,mpc,dwa",
-        help="comma-separated methods: dwa, mpc, dwa_digit (DWA planning with Digit's "
-        "step-response model: the Digit/Digit route's expert), policy (the shipped policy), "
+        help="comma-separated methods: dwa, mpc, mpc_digit and dwa_digit (the MPC and DWA "
+        "planning with Digit's step-response model), policy (the shipped policy), "
         "a variant, or a name given a --checkpoint (sac: a SAC-trained one)",
     )
     b.add_argument("--plant", default="lip", choices=list(PLANTS))
