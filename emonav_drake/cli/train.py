@@ -1,9 +1,12 @@
-"""`emonav train`: the SAC trainer (paper-scale, `--algo sac`) or the CPU route (`--algo dagger`).
+"""`emonav train`: the SAC trainer (paper-scale, `--algo sac`), the CPU route (`--algo dagger`)
+or the SAC fine-tuning of a trained student (`--algo finetune`).
 
 emonav train --algo dagger --out runs/dagger --seed 0 [--device cpu] [--resume runs/dagger]
 emonav train --variant NAME [--out runs/NAME] [--seed 0] [--resume runs/NAME]
 emonav train --algo sac [--config FILE] [--plant lip|digit] [--steps N] [--device cpu|cuda]
              [--envs W] [--ray-address ADDR] [--out DIR] [--resume DIR]
+emonav train --algo finetune --init PATH|shipped|VARIANT [--config FILE] [--steps N]
+             [--device cpu|cuda] [--out DIR] [--resume DIR]
 """
 
 from __future__ import annotations
@@ -23,10 +26,21 @@ from emonav_drake.planners.variants import VARIANTS, variant
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register `emonav train` on the CLI's sub-parsers."""
     t = subparsers.add_parser(
-        "train", help="train a navigation policy (SAC, or the CPU DAgger route)"
+        "train",
+        help="train a navigation policy (SAC, the CPU DAgger route, or SAC fine-tuning of a "
+        "trained student)",
     )
     t.add_argument(
-        "--algo", choices=["sac", "dagger"], help="sac (default) or dagger (the CPU route)"
+        "--algo",
+        choices=["sac", "dagger", "finetune"],
+        help="sac (default), dagger (the CPU route) or finetune (discrete SAC on a trained "
+        "categorical student, --init)",
+    )
+    t.add_argument(
+        "--init",
+        help="--algo finetune: the student to fine-tune: a policy file, shipped (the shipped "
+        "LGM policy) or a shipped variant's name (e.g. emobipednav_digit); required unless "
+        "--resume",
     )
     t.add_argument(
         "--variant",
@@ -39,11 +53,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "--config",
         type=Path,
         help="YAML training configuration: top-level SacConfig fields for --algo sac, "
-        "DaggerConfig fields for --algo dagger (see emonav_drake/learning/config.py; the "
-        "navigation environment is the paper's default and not configurable here)",
+        "DaggerConfig fields for --algo dagger, FinetuneConfig fields for --algo finetune "
+        "(e.g. emonav_drake/configs/finetune_digit.yaml; see emonav_drake/learning/config.py; "
+        "the navigation environment is the paper's default and not configurable here)",
     )
     t.add_argument(
-        "--steps", type=int, help="SAC environment steps, >= 1 (default from the config)"
+        "--steps",
+        type=int,
+        help="SAC or fine-tuning environment steps, >= 1 (default from the config)",
     )
     t.add_argument(
         "--plant",
@@ -83,8 +100,8 @@ def _apply_variant(args: argparse.Namespace) -> None:
             f"--variant {args.variant} brings its configuration "
             f"({variant(args.variant).config.name}); --config cannot be combined with it"
         )
-    if args.algo == "sac":
-        raise ConfigError("--variant trains by the CPU route: drop --algo sac")
+    if args.algo in ("sac", "finetune"):
+        raise ConfigError(f"--variant trains by the CPU route: drop --algo {args.algo}")
     args.algo, args.config = "dagger", variant(args.variant).config
     if args.out is None:
         args.out = Path("runs") / args.variant
@@ -107,8 +124,22 @@ def _training_config(args: argparse.Namespace):
                 "--plant applies to --algo sac only (the CPU route learns Digit's dynamics "
                 "through its calibrated world: `response: digit` in its configuration)"
             )
+    elif args.algo == "finetune":
+        from emonav_drake.learning.config import FinetuneConfig as schema
+
+        for flag, value in (
+            ("--plant", args.plant),
+            ("--envs", args.envs),
+            ("--ray-address", args.ray_address),
+        ):
+            if value is not None:
+                raise ConfigError(
+                    f"{flag} applies to --algo sac only (fine-tuning learns in the reduced "
+                    "world of its configuration's `response`)"
+                )
     else:
         from emonav_drake.learning.config import SacConfig as schema
+    _check_init(args)
     cfg = load_typed_yaml(schema, path=args.config) if args.config else schema()
     if args.steps is not None and args.steps < 1:
         raise ConfigError(f"--steps {args.steps}: must be >= 1")
@@ -130,6 +161,27 @@ def _training_config(args: argparse.Namespace):
     except ConfigError as e:
         raise ConfigError(f"{where}{e}") from None
     return cfg
+
+
+def _check_init(args: argparse.Namespace) -> None:
+    """--init: required by a new --algo finetune run, refused otherwise."""
+    if args.algo != "finetune":
+        if args.init is not None:
+            raise ConfigError(
+                f"--init applies to --algo finetune only (--algo {args.algo}"
+                + (": `init_policy` in its --config)" if args.algo == "dagger" else ")")
+            )
+        return
+    if args.resume is not None and args.init is not None:
+        raise ConfigError(
+            f"--init {args.init}: a resumed run continues from the state in {args.resume} "
+            "(which records its initial policy): drop --init"
+        )
+    if args.resume is None and args.init is None:
+        raise ConfigError(
+            "--algo finetune needs --init: the categorical student to fine-tune (a policy "
+            "file, shipped, or a shipped variant's name such as emobipednav_digit)"
+        )
 
 
 def resume_command(args: argparse.Namespace, out: Path) -> str:
@@ -168,10 +220,27 @@ def cmd_train(args: argparse.Namespace) -> int:
         out = args.resume
     else:
         out = check_output_dir(args.out, "--out")
+    command = "emonav " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    if args.algo == "finetune":
+        from emonav_drake.learning.finetune import train_finetune
+        from emonav_drake.learning.finetune_agent import load_init
+        from emonav_drake.params import EmoNavConfig
+
+        if args.resume is None:
+            load_init(args.init, EmoNavConfig(), args.device, "--init")  # before --out exists
+        path = train_finetune(
+            out,
+            cfg,
+            init=args.init,
+            resume=args.resume is not None,
+            command=command,
+            resume_command=resume_command(args, out),
+        )
+        print(f"policy written to {path}")
+        return 0
     if args.algo == "dagger":
         from emonav_drake.learning.dagger import train_dagger
 
-        command = "emonav " + " ".join(shlex.quote(a) for a in sys.argv[1:])
         path = train_dagger(
             out,
             cfg,

@@ -235,6 +235,8 @@ def describe_policy(meta: dict[str, Any]) -> str:
     )
     if policy_kind(meta) == "sac":
         route = "SAC actor"
+    elif prov.get("route") == "finetune":
+        route = "DAgger student fine-tuned by SAC"
     else:
         route = "DAgger student"
         if "round" in prov:
