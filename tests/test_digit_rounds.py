@@ -3,6 +3,7 @@ a calibrated run, then one Digit round whose student acts in the Digit diagram w
 model-aware expert labels; the round writes a loadable policy and a resumable state."""
 
 import numpy as np
+import pytest
 
 from emonav_drake.config_yaml import load_typed_yaml
 from emonav_drake.learning.config import DaggerConfig
@@ -13,8 +14,9 @@ from emonav_drake.planners.policy import PolicyPlanner
 from emonav_drake.planners.variants import variant
 
 
-def test_a_tiny_digit_round_writes_a_loadable_policy(tmp_path):
-    cfg = load_typed_yaml(DaggerConfig, path=variant("emobipednav_digit").config)
+@pytest.mark.parametrize("route", ["emobipednav_digit", "emobipednav_digit_mpc"])
+def test_a_tiny_digit_round_writes_a_loadable_policy(tmp_path, route):
+    cfg = load_typed_yaml(DaggerConfig, path=variant(route).config)
     cfg.expert_episodes, cfg.episodes_per_round, cfg.rounds = 2, 1, 1
     cfg.grad_steps_first, cfg.grad_steps_per_round, cfg.batch_size = 2, 2, 8
     cfg.eval_episodes = 1
@@ -27,6 +29,7 @@ def test_a_tiny_digit_round_writes_a_loadable_policy(tmp_path):
     planner = PolicyPlanner(policy)
     prov = planner.meta["provenance"]
     assert prov["route"] == "dagger+digit" and prov["round"] == 0
+    assert prov["config"]["expert"] == cfg.expert  # the calibrated run's teacher labels
     (entry,) = prov["history"]
     assert entry["episodes"] == 2 and entry["seeds"] == [4_000_000, 4_000_001]
     assert entry["digit_samples"] >= 6  # 3 planner instants (at least) per episode

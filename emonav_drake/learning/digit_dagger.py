@@ -9,8 +9,9 @@ fitted to Digit; these rounds close what the fit misses. Each round:
 
 1. **collect** `episodes` Digit navigation episodes (the whole diagram: station, crowd,
    LiDAR grid maps) on seeds `first_seed + round·episodes + i`, one per Ray task. The
-   planner is `LabellingPlanner`: at every t_k it asks the model-aware DWA expert
-   (`DwaPlanner(response=digit model)`, margin `expert_margin`) for its command, records
+   planner is `LabellingPlanner`: at every t_k it asks the calibrated run's expert (its
+   `DaggerConfig.expert`: the model-aware DWA, `DwaPlanner(response=digit model)` with
+   margin `expert_margin`, or the MPC) for its command, records
    the newest observation frame, the vector state and the expert's label, and sends the
    student's command (the expert's with probability β, drawn per (seed, step));
 2. **aggregate** the new samples with the calibrated run's demonstrations (its
@@ -36,6 +37,7 @@ import numpy as np
 from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.params import ConfigError
 from emonav_drake.planners.policy import vector_state
+from emonav_drake.planners.protocol import Planner
 
 log = logging.getLogger(__name__)
 DIGIT_ROUNDS_FORMAT = "emonav-digit-dagger/1"
@@ -54,7 +56,7 @@ class LabellingPlanner:
 
     name = "labelling"
 
-    def __init__(self, student, expert: DwaPlanner, beta: float, seed: int) -> None:
+    def __init__(self, student, expert: Planner, beta: float, seed: int) -> None:
         self.student, self.expert, self.beta, self.seed = student, expert, beta, seed
         self.commands = student.commands
         self.grid_kind = student.grid_kind
@@ -81,25 +83,28 @@ class LabellingPlanner:
         return self.student.plan(obs), memory
 
 
-def _round_worker(beta: float, expert_margin: float) -> type:
+def _round_worker(beta: float, expert_margin: float, expert: str) -> type:
     """The Ray actor class of `collect_round`: one labelled Digit episode per task."""
     from emonav_drake.diagrams.trials import TrialWorker
 
     class RoundWorker(TrialWorker):
         def run(self, method: str, seed: int) -> dict:
-            return _labelled_episode(self.runner, method, seed, beta, expert_margin)
+            return _labelled_episode(self.runner, method, seed, beta, expert_margin, expert)
 
     return RoundWorker
 
 
-def _labelled_episode(runner, method: str, seed: int, beta: float, margin: float) -> dict:
-    """One Digit episode of the student (`runner`'s method) labelled by the expert."""
+def _labelled_episode(
+    runner, method: str, seed: int, beta: float, margin: float, expert_kind: str = "dwa"
+) -> dict:
+    """One Digit episode of the student (`runner`'s method) labelled by the expert
+    (`expert_kind`: "dwa", the model-aware DWA with `margin`, or "mpc")."""
     from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
-    from emonav_drake.planners.model_aware import model_aware_expert
+    from emonav_drake.planners.model_aware import route_expert
 
     student, cfg, grid_kind = runner.planner(method)
-    expert = model_aware_expert(cfg, margin)
+    expert = route_expert(cfg, expert_kind, margin, "digit")
     planner = LabellingPlanner(student, expert, beta, seed)
     t0 = time.perf_counter()
     record = run_digit_episode(
@@ -129,6 +134,9 @@ class DigitRoundsConfig:
     digit_fraction: float = 0.5  # of every batch from Digit samples
     expert_margin: float = 0.1
     seed: int = 0
+    # The labelling expert: "dwa" or "mpc"; `run_digit_rounds` sets it to the calibrated
+    # run's (`DaggerConfig.expert`), so both kinds of demonstrations have one teacher.
+    expert: str = "dwa"
 
     def validate(self) -> DigitRoundsConfig:
         """Raise `ConfigError` naming the flag (or field) of a value out of range."""
@@ -147,6 +155,8 @@ class DigitRoundsConfig:
             raise ConfigError(f"digit_fraction = {self.digit_fraction}: must be in (0, 1]")
         if not 0.0 <= self.expert_margin <= 2.0:
             raise ConfigError(f"expert_margin = {self.expert_margin}: must be in [0, 2] m")
+        if self.expert not in ("dwa", "mpc"):
+            raise ConfigError(f"expert = {self.expert!r}: must be 'dwa' or 'mpc'")
         if not 0 <= self.seed <= MAX_SEED:
             raise ConfigError(f"seed = {self.seed}: must be in [0, 2**64 - 1]")
         last = self.first_seed + self.rounds * self.episodes - 1
@@ -182,13 +192,15 @@ def collect_round(
         dump_config(env_config or EmoNavConfig()),
     )
     beta = cfg.beta * 0.5**rnd
-    worker_cls = _round_worker(beta, cfg.expert_margin)
+    worker_cls = _round_worker(beta, cfg.expert_margin, cfg.expert)
     first = cfg.first_seed + rnd * cfg.episodes
     tasks = [("student", first + i) for i in range(cfg.episodes)]
     results: list[dict] = []
     if workers <= 1 and ray_address is None:
         runner = TrialRunner(spec)
-        results = [_labelled_episode(runner, m, s, beta, cfg.expert_margin) for m, s in tasks]
+        results = [
+            _labelled_episode(runner, m, s, beta, cfg.expert_margin, cfg.expert) for m, s in tasks
+        ]
     else:
         run_trials(spec, tasks, results.append, workers, ray_address, worker_cls=worker_cls)
     return sorted(results, key=lambda r: r["seed"])
@@ -228,7 +240,8 @@ def run_digit_rounds(
 
     cfg.validate()
     out, source = Path(out), Path(source)
-    n, calibrated, digit, student, start_policy = _start_from(source)
+    n, calibrated, digit, student, start_policy, expert = _start_from(source)
+    cfg = dc.replace(cfg, expert=expert)  # the calibrated run's teacher labels here too
     rnd, history = _resume_rounds(out, cfg, digit, student, n) if resume else (0, [])
     out.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(cfg.seed + rnd)
@@ -259,7 +272,7 @@ def run_digit_rounds(
 def _start_from(source: Path) -> tuple:
     """What the rounds start from in the calibrated run `source`: `(num_frames, its
     demonstrations, empty Digit demonstrations, the student with its weights, the path of
-    its policy)` (`RunStateError` if its DAgger state is missing or refused)."""
+    its policy, its expert)` (`RunStateError` if its DAgger state is missing or refused)."""
     from emonav_drake.learning.dagger_state import STATE_FILE as SOURCE_STATE
     from emonav_drake.learning.dagger_state import read_dagger_state
     from emonav_drake.learning.dagger_student import Student
@@ -280,7 +293,7 @@ def _start_from(source: Path) -> tuple:
     student = Student(dcfg, env_cfg, commands)
     start_policy = source / "policy.pt"
     student.load_weights(str(start_policy))
-    return n, calibrated, digit, student, start_policy
+    return n, calibrated, digit, student, start_policy, dcfg.expert
 
 
 def _resume_rounds(out: Path, cfg: DigitRoundsConfig, digit, student, n: int) -> tuple[int, list]:
