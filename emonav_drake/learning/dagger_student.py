@@ -21,7 +21,7 @@ from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.demonstrations import Demonstrations, command_index
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.networks import CategoricalPolicy
-from emonav_drake.planners.policy import DEFAULT_POLICY, build_encoder, encoder_spec, load_policy
+from emonav_drake.planners.policy import LIP_POLICY, build_encoder, encoder_spec, load_policy
 
 
 class Student:
@@ -55,7 +55,7 @@ class Student:
     def load_weights(self, policy: str) -> None:
         """Start from a trained policy ("shipped" = the shipped LGM policy, or a path);
         `ConfigError` if its network or command grid is not this student's."""
-        path = DEFAULT_POLICY if policy == "shipped" else Path(policy)
+        path = LIP_POLICY if policy == "shipped" else Path(policy)
         model, meta = load_policy(path)
         ob = meta["observation"]
         if meta["kind"] != "categorical" or (ob["grid_kind"], ob["num_frames"]) != (

@@ -42,7 +42,7 @@ from emonav_drake.learning.config import FinetuneConfig
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.networks import VECTOR_STATE, CategoricalPolicy, mlp
 from emonav_drake.planners.policy import (
-    DEFAULT_POLICY,
+    LIP_POLICY,
     PolicyError,
     describe_policy,
     load_policy,
@@ -52,11 +52,12 @@ from emonav_drake.planners.variants import VARIANTS
 
 
 def resolve_init(spec: str, label: str = "init policy") -> Path:
-    """The file of an initial policy: "shipped" (the shipped LGM policy), a shipped
-    variant's name (e.g. "emobipednav_digit", unless a file of that name exists), or a path.
+    """The file of an initial policy: "shipped" (the LIP-trained LGM policy, `LIP_POLICY`),
+    a shipped variant's name (e.g. "emobipednav_digit", unless a file of that name exists),
+    or a path.
     `ConfigError` starting with `label` for a variant that has no shipped policy."""
     if spec == "shipped":
-        return DEFAULT_POLICY
+        return LIP_POLICY
     path = Path(spec)
     if not path.exists() and spec in VARIANTS:
         v = VARIANTS[spec]

@@ -43,7 +43,11 @@ from emonav_drake.planners.networks import (
 from emonav_drake.torch_load import load_failure, refused_global
 
 FORMAT = "emonav-policy/1"
-DEFAULT_POLICY = Path(__file__).resolve().parent.parent / "data" / "policy_lgm.pt"
+_DATA = Path(__file__).resolve().parent.parent / "data"
+# The LIP-trained student (LIP/·; variant `emobipednav`; "shipped" as a route's init_policy).
+LIP_POLICY = _DATA / "policy_lgm.pt"
+# What `--planner policy` runs without a --checkpoint (data/README.md says which and why).
+DEFAULT_POLICY = LIP_POLICY
 
 
 class PolicyError(ValueError):
