@@ -1,0 +1,93 @@
+"""The learning curve of a training route, stage by stage, in the world it learns in.
+
+    python scripts/route_stage_curve.py \\
+        --dagger benchmarks/results/digit_mpc_route/dagger_history.json \\
+        --finetune benchmarks/results/digit_mpc_route/finetune_history.json \\
+        --teacher "MPC (teacher)=0.995" --n 200 \\
+        --png docs/figures/digit_mpc_route_stages.png
+
+x: cumulative wall time of the route on one core [min] (each stage's collection, training
+and evaluation); y: the success rate on the route's selection seeds with its 95 % Wilson
+interval — every DAgger round (`history.json` of `emonav train --algo dagger`), then every
+evaluation of the SAC fine-tuning (`history.json` of `emonav train --algo finetune`). A
+dashed line marks a reference measured on the same seeds (e.g. the teacher).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+from emonav_drake.core import palette  # noqa: E402
+from emonav_drake.evaluation.tables import wilson_interval  # noqa: E402
+
+
+def _dagger(path: Path) -> tuple[list[float], list[float], list[str]]:
+    t, xs, sr, labels = 0.0, [], [], []
+    for e in json.loads(path.read_text()):
+        t += (e["collect_s"] + e["train_s"] + e["eval_s"]) / 60.0
+        xs.append(t)
+        sr.append(e["eval"]["SR"])
+        labels.append(f"r{e['round']}")
+    return xs, sr, labels
+
+
+def _finetune(path: Path, start: float) -> tuple[list[float], list[float], list[str]]:
+    xs, sr, labels = [], [], []
+    for e in json.loads(path.read_text()):
+        xs.append(start + (e["collect_s"] + e["update_s"] + e["eval_s"]) / 60.0)
+        sr.append(e["eval"]["SR"])
+        labels.append(f"{e['env_steps'] // 1000}k")
+    return xs, sr, labels
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--dagger", type=Path, required=True)
+    ap.add_argument("--finetune", type=Path)
+    ap.add_argument("--teacher", action="append", default=[], help="LABEL=SR on the same seeds")
+    ap.add_argument("--n", type=int, default=200, help="selection episodes per point")
+    ap.add_argument("--title", default="Digit/Digit route in the calibrated world")
+    ap.add_argument("--png", type=Path, required=True)
+    args = ap.parse_args()
+
+    fig, ax = plt.subplots(figsize=(7.5, 4.0), dpi=150)
+    stages = [("DAgger rounds (MPC teacher)", _dagger(args.dagger))]
+    if args.finetune is not None:
+        xs, sr, labels = _finetune(args.finetune, stages[0][1][0][-1])
+        labels[0] = ""  # its first evaluation is the student it starts from
+        stages.append(("SAC fine-tuning from the kept round", (xs, sr, labels)))
+    colours = [palette.METHOD_RGB["policy"], palette.METHOD_CYCLE[1]]
+    offsets = [7, -13]  # labels above the DAgger points, below the fine-tuning ones
+    for (name, (xs, sr, labels)), colour, dy in zip(stages, colours, offsets, strict=False):
+        lo_hi = [wilson_interval(round(s * args.n), args.n) for s in sr]
+        err = [[s - lo for s, (lo, _) in zip(sr, lo_hi, strict=True)],
+               [hi - s for s, (_, hi) in zip(sr, lo_hi, strict=True)]]  # fmt: skip
+        ax.errorbar(xs, sr, yerr=err, fmt="o-", color=colour, capsize=3, label=name)
+        for x, s, label in zip(xs, sr, labels, strict=True):
+            ax.annotate(label, (x, s), textcoords="offset points", xytext=(0, dy), fontsize=7,
+                        ha="center", color=palette.TEXT_RGB)  # fmt: skip
+    for spec in args.teacher:
+        label, _, value = spec.partition("=")
+        ax.axhline(float(value), ls="--", color=palette.INK_RGB, lw=1)
+        ax.annotate(f"{label}: {float(value):.3f}", (0.01, float(value)), xycoords=("axes fraction",
+                    "data"), xytext=(0, 4), textcoords="offset points", fontsize=8)  # fmt: skip
+    ax.set_xlabel("cumulative wall time of the route on one core [min]")
+    ax.set_ylabel(f"SR on {args.n} selection seeds (95 % CI)")
+    ax.set_title(args.title)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    args.png.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(args.png)
+    print(f"wrote {args.png}")
+
+
+if __name__ == "__main__":
+    main()
