@@ -31,7 +31,7 @@ from emonav_drake.learning.run_state import read_run_state
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.networks import Actor, CategoricalPolicy, LgmEncoder, ScanEncoder
 from emonav_drake.planners.policy import (
-    DEFAULT_POLICY,
+    LIP_POLICY,
     PolicyPlanner,
     encoder_spec,
     save_policy,
@@ -89,7 +89,7 @@ def test_one_update_changes_the_actor_and_critics_but_not_the_encoder():
     # a few real transitions: features of real observations, real rewards
     replay = FrameReplayBuffer(20, (agent.features,), np.float32, 1)
     world = NavigationWorld(sample_scenario(2_000_000, env), env, grid_kind="lgm")
-    commands = np.asarray(torch.load(DEFAULT_POLICY, weights_only=True)["commands"])
+    commands = np.asarray(torch.load(LIP_POLICY, weights_only=True)["commands"])
     bounds = (env.robot.max_speed, env.robot.max_heading_change)
 
     def observe():
@@ -128,7 +128,7 @@ def test_a_run_writes_a_policy_that_the_planner_runs_as_selected(tmp_path):
     _, tensors = read_run_state(out / STATE_FILE, FINETUNE_FORMAT)
     agent = tensors["agent"]
     # the head moved away from the student; its encoder did not
-    init = torch.load(DEFAULT_POLICY, weights_only=True)["state_dict"]
+    init = torch.load(LIP_POLICY, weights_only=True)["state_dict"]
     assert any(not torch.equal(v, init[k]) for k, v in _head(agent["policy"]).items())
     assert all(torch.equal(agent["policy"][k], init[k]) for k in init if k.startswith("encoder"))
     history = json.loads((out / "history.json").read_text())
@@ -136,7 +136,7 @@ def test_a_run_writes_a_policy_that_the_planner_runs_as_selected(tmp_path):
     assert history[0]["updates"] == 0  # the starting point
     planner = PolicyPlanner(path)
     prov = planner.meta["provenance"]
-    assert prov["route"] == "finetune" and prov["init_policy"] == str(DEFAULT_POLICY)
+    assert prov["route"] == "finetune" and prov["init_policy"] == str(LIP_POLICY)
     assert prov["init_provenance"]["route"] == "dagger"
     assert prov["selection_seeds"] == [600_000, 600_001]
     assert prov["config"] == _cfg().__dict__ and prov["env_config"]["episode"]["max_steps"] == 8
@@ -163,7 +163,7 @@ def test_with_the_warmup_covering_every_update_the_actor_stays(tmp_path):
     train_finetune(out, _cfg(critic_warmup=10**6), init="shipped", env_cfg=_env(), progress=False)
     agent, _, _, _, updates, history = _result(out)
     assert updates == 32 and all(h["training"]["actor_updates"] == 0 for h in history)
-    init = torch.load(DEFAULT_POLICY, weights_only=True)["state_dict"]
+    init = torch.load(LIP_POLICY, weights_only=True)["state_dict"]
     assert_equal_state(init, agent["policy"], "policy")
     assert float(agent["log_alpha"].exp()) == pytest.approx(0.01)
     assert all(h["alpha"] == history[0]["alpha"] for h in history)
@@ -307,7 +307,7 @@ def _gaussian_policy(path):
 
 
 def _one_frame_student(path):
-    commands = torch.load(DEFAULT_POLICY, weights_only=True)["commands"]
+    commands = torch.load(LIP_POLICY, weights_only=True)["commands"]
     enc = encoder_spec("lgm", "cnn", 1, 100, pool=4)
     model = CategoricalPolicy(LgmEncoder(1, 100, pool=4), len(commands), 16)
     meta = {
@@ -374,7 +374,7 @@ def test_the_digit_route_file_holds_the_defaults_in_the_calibrated_world():
 
 
 def test_init_names_and_worlds(tmp_path):
-    assert resolve_init("shipped") == DEFAULT_POLICY
+    assert resolve_init("shipped") == LIP_POLICY
     assert resolve_init("emobipednav_digit") == VARIANTS["emobipednav_digit"].checkpoint
     assert resolve_init(str(tmp_path / "x.pt")) == tmp_path / "x.pt"
     env = EmoNavConfig()

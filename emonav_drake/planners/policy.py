@@ -46,8 +46,10 @@ FORMAT = "emonav-policy/1"
 _DATA = Path(__file__).resolve().parent.parent / "data"
 # The LIP-trained student (LIP/·; variant `emobipednav`; "shipped" as a route's init_policy).
 LIP_POLICY = _DATA / "policy_lgm.pt"
-# What `--planner policy` runs without a --checkpoint (data/README.md says which and why).
-DEFAULT_POLICY = LIP_POLICY
+# What `--planner policy` runs without a --checkpoint: the best learned policy measured on
+# both plants, the MPC-teacher student of the Digit route (variant `emobipednav_digit_mpc`;
+# data/README.md says why and with which numbers).
+DEFAULT_POLICY = _DATA / "policies" / "emobipednav_digit_mpc.pt"
 
 
 class PolicyError(ValueError):
