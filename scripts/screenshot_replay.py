@@ -26,10 +26,13 @@ def screenshot_replay(
     out_dir: Path,
     chromium: str = "/usr/bin/chromium",
     size: tuple[int, int] = (1280, 800),
+    camera: tuple[list[float], list[float]] | None = None,
 ) -> tuple[list[Path], list[str]]:
     """Open `html`, pause its animation, and screenshot it at each time in `times` [s].
 
-    Returns the written PNG paths and the page's console warnings/errors."""
+    `camera`: (position, target) [m, world frame, z up] of the viewer's camera instead of
+    the replay's default view. Returns the written PNG paths and the page's console
+    warnings/errors."""
     out_dir.mkdir(parents=True, exist_ok=True)
     shots: list[Path] = []
     messages: list[str] = []
@@ -50,6 +53,14 @@ def screenshot_replay(
         )
         page.wait_for_timeout(500)
         duration = page.evaluate("() => viewer.animator.duration")
+        if camera is not None:  # Meshcat's three.js frame is y up: world (x, y, z) → (x, z, −y)
+            (px, py, pz), (tx, ty, tz) = camera
+            page.evaluate(
+                "([p, t]) => { viewer.handle_command({type: 'set_property', path: "
+                "'/Cameras/default/rotated/<object>', property: 'position', value: p});"
+                " viewer.set_camera_target(t); viewer.set_dirty(); }",
+                [[px, pz, -py], [tx, tz, -ty]],
+            )
         for t in times:
             page.evaluate(
                 "(t) => { const a = viewer.animator; a.pause(); a.seek(t); a.display_progress(t);"
@@ -70,8 +81,18 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--times", type=float, nargs="+", default=[0.0], help="animation times [s]")
     p.add_argument("--out", type=Path, default=Path("."), help="directory for the PNGs")
     p.add_argument("--chromium", default="/usr/bin/chromium", help="the Chromium executable")
+    p.add_argument(
+        "--camera",
+        type=float,
+        nargs=6,
+        metavar=("PX", "PY", "PZ", "TX", "TY", "TZ"),
+        help="the viewer's camera position and target [m, world, z up]",
+    )
     args = p.parse_args(argv)
-    shots, messages = screenshot_replay(args.html, args.times, args.out, args.chromium)
+    camera = None if args.camera is None else (args.camera[:3], args.camera[3:])
+    shots, messages = screenshot_replay(
+        args.html, args.times, args.out, args.chromium, camera=camera
+    )
     for m in messages:
         print(m, file=sys.stderr)
     for s in shots:

@@ -8,7 +8,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from emonav_drake.cli.common import SeedArg, check_workers, load_emotion_estimate
+from emonav_drake.cli.common import (
+    SeedArg,
+    add_emotion_flags,
+    check_workers,
+    emotion_estimate_of,
+)
 from emonav_drake.cli.config import add_config_choice, resolve_config
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.diagrams.trials import MAX_TRIALS
@@ -19,7 +24,8 @@ DESCRIPTION = """\
 
 emonav benchmark --planners policy,mpc,dwa --plant lip --trials 500 --first-seed 0
                  [--workers W] [--ray-address ADDR] [--config F | --setting NAME]
-                 [--time-varying] [--emotion-estimate F] [--checkpoint NAME=PATH …] --out DIR
+                 [--time-varying] [--emotion-source truth|camera] [--emotion-estimate F]
+                 [--checkpoint NAME=PATH …] --out DIR
 emonav config [--dump] [--setting NAME | --config F] [--time-varying]
 emonav config --list
 
@@ -71,12 +77,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     b.add_argument("--ray-address", help="run on this Ray cluster (e.g. auto or HOST:6379)")
     add_config_choice(b)
     b.add_argument("--time-varying", action="store_true", help=TIME_VARYING_HELP)
-    b.add_argument(
-        "--emotion-estimate",
-        type=Path,
-        help="YAML EmotionEstimateParams: perceive emotions through a confusion matrix "
-        "(--plant lip)",
-    )
+    add_emotion_flags(b)
     b.add_argument(
         "--checkpoint",
         action="append",
@@ -90,13 +91,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     return b
 
 
-def _emotion_estimate_yaml(path: Path | None) -> str | None:
-    """The validated emotion estimate of --emotion-estimate as canonical YAML."""
-    if path is None:
+def _emotion_estimate_yaml(args: argparse.Namespace) -> str | None:
+    """The validated emotion estimate of --emotion-source / --emotion-estimate as
+    canonical YAML (None: the ground truth)."""
+    params = emotion_estimate_of(args)
+    if params is None:
         return None
     from emonav_drake.config_yaml import dump_typed_yaml
 
-    return dump_typed_yaml(load_emotion_estimate(path))
+    return dump_typed_yaml(params)
 
 
 def cmd_benchmark(args: argparse.Namespace) -> int:
@@ -109,8 +112,9 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
     check_output_dir(args.out, "--out")
     if args.workers is not None:
         check_workers(args.workers)
-    if args.emotion_estimate is not None and not PLANTS[args.plant].emotion_estimates:
-        raise ConfigError("--emotion-estimate is available with --plant lip only")
+    estimate_yaml = _emotion_estimate_yaml(args)
+    if estimate_yaml is not None and not PLANTS[args.plant].emotion_estimates:
+        raise ConfigError(f"--plant {args.plant} takes no --emotion-estimate / --emotion-source")
     methods = parse_methods(args.planners, args.checkpoint or [])
     resolved = resolve_config(args)
     workers = args.workers
@@ -129,7 +133,7 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
         ray_address=args.ray_address,
         setting=resolved.setting,
         config_source=resolved.source,
-        emotion_estimate_yaml=_emotion_estimate_yaml(args.emotion_estimate),
+        emotion_estimate_yaml=estimate_yaml,
         progress=not args.quiet,
     )
     from emonav_drake.evaluation import tables

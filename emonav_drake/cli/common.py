@@ -120,12 +120,7 @@ def add_episode_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--device", default="cpu", help="torch device for a learned planner (cpu, cuda, cuda:N)"
     )
-    p.add_argument(
-        "--emotion-estimate",
-        type=Path,
-        help="YAML EmotionEstimateParams: perceive emotions through a confusion "
-        "matrix (mode: confusion) instead of the ground truth",
-    )
+    add_emotion_flags(p)
     p.add_argument(
         "--time-varying",
         action="store_true",
@@ -151,6 +146,45 @@ def check_planner_flags(args: argparse.Namespace) -> None:
     from emonav_drake.planners.policy import resolve_device
 
     resolve_device(args.device)
+
+
+EMOTION_SOURCES = ("truth", "camera")
+
+
+def add_emotion_flags(p: argparse.ArgumentParser) -> None:
+    """--emotion-source and --emotion-estimate: where the perceived emotions come from."""
+    p.add_argument(
+        "--emotion-source",
+        choices=EMOTION_SOURCES,
+        default="truth",
+        help="truth: the simulator's emotions; camera: the robot's head camera renders the "
+        "pedestrians' faces and the face cascade + CNN read them at 0.5 Hz, neutral when no "
+        "face is seen (docs/perception.md)",
+    )
+    p.add_argument(
+        "--emotion-estimate",
+        type=Path,
+        help="YAML EmotionEstimateParams: the perceived emotions in full (mode: confusion "
+        "through a confusion matrix, or camera with its camera settings)",
+    )
+
+
+def emotion_estimate_of(args: argparse.Namespace) -> Any:
+    """The `EmotionEstimateParams` of --emotion-source / --emotion-estimate, or None for
+    the ground truth; `ConfigError` when the two disagree."""
+    source = getattr(args, "emotion_source", "truth")
+    params = load_emotion_estimate(args.emotion_estimate)
+    if source == "camera":
+        if params is None:
+            from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+
+            return EmotionEstimateParams(mode="camera").validate()
+        if params.mode != "camera":
+            raise ConfigError(
+                f"--emotion-source camera and --emotion-estimate {args.emotion_estimate} "
+                f"(mode {params.mode}) disagree: give one of them"
+            )
+    return params
 
 
 def load_emotion_estimate(path: Path | None) -> Any:

@@ -16,7 +16,7 @@ from emonav_drake.cli.common import (
     check_outputs,
     check_planner_flags,
     check_seed_range,
-    load_emotion_estimate,
+    emotion_estimate_of,
 )
 from emonav_drake.cli.config import resolve_config, sample
 from emonav_drake.diagrams.plants import PLANTS
@@ -69,9 +69,9 @@ def cmd_eval(args: argparse.Namespace) -> int:
     check_planner_flags(args)
     resolved = resolve_config(args)
     cfg = resolved.config
-    estimate = load_emotion_estimate(args.emotion_estimate)
+    estimate = emotion_estimate_of(args)
     if estimate is not None and not PLANTS[args.plant].emotion_estimates:
-        raise ConfigError("--emotion-estimate is available with --plant lip only")
+        raise ConfigError(f"--plant {args.plant} takes no --emotion-estimate / --emotion-source")
     from tqdm import tqdm
 
     from emonav_drake.core.metrics import format_summary, summarize

@@ -25,8 +25,8 @@ from emonav_drake.cli.common import (
     add_meshcat_host,
     check_outputs,
     check_planner_flags,
+    emotion_estimate_of,
     episode_steps_table,
-    load_emotion_estimate,
     meshcat_host,
     write_steps_csv,
 )
@@ -103,7 +103,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     resolved = resolve_config(args)
     cfg = resolved.config
     scenario = resolve_scenario(args, resolved)
-    estimate = load_emotion_estimate(args.emotion_estimate)
+    estimate = emotion_estimate_of(args)
     if robot.simulate is None:  # a plant without viewers and per-step outputs: its record
         return _sim_registered_plant(args, robot, cfg, scenario, estimate)
     from emonav_drake.planners import configure_for, make_planner
@@ -163,7 +163,8 @@ def _check_plant_flags(args: argparse.Namespace, robot: Plant) -> None:
     plant without one is checked by `_sim_registered_plant`)."""
     if robot.simulate is None:
         return
-    if (args.emotion_estimate and not robot.emotion_estimates) or (args.rays and not robot.rays):
+    estimate = args.emotion_estimate or args.emotion_source != "truth"
+    if (estimate and not robot.emotion_estimates) or (args.rays and not robot.rays):
         able = [p for p in PLANTS if PLANTS[p].rays and PLANTS[p].emotion_estimates]
         raise ConfigError(
             f"--plant {robot.name}: --rays and --emotion-estimate are available "

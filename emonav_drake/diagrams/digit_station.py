@@ -105,6 +105,7 @@ class DigitStation(Diagram):
         b.ExportOutput(controller.GetOutputPort("actuation"), "actuation")
         b.ExportOutput(model.scene_graph.get_query_output_port(), "query_object")
         b.ExportOutput(plant.get_contact_results_output_port(), "contact_results")
+        b.ExportOutput(plant.get_body_poses_output_port(), "body_poses")
         b.BuildInto(self)
         self.set_name("digit_station")
         self.model = model

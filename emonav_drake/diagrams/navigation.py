@@ -63,12 +63,14 @@ from emonav_drake.systems.episode_monitor import (
     EpisodeStatus,
     episode_monitor_callback,
 )
+from emonav_drake.systems.head_camera import CameraMount, lip_camera_mount
 from emonav_drake.systems.lidar_grid_map_builder import LidarGridMapBuilder
 from emonav_drake.systems.lip_robot_plant import LipRobotPlant
 from emonav_drake.systems.navigation_meshcat import NavigationMeshcatVisualizer
 from emonav_drake.systems.navigation_planner import NavigationPlanner
 
 if TYPE_CHECKING:
+    from emonav_drake.diagrams.camera_perception import CameraPerception
     from emonav_drake.diagrams.rates import RateMeasurement
 
 log = logging.getLogger(__name__)
@@ -164,6 +166,7 @@ class NavigationStack:
     grid_maps: LidarGridMapBuilder
     planner: NavigationPlanner
     monitor: EpisodeMonitor
+    perception: CameraPerception | None = None  # mode "camera": the camera chain
 
 
 def AddNavigationStack(
@@ -175,6 +178,7 @@ def AddNavigationStack(
     grid_kind: str = "lgm",
     goal_radius: float | None = None,
     emotion_estimate: EmotionEstimateParams | None = None,
+    camera_mount: CameraMount | None = None,
 ) -> NavigationStack:
     """Add crowd, grid maps, planner and episode monitor, wired to a robot.
 
@@ -182,6 +186,8 @@ def AddNavigationStack(
         builder: the diagram builder.
         robot_state: the robot's (x [m], y [m], θ [rad], v [m/s]) output, world frame (LIP
             plant or Digit's CoM state); at t_k it must show the robot at its foot switch.
+        camera_mount: where the robot carries its head camera (required by the emotion
+            estimate's mode "camera": `diagrams/camera_perception.py`).
         Others: as `build_navigation_diagram`.
     The caller connects the planner's `command` output to its robot: (u_v [m/s], u_Δθ
     [rad]), held for the whole walking step (u_k during step k, planned at t_k).
@@ -194,7 +200,23 @@ def AddNavigationStack(
     for sys in (crowd, maps, plan, monitor):
         b.Connect(robot_state, sys.GetInputPort("robot_state"))
     perceivers = [maps.GetInputPort("crowd"), plan.GetInputPort("crowd")]
-    if emotion_estimate is not None and emotion_estimate.mode != "ground_truth":
+    perception = None
+    if emotion_estimate is not None and emotion_estimate.mode == "camera":
+        from emonav_drake.diagrams.camera_perception import AddCameraPerception
+
+        if camera_mount is None:
+            raise ValueError("emotion estimate mode 'camera' needs the robot's camera_mount")
+        perception = AddCameraPerception(
+            b,
+            scenario,
+            config,
+            crowd.GetOutputPort("crowd"),
+            robot_state,
+            camera_mount,
+            perceivers,
+            emotion_estimate,
+        )
+    elif emotion_estimate is not None and emotion_estimate.mode != "ground_truth":
         AddEmotionEstimateSource(
             b, crowd.GetOutputPort("crowd"), perceivers, config, emotion_estimate
         )
@@ -203,7 +225,15 @@ def AddNavigationStack(
             b.Connect(crowd.GetOutputPort("crowd"), port)
     b.Connect(crowd.GetOutputPort("crowd"), monitor.GetInputPort("crowd"))
     b.Connect(maps.GetOutputPort("lgm_stack"), plan.GetInputPort("lgm_stack"))
-    return NavigationStack(crowd, maps, plan, monitor)
+    return NavigationStack(crowd, maps, plan, monitor, perception)
+
+
+def pedestrian_draw_height(stack: NavigationStack) -> float:
+    """How tall the navigation visualiser draws a pedestrian [m]: up to the rendered head
+    (the camera's pedestrians, drawn on top) or the default column."""
+    if stack.perception is None:
+        return 1.7
+    return stack.perception.bodies.body.body_height
 
 
 def build_navigation_diagram(
@@ -239,6 +269,9 @@ def build_navigation_diagram(
     b = DiagramBuilder()
     robot = b.AddNamedSystem("robot", LipRobotPlant(scenario, config))
     state = robot.GetOutputPort("robot_state")
+    mount = None
+    if emotion_estimate is not None and emotion_estimate.mode == "camera":
+        mount = lip_camera_mount(b, state, emotion_estimate.camera)
     stack = AddNavigationStack(
         b,
         scenario,
@@ -248,6 +281,7 @@ def build_navigation_diagram(
         grid_kind,
         goal_radius,
         emotion_estimate,
+        mount,
     )
     crowd, maps, plan, monitor = stack.crowd, stack.grid_maps, stack.planner, stack.monitor
     b.Connect(plan.GetOutputPort("command"), robot.GetInputPort("command"))
@@ -256,12 +290,26 @@ def build_navigation_diagram(
         vis = b.AddNamedSystem(
             "visualizer",
             NavigationMeshcatVisualizer(
-                meshcat, scenario, config, show_rays=show_rays, goal_radius=goal_radius
+                meshcat,
+                scenario,
+                config,
+                show_rays=show_rays,
+                goal_radius=goal_radius,
+                pedestrian_height=pedestrian_draw_height(stack),
             ),
         )
         b.Connect(state, vis.GetInputPort("robot_state"))
         b.Connect(crowd.GetOutputPort("crowd"), vis.GetInputPort("crowd"))
         b.Connect(maps.GetOutputPort("scan"), vis.GetInputPort("scan"))
+        if stack.perception is not None:  # the pedestrians' bodies and faces
+            from pydrake.geometry import MeshcatVisualizer, MeshcatVisualizerParams, Role
+
+            MeshcatVisualizer.AddToBuilder(
+                b,
+                stack.perception.scene_graph.get_query_output_port(),
+                meshcat,
+                MeshcatVisualizerParams(role=Role.kIllustration, prefix="perception"),
+            )
     diagram = b.Build()
     diagram.set_name("emonav_navigation")
     return NavigationDiagram(diagram, robot, crowd, maps, plan, monitor, vis)

@@ -44,13 +44,19 @@ from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
 from emonav_drake.diagrams.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
-from emonav_drake.diagrams.navigation import AddNavigationStack, SimulationProgress
+from emonav_drake.diagrams.navigation import (
+    AddNavigationStack,
+    SimulationProgress,
+    pedestrian_draw_height,
+)
 from emonav_drake.diagrams.rates import RateMeasurement
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.episode_monitor import EpisodeMonitor
 from emonav_drake.systems.fall_monitor import FALL
+from emonav_drake.systems.head_camera import body_camera_mount
 from emonav_drake.systems.navigation_meshcat import NavigationMeshcatVisualizer
 from emonav_drake.systems.navigation_planner import NavigationPlanner
 
@@ -77,6 +83,7 @@ def build_digit_navigation_diagram(
     meshcat: Meshcat | None = None,
     grid_kind: str = "lgm",
     goal_radius: float | None = None,
+    emotion_estimate: EmotionEstimateParams | None = None,
 ) -> DigitNavigationDiagram:
     """Wire the navigation stack around the Digit station for one scenario.
 
@@ -86,6 +93,8 @@ def build_digit_navigation_diagram(
     `planners.configure_for`). `planner` None builds the diagram for an external agent:
     an `action` input (the planner's, sampled at every t_k) and an `observation` output
     (the Gymnasium observation of `EmoNavDigit-v0`, `systems.navigation_observation`).
+    `emotion_estimate` as in `build_navigation_diagram`; in mode "camera" the head camera
+    rides on Digit's torso (`HeadCameraParams.digit_offset`) and sways with it.
     """
     config.validate()
     scenario.validate()
@@ -93,8 +102,22 @@ def build_digit_navigation_diagram(
     pose = (*(float(v) for v in scenario.robot_start), float(scenario.robot_heading))
     station = AddDigitStation(b, config, pose=pose)
     robot_state = station.GetOutputPort("robot_state")
+    mount = None
+    if emotion_estimate is not None and emotion_estimate.mode == "camera":
+        torso = station.model.torso_body.index()
+        mount = body_camera_mount(
+            b, station.GetOutputPort("body_poses"), int(torso), emotion_estimate.camera
+        )
     stack = AddNavigationStack(
-        b, scenario, config, planner, robot_state, grid_kind=grid_kind, goal_radius=goal_radius
+        b,
+        scenario,
+        config,
+        planner,
+        robot_state,
+        grid_kind=grid_kind,
+        goal_radius=goal_radius,
+        emotion_estimate=emotion_estimate,
+        camera_mount=mount,
     )
     crowd, nav, monitor = stack.crowd, stack.planner, stack.monitor
     b.Connect(nav.GetOutputPort("command"), station.GetInputPort("command"))
@@ -119,12 +142,24 @@ def build_digit_navigation_diagram(
         vis = b.AddNamedSystem(
             "navigation_visualizer",
             NavigationMeshcatVisualizer(
-                meshcat, scenario, config, draw_robot=False, goal_radius=goal_radius
+                meshcat,
+                scenario,
+                config,
+                draw_robot=False,
+                goal_radius=goal_radius,
+                pedestrian_height=pedestrian_draw_height(stack),
             ),
         )
         b.Connect(robot_state, vis.GetInputPort("robot_state"))
         b.Connect(crowd.GetOutputPort("crowd"), vis.GetInputPort("crowd"))
         b.Connect(station.GetOutputPort("targets"), vis.GetInputPort("footstep_targets"))
+        if stack.perception is not None:  # the pedestrians' bodies and faces
+            MeshcatVisualizer.AddToBuilder(
+                b,
+                stack.perception.scene_graph.get_query_output_port(),
+                meshcat,
+                MeshcatVisualizerParams(role=Role.kIllustration, prefix="perception"),
+            )
     diagram = b.Build()
     diagram.set_name("emonav_navigation_digit")
     return DigitNavigationDiagram(diagram, station, crowd, nav, monitor)
@@ -142,9 +177,11 @@ def run_digit_episode(
     rates: RateMeasurement | None = None,
     trace: list[dict] | None = None,
     progress: bool = False,
+    emotion_estimate: EmotionEstimateParams | None = None,
 ) -> EpisodeRecord:
     """Simulate one navigation episode with the full-order Digit; returns its record
-    (outcome success | collision | timeout | fall).
+    (outcome success | collision | timeout | fall). `emotion_estimate`: where the
+    perceived emotions come from (default the ground truth; `build_navigation_diagram`).
 
     With `rates`, the simulation runs under the profiler of `diagrams.rates` and the
     per-system rates and wall-time shares are left in `rates.report`. With `trace`, the
@@ -153,7 +190,9 @@ def run_digit_episode(
     simulated time (`SimulationProgress`; the record does not change)."""
     if record_html is not None and meshcat is None:
         meshcat = make_meshcat(live=False)  # loopback only
-    nd = build_digit_navigation_diagram(scenario, config, planner, meshcat, grid_kind, goal_radius)
+    nd = build_digit_navigation_diagram(
+        scenario, config, planner, meshcat, grid_kind, goal_radius, emotion_estimate
+    )
     sim = Simulator(nd.diagram)
     sim.set_target_realtime_rate(realtime_rate)
     if record_html is not None:

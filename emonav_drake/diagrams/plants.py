@@ -4,8 +4,7 @@
   per T (`systems.LipRobotPlant`, `diagrams/navigation.py`).
 * `digit`: the full-order Digit in Drake — the ALIP footstep planner, the passivity
   controller and the multibody plant — under the same navigation stack
-  (`diagrams/navigation_digit.py`). It can fall; perceived-emotion estimates
-  (`--emotion-estimate`) are not wired into its diagram.
+  (`diagrams/navigation_digit.py`). It can fall.
 
 Everything that depends on the robot asks its `Plant` (`plant_named("digit")`) instead of
 comparing strings: which episode runner, whether falls are an outcome, whether the replay
@@ -135,9 +134,16 @@ def _run_lip(scenario, config, planner, grid_kind, goal_radius, emotion_estimate
 
 
 def _run_digit(scenario, config, planner, grid_kind, goal_radius, emotion_estimate):
-    if emotion_estimate is not None:
-        raise ConfigError("--emotion-estimate is available with --plant lip only")
-    return _run_digit_traced(scenario, config, planner, grid_kind, goal_radius, None)
+    from emonav_drake.diagrams.navigation_digit import run_digit_episode
+
+    return run_digit_episode(
+        scenario,
+        config,
+        planner,
+        grid_kind=grid_kind,
+        goal_radius=goal_radius,
+        emotion_estimate=emotion_estimate,
+    )
 
 
 def _run_lip_logged(scenario, config, planner, grid_kind, goal_radius, emotion_estimate):
@@ -199,6 +205,7 @@ def _simulate_digit(req: SimRequest) -> SimResult:
         rates=req.rates,
         trace=trace,
         progress=req.progress,
+        emotion_estimate=req.emotion_estimate,
     )
     return SimResult(record, trace=trace)
 
@@ -225,7 +232,7 @@ PLANTS.add(
         "Digit (full order)",
         _run_digit,
         can_fall=True,
-        emotion_estimates=False,
+        emotion_estimates=True,
         footsteps=True,
         caption="Digit",
         run_traced=_run_digit_traced,

@@ -199,7 +199,7 @@ def _check_run_args(
     if workers is None and not ray_address:
         workers = os.cpu_count() or 1
     if emotion_estimate_yaml is not None and not robot.emotion_estimates:
-        raise ConfigError("--emotion-estimate is available with --plant lip only")
+        raise ConfigError(f"--plant {plant} takes no --emotion-estimate / --emotion-source")
     return workers
 
 

@@ -26,7 +26,7 @@ from emonav_drake.core.crowd import CrowdSnapshot
 from emonav_drake.params import EMOTION_NAMES, ConfigError
 
 NUM_EMOTIONS = len(EMOTION_NAMES)
-ESTIMATE_MODES = ("ground_truth", "confusion", "classifier")
+ESTIMATE_MODES = ("ground_truth", "confusion", "classifier", "camera")
 
 
 def validate_confusion(matrix: object, name: str = "confusion") -> np.ndarray:
@@ -112,22 +112,73 @@ def replace_emotions(
 
 
 @dc.dataclass
+class HeadCameraParams:
+    """The robot's head camera and the face pipeline on its images (mode "camera").
+
+    Attributes:
+        width, height: image size [px].
+        fov_y_deg: vertical field of view [deg] (45° at 640 × 480: ≈ 58° horizontal).
+        lip_height: camera height above the ground on the LIP robot [m].
+        digit_offset: camera origin in Digit's torso frame (x forward, y left, z up) [m];
+            the optical axis is the torso's x axis.
+        near, far: rendering clipping range [m].
+        min_face_size: smallest face the Haar cascade accepts [px] (24: a 0.16 m face
+            up to ≈ 3.9 m away at the default intrinsics).
+        max_range: pedestrians farther than this get no face [m].
+    """
+
+    width: int = 640
+    height: int = 480
+    fov_y_deg: float = 45.0
+    lip_height: float = 1.45
+    digit_offset: list[float] = dc.field(default_factory=lambda: [0.05, 0.0, 0.45])
+    near: float = 0.1
+    far: float = 15.0
+    min_face_size: int = 24
+    max_range: float = 6.0
+
+    def validate(self) -> "HeadCameraParams":
+        """Raise `ConfigError` naming the field if a value is invalid."""
+        pre = "emotion_estimate.camera"
+        if not (16 <= self.width <= 4096 and 16 <= self.height <= 4096):
+            raise ConfigError(f"{pre}: image {self.width} × {self.height} px: each in [16, 4096]")
+        if not (math.isfinite(self.fov_y_deg) and 1.0 <= self.fov_y_deg <= 170.0):
+            raise ConfigError(f"{pre}.fov_y_deg = {self.fov_y_deg!r}: must be in [1, 170]")
+        if not (math.isfinite(self.lip_height) and 0.1 <= self.lip_height <= 3.0):
+            raise ConfigError(f"{pre}.lip_height = {self.lip_height!r}: must be in [0.1, 3] m")
+        off = np.asarray(self.digit_offset, dtype=float)
+        if off.shape != (3,) or not np.all(np.isfinite(off)) or np.any(np.abs(off) > 2.0):
+            raise ConfigError(f"{pre}.digit_offset = {self.digit_offset!r}: three values in m")
+        if not (0 < self.near < self.far and math.isfinite(self.far)):
+            raise ConfigError(f"{pre}: near {self.near!r}, far {self.far!r}: 0 < near < far")
+        if not 8 <= self.min_face_size <= min(self.width, self.height):
+            raise ConfigError(f"{pre}.min_face_size = {self.min_face_size}: at least 8 px")
+        if not (math.isfinite(self.max_range) and self.max_range > 0):
+            raise ConfigError(f"{pre}.max_range = {self.max_range!r}: must be > 0")
+        return self
+
+
+@dc.dataclass
 class EmotionEstimateParams:
     """Where the emotions that shape the discomfort zones come from (YAML-loadable).
 
     Attributes:
         mode: "ground_truth" (simulation default), "confusion" (truth through
-            `confusion`, seeded) or "classifier" (the face classifier's estimates).
+            `confusion`, seeded), "classifier" (the estimates of a face classifier the
+            caller wires in) or "camera" (the robot's head camera renders the crowd's
+            faces and the face classifier reads them: `diagrams/camera_perception.py`).
         confusion: rows = true happy / neutral / negative, columns = estimate.
         seed: seed of the confusion draws.
-        period: a new confusion draw every `period` [s] (0.5 Hz, the paper's
-            emotion rate).
+        period: a new confusion draw, or a new camera classification, every `period`
+            [s] (0.5 Hz, the paper's emotion rate).
+        camera: the head camera of mode "camera".
     """
 
     mode: str = "ground_truth"
     confusion: list[list[float]] = dc.field(default_factory=lambda: np.eye(NUM_EMOTIONS).tolist())
     seed: int = 0
     period: float = 2.0
+    camera: HeadCameraParams = dc.field(default_factory=HeadCameraParams)
 
     def validate(self) -> "EmotionEstimateParams":
         """Raise `ConfigError` naming the field if a value is invalid."""
@@ -138,4 +189,5 @@ class EmotionEstimateParams:
             raise ConfigError(f"emotion_estimate.period = {self.period!r}: must be > 0")
         if self.seed < 0:
             raise ConfigError(f"emotion_estimate.seed = {self.seed}: must be >= 0")
+        self.camera.validate()
         return self

@@ -24,7 +24,9 @@ Modes (`EmotionEstimateParams.mode`):
         in the configured 3 × 3 confusion matrix, redrawn every `period` (draw
         k = ⌊t / period⌋, seeded, see `perception/noisy_emotions.py`). The output is a
         pure function of time and input, so the system has no state.
-    classifier: the `estimated_emotions` input (held by the classifier at 0.5 Hz).
+    classifier, camera: the `estimated_emotions` input (held by the classifier at 0.5 Hz;
+        "camera" when that classifier reads the diagram's own head camera,
+        `diagrams/camera_perception.py`).
 """
 
 from __future__ import annotations
@@ -81,7 +83,7 @@ class EmotionEstimateSource(LeafSystem):
             return self._model.estimate(crowd.emotions, self.draw_index(context.get_time()))
         if not self._estimates_in.HasValue(context):
             raise RuntimeError(
-                "EmotionEstimateSource in 'classifier' mode needs its estimated_emotions "
+                f"EmotionEstimateSource in {mode!r} mode needs its estimated_emotions "
                 "input connected (e.g. EmotionClassifier.pedestrian_emotions)"
             )
         return np.asarray(self._estimates_in.Eval(context), dtype=np.int64)
@@ -107,11 +109,11 @@ def AddEmotionEstimateSource(
 
     Connect only the inputs that should see estimated emotions (grid maps, planner);
     leave the episode monitor on the ground truth. `estimated_emotions` (required in
-    "classifier" mode) is connected to the source's input of that name.
+    "classifier" and "camera" modes) is connected to the source's input of that name.
     """
     system = EmotionEstimateSource(config, params)
-    if system.params.mode == "classifier" and estimated_emotions is None:
-        raise ValueError("mode 'classifier' needs the estimated_emotions output port")
+    if system.params.mode in ("classifier", "camera") and estimated_emotions is None:
+        raise ValueError(f"mode {system.params.mode!r} needs the estimated_emotions output port")
     source = builder.AddNamedSystem(name, system)
     builder.Connect(crowd_output, source.GetInputPort("crowd"))
     if estimated_emotions is not None:

@@ -96,6 +96,8 @@ class NavigationMeshcatVisualizer(LeafSystem):
         draw_robot: draw the LIP robot's column (off when the full-order Digit is drawn).
         goal_radius: radius of the goal pad [m]; default `config.episode.eval_goal_radius`.
         draw_trail: draw the robot's trail, one segment per walking step.
+        pedestrian_height: height of a pedestrian's column [m] (with the camera's
+            rendered heads and faces on top: their body height).
     """
 
     def __init__(
@@ -108,8 +110,10 @@ class NavigationMeshcatVisualizer(LeafSystem):
         draw_robot: bool = True,
         goal_radius: float | None = None,
         draw_trail: bool = True,
+        pedestrian_height: float = 1.7,
     ) -> None:
         super().__init__()
+        self._pedestrian_height = float(pedestrian_height)
         self._meshcat = meshcat
         self._config = config
         self._show_rays = show_rays
@@ -191,8 +195,9 @@ class NavigationMeshcatVisualizer(LeafSystem):
             # initial emotion's body and ring are visible; `_publish` animates changes.
             first = EMOTION_NAMES.index(ped.emotion)
             for e in range(3):
-                m.SetObject(f"{path}/body{e}", Cylinder(radius, 1.7), EMOTION_RGBA[e])
-                m.SetTransform(f"{path}/body{e}", RigidTransform([0, 0, 0.85]))
+                h = self._pedestrian_height
+                m.SetObject(f"{path}/body{e}", Cylinder(radius, h), EMOTION_RGBA[e])
+                m.SetTransform(f"{path}/body{e}", RigidTransform([0, 0, h / 2]))
                 m.SetObject(
                     f"{path}/ring{e}",
                     Cylinder(radius + dist[e], 0.01),
