@@ -213,3 +213,28 @@ def test_emotion_source_flags(tmp_path, capsys):
     bad.write_text("mode: camera\ncamera: {fov_y_deg: 400}\n")
     assert_user_error(*run(capsys, "sim", "--emotion-estimate", bad), "fov_y_deg")
     assert (FACES_DIR / "face_happy.obj").is_file()
+
+
+def test_the_perception_study_measures_what_the_chain_does():
+    """The sweep's rig and the in-episode samples use the real chain: a facing pedestrian
+    2 m ahead is found and recognised, its back is not; an episode's samples carry, at
+    each classification, what the classifier of that instant made of each pedestrian."""
+    from emonav_drake.evaluation.perception_study import (
+        confusion_counts,
+        episode_samples,
+        rate_by,
+        sweep,
+    )
+
+    rows = sweep([2.0], [0.0], [0.0, 180.0], emotions=[HAPPY])
+    assert [(r["detected"], r["estimate"]) for r in rows] == [(True, HAPPY), (False, NEUTRAL)]
+    rate, n = rate_by(rows, "facing_deg", [-1.0, 90.0, 181.0])
+    assert rate.tolist() == [1.0, 0.0] and n.tolist() == [1, 1]
+    cfg = EmoNavConfig()
+    cfg.episode.max_steps = 12
+    record, samples = episode_samples(sample_scenario(3, cfg), cfg, make_planner("dwa", cfg))
+    times = sorted({s["time"] for s in samples})
+    assert times == [0.0, 2.0, 4.0] and record.steps <= 12
+    assert len(samples) == 3 * len(sample_scenario(3, cfg).pedestrians)
+    assert all(s["estimate"] == NEUTRAL for s in samples if not s["detected"])
+    assert confusion_counts(samples).sum() == len(samples)

@@ -1,0 +1,248 @@
+"""What the head camera really gives: detection and recognition, measured.
+
+Two measurements of the camera chain (`diagrams/camera_perception.py`), both with the
+real renderer, Haar cascade and CNN:
+
+* `sweep`: one pedestrian placed in front of the robot's camera at a grid of distances
+  [m], bearings [deg] (relative to the optical axis, counter-clockwise positive) and
+  facing angles [deg] (0: it faces the camera; 180: its back), for each emotion; one
+  classification each. Detection rate and recognition against the geometry.
+* `episode_samples`: whole navigation episodes with camera emotions; at every
+  classification (0.5 Hz) each pedestrian's true emotion, what the chain made of it,
+  whether its face was found, and its geometry at that instant. The confusion matrix of
+  the in-loop pipeline against the ground truth, with unseen pedestrians (neutral by
+  rule) counted.
+
+A sample is a plain dict (JSON-ready): distance, bearing_deg, facing_deg, truth, estimate
+(codes HAPPY 0, NEUTRAL 1, NEGATIVE 2), detected (a face was assigned to it), and for
+episodes seed and time.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
+
+from emonav_drake.core.crowd import CrowdSnapshot
+from emonav_drake.core.pedestrian_pose import bearing_and_facing
+from emonav_drake.core.scenario import PedestrianSpec, Scenario
+from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
+from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+
+NUM_EMOTIONS = len(EMOTION_NAMES)
+
+
+class CameraRig:
+    """The camera chain with one pedestrian whose pose and emotion are set per shot.
+
+    The robot stands at the origin facing +x with the LIP camera (`lip_height`); the
+    pedestrian's position, heading and emotion come from constant sources changed
+    between shots. The classifier is `EmotionClassifier.estimate` on the rendered image.
+    """
+
+    def __init__(self, params: EmotionEstimateParams | None = None) -> None:
+        from emonav_drake.diagrams.camera_perception import make_classifier
+        from emonav_drake.systems.head_camera import AddCameraScene, AddHeadCamera
+        from emonav_drake.systems.pedestrian_bodies import PedestrianBodies
+
+        self.params = (params or EmotionEstimateParams(mode="camera")).validate()
+        cam = self.params.camera
+        self.config = EmoNavConfig()
+        scenario = Scenario(
+            pedestrians=[PedestrianSpec(start=[2.0, 0.0], goal=[-2.0, 0.0])],
+            obstacles=[],
+            robot_start=[0.0, 0.0],
+            robot_goal=[8.0, 0.0],
+        )
+        b = DiagramBuilder()
+        robot = b.AddSystem(ConstantVectorSource(np.zeros(4)))
+        mount = b.AddSystem(ConstantValueSource(AbstractValue.Make(RigidTransform())))
+        scene = AddCameraScene(b)
+        bodies = b.AddSystem(PedestrianBodies(scene, scenario))
+        b.Connect(
+            bodies.GetOutputPort("geometry_pose"), scene.get_source_pose_port(bodies.source_id)
+        )
+        camera = AddHeadCamera(
+            b, scene, mount.get_output_port(), np.array([0.0, 0.0, cam.lip_height]), cam
+        )
+        self.classifier = b.AddSystem(make_classifier(self.params, camera))
+        b.Connect(camera.color_image, self.classifier.GetInputPort("image"))
+        b.Connect(robot.get_output_port(), self.classifier.GetInputPort("robot_state"))
+        crowd = b.ExportInput(bodies.GetInputPort("crowd"), "crowd")
+        b.ConnectInput(crowd, self.classifier.GetInputPort("crowd"))
+        self.camera = camera
+        self.diagram = b.Build()
+        self.context = self.diagram.CreateDefaultContext()
+
+    def _snapshot(self, x: float, y: float, heading: float, emotion: int = 1) -> CrowdSnapshot:
+        speed = 1.0  # walking along its heading: PedestrianBodies faces it that way
+        dist = np.asarray(self.config.reward.emotion_distances())
+        return CrowdSnapshot(
+            positions=np.array([[x, y]]),
+            velocities=speed * np.array([[math.cos(heading), math.sin(heading)]]),
+            radius=self.config.crowd.pedestrian_radius,
+            emotions=np.array([emotion], np.int64),
+            discomfort=dist[[emotion]],
+            static_centers=np.zeros((0, 2)),
+            static_radii=np.zeros(0),
+            static_discomfort=self.config.reward.static_discomfort,
+        )
+
+    def shot(self, distance: float, bearing_deg: float, facing_deg: float, emotion: int) -> dict:
+        """Place the pedestrian, render, classify: one sample (module docstring)."""
+        b = math.radians(bearing_deg)
+        x, y = distance * math.cos(b), distance * math.sin(b)
+        to_camera = math.atan2(-y, -x)
+        heading = to_camera - math.radians(facing_deg)
+        self.diagram.get_input_port(0).FixValue(
+            self.context, AbstractValue.Make(self._snapshot(x, y, heading, emotion))
+        )
+        est = self.classifier.estimate(self.classifier.GetMyContextFromRoot(self.context))
+        return {
+            "distance": float(distance),
+            "bearing_deg": float(bearing_deg),
+            "facing_deg": float(facing_deg),
+            "truth": int(emotion),
+            "estimate": int(est.pedestrian_emotions[0]),
+            "detected": bool((est.face_pedestrian == 0).any()),
+            "faces": len(est.boxes),
+        }
+
+    def image(self) -> np.ndarray:
+        """The last shot's image as RGB uint8 (H, W, 3)."""
+        port = self.camera.color_image
+        img = port.Eval(self.camera.sensor.GetMyContextFromRoot(self.context))
+        return np.array(img.data)[:, :, :3].copy()
+
+
+def sweep(
+    distances: Sequence[float],
+    bearings_deg: Sequence[float],
+    facings_deg: Sequence[float],
+    emotions: Iterable[int] = range(NUM_EMOTIONS),
+    params: EmotionEstimateParams | None = None,
+    progress: bool = False,
+) -> list[dict]:
+    """One `CameraRig.shot` per (emotion, distance, bearing, facing), in that nesting."""
+    from tqdm import tqdm
+
+    rig = CameraRig(params)
+    grid = [
+        (e, d, b, f) for e in emotions for d in distances for b in bearings_deg for f in facings_deg
+    ]
+    return [
+        rig.shot(d, b, f, e)
+        for e, d, b, f in tqdm(grid, desc="camera sweep", unit="shot", disable=not progress)
+    ]
+
+
+def episode_samples(
+    scenario: Scenario,
+    config: EmoNavConfig,
+    planner: Any,
+    params: EmotionEstimateParams | None = None,
+) -> tuple[Any, list[dict]]:
+    """Run one LIP episode with camera emotions; (its record, one sample per pedestrian
+    per classification).
+
+    The geometry and the true emotion are read at each classification instant before
+    the updates at that instant (what the camera rendered); the estimate is the
+    classifier's result of that instant, read one walking step later.
+    """
+    from emonav_drake.diagrams.navigation import _start_simulator, build_navigation_diagram
+
+    params = (params or EmotionEstimateParams(mode="camera")).validate()
+    if params.mode != "camera":
+        raise ValueError(f"episode_samples needs mode 'camera', not {params.mode!r}")
+    nav = build_navigation_diagram(scenario, config, planner, emotion_estimate=params)
+    sim = _start_simulator(nav, 0.0, None)
+    ctx = sim.get_mutable_context()
+    d = nav.diagram
+    classifier = d.GetSubsystemByName("emotion_classifier")
+    bodies = d.GetSubsystemByName("pedestrian_bodies")
+    cam_pose = d.GetSubsystemByName("head_camera_pose")
+    T, P = config.robot.step_time, params.period
+    status = nav.monitor.GetOutputPort("status")
+    samples: list[dict] = []
+    pending: list[dict] = []
+    k = 0
+    while True:
+        t = ctx.get_time()
+        if pending:  # the classification of the previous instant is in the state now
+            est = classifier.GetOutputPort("detections").Eval(classifier.GetMyContextFromRoot(ctx))
+            for s in pending:
+                p = s.pop("_index")
+                s["estimate"] = int(est.pedestrian_emotions[p])
+                s["detected"] = bool((est.face_pedestrian == p).any())
+            samples += pending
+            pending = []
+        if status.Eval(nav.monitor.GetMyContextFromRoot(ctx)).done:
+            break
+        if abs(t / P - round(t / P)) < 1e-9:  # a classification instant
+            pending = _geometry(ctx, t, nav, bodies, cam_pose, scenario.seed)
+        k += 1
+        sim.AdvanceTo(k * T)
+    return status.Eval(nav.monitor.GetMyContextFromRoot(ctx)).record, samples
+
+
+def _geometry(ctx, t, nav, bodies, cam_pose, seed) -> list[dict]:
+    """Each pedestrian's truth and geometry seen from the camera at time t."""
+    crowd = nav.crowd.GetOutputPort("crowd").Eval(nav.crowd.GetMyContextFromRoot(ctx))
+    X_WC = (
+        cam_pose.GetOutputPort("geometry_pose")
+        .Eval(cam_pose.GetMyContextFromRoot(ctx))
+        .value(cam_pose.frame_id)
+    )
+    headings = [
+        RotationMatrix(X.rotation()).ToRollPitchYaw().yaw_angle()
+        for X in bodies.pedestrian_poses(bodies.GetMyContextFromRoot(ctx))
+    ]
+    cam_xy = X_WC.translation()[:2]
+    cam_yaw = X_WC.rotation().ToRollPitchYaw().yaw_angle()
+    pos = np.asarray(crowd.positions).reshape(-1, 2)
+    dist, facing = bearing_and_facing(cam_xy, pos, np.asarray(headings))
+    rel = pos - cam_xy
+    bearing = np.angle(np.exp(1j * (np.arctan2(rel[:, 1], rel[:, 0]) - cam_yaw)))
+    return [
+        {
+            "seed": int(seed),
+            "time": float(t),
+            "_index": i,
+            "distance": float(dist[i]),
+            "bearing_deg": float(np.degrees(bearing[i])),
+            "facing_deg": float(np.degrees(facing[i])),
+            "truth": int(crowd.emotions[i]),
+        }
+        for i in range(len(pos))
+    ]
+
+
+def confusion_counts(samples: Iterable[dict], detected_only: bool = False) -> np.ndarray:
+    """(3, 3) counts: rows the true emotion, columns the estimate."""
+    c = np.zeros((NUM_EMOTIONS, NUM_EMOTIONS), np.int64)
+    for s in samples:
+        if detected_only and not s["detected"]:
+            continue
+        c[s["truth"], s["estimate"]] += 1
+    return c
+
+
+def rate_by(
+    samples: Sequence[dict], key: str, edges: Sequence[float], what: str = "detected"
+) -> tuple[np.ndarray, np.ndarray]:
+    """(rate of `what` per bin of `key` between `edges`, samples per bin)."""
+    x = np.array([s[key] for s in samples], dtype=float)
+    y = np.array([bool(s[what]) for s in samples], dtype=float)
+    idx = np.digitize(x, edges) - 1
+    n = np.array([(idx == i).sum() for i in range(len(edges) - 1)])
+    rate = np.array(
+        [y[idx == i].mean() if n[i] else np.nan for i in range(len(edges) - 1)], dtype=float
+    )
+    return rate, n
