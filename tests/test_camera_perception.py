@@ -203,7 +203,17 @@ def test_emotion_source_flags(tmp_path, capsys):
     cfg.write_text("episode: {max_steps: 3}\n")
     out = tmp_path / "r.json"
     argv = ["sim", "--planner", "dwa", "--config", str(cfg), "--emotion-source", "camera"]
-    assert main([*argv, "--json", str(out)]) == 0
+    gif = tmp_path / "camera.gif"
+    assert main([*argv, "--json", str(out), "--camera-gif", str(gif)]) == 0
+    from PIL import Image
+
+    with Image.open(gif) as im:  # 3 steps = 1.2 s: the classification at t = 0
+        assert im.n_frames == 1 and im.size == (640, 480)
+    assert_user_error(
+        *run(capsys, "sim", "--config", cfg, "--camera-gif", tmp_path / "x.gif"),
+        "--camera-gif",
+        "--emotion-source camera",
+    )
     confusion = tmp_path / "confusion.yaml"
     confusion.write_text("mode: confusion\n")
     assert_user_error(

@@ -62,6 +62,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     add_meshcat_host(s)
     s.add_argument("--record", type=Path, help="write a self-contained HTML replay")
     s.add_argument(
+        "--camera-gif",
+        type=Path,
+        help="with --emotion-source camera: write what the head camera classified "
+        "(every 0.5 Hz image, faces boxed and labelled) as an animated GIF",
+    )
+    s.add_argument(
         "--rays", action="store_true", help="draw the LiDAR rays (per walking step) in Meshcat"
     )
     s.add_argument(
@@ -95,7 +101,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 
 def cmd_sim(args: argparse.Namespace) -> int:
     """Run one episode; print its outcome and write --json / --record / --steps-out."""
-    check_outputs(args, "--json", "--record", "--steps-out")
+    check_outputs(args, "--json", "--record", "--steps-out", "--camera-gif")
     meshcat_host(args)
     robot = plant_named(args.plant)
     _check_plant_flags(args, robot)
@@ -104,6 +110,10 @@ def cmd_sim(args: argparse.Namespace) -> int:
     cfg = resolved.config
     scenario = resolve_scenario(args, resolved)
     estimate = emotion_estimate_of(args)
+    if args.camera_gif is not None and (estimate is None or estimate.mode != "camera"):
+        raise ConfigError(
+            "--camera-gif needs the camera as the emotion source: --emotion-source camera"
+        )
     if robot.simulate is None:  # a plant without viewers and per-step outputs: its record
         return _sim_registered_plant(args, robot, cfg, scenario, estimate)
     from emonav_drake.planners import configure_for, make_planner
@@ -130,6 +140,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
         rates=rates,
         per_step=bool(args.json or args.steps_out),
         progress=show_progress(args),
+        camera_frames=[] if args.camera_gif is not None else None,
     )
     t0 = time.perf_counter()
     result = _run_sim_episode(args, robot, request)
@@ -149,6 +160,13 @@ def cmd_sim(args: argparse.Namespace) -> int:
     )
     if args.record:
         print(f"replay written to {Path(args.record).resolve()} (open it in a browser)")
+    if args.camera_gif is not None:
+        from emonav_drake.atomic_io import atomic_output
+        from emonav_drake.diagrams.camera_perception import write_camera_gif
+
+        with atomic_output(args.camera_gif) as path:
+            n = write_camera_gif(request.camera_frames, path)
+        print(f"camera: {n} classified images written to {Path(args.camera_gif).resolve()}")
     _write_sim_outputs(args, request, result, out)
     if caption is not None:  # live: the outcome in Meshcat, served until Ctrl-C
         from emonav_drake.diagrams.meshcat_viewing import finish_live_view
@@ -253,6 +271,7 @@ def _sim_registered_plant(
 
     viewer_flags = {"--meshcat": args.meshcat, "--record": args.record, "--rays": args.rays}
     viewer_flags |= {"--steps-out": args.steps_out, "--rates": args.rates}
+    viewer_flags |= {"--camera-gif": args.camera_gif}
     given = [flag for flag, value in viewer_flags.items() if value]
     if given:
         able = " or ".join(p for p in PLANTS if PLANTS[p].simulate is not None)

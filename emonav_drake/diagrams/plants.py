@@ -62,6 +62,7 @@ class SimRequest:
     rates: Any = None  # --rates: a `diagrams.rates.RateMeasurement`
     per_step: bool = False  # --json / --steps-out: keep the per-step log or trace
     progress: bool = False  # the progress bar on stderr
+    camera_frames: list | None = None  # --camera-gif: the classified camera images
 
 
 @dc.dataclass
@@ -184,6 +185,7 @@ def _simulate_lip(req: SimRequest) -> SimResult:
         emotion_estimate=req.emotion_estimate,
         rates=req.rates,
         progress=req.progress,
+        camera_frames=req.camera_frames,
     )
     return SimResult(record, step_log=step_log)
 
@@ -206,6 +208,7 @@ def _simulate_digit(req: SimRequest) -> SimResult:
         trace=trace,
         progress=req.progress,
         emotion_estimate=req.emotion_estimate,
+        camera_frames=req.camera_frames,
     )
     return SimResult(record, trace=trace)
 

@@ -56,6 +56,7 @@ class EmotionEstimate:
     face_pedestrian: np.ndarray  # (F,) int64 pedestrian index of each face, −1 if none
     pedestrian_emotions: np.ndarray  # (P,) int64 codes; NEUTRAL without a face
     pedestrian_probabilities: np.ndarray  # (P, 7) smoothed probabilities, NaN without a face
+    image: np.ndarray | None = None  # the classified RGB image (H, W, 3) with `keep_image`
 
     @staticmethod
     def empty(num_pedestrians: int = 0, time: float = float("nan")) -> EmotionEstimate:
@@ -100,6 +101,8 @@ class EmotionClassifier(LeafSystem):
         smoothing: weight of the newest classification in the exponential moving
             average of a pedestrian's probabilities (1 = no smoothing); the average
             restarts whenever the pedestrian's face is lost.
+        keep_image: keep each classified image in the estimate (`EmotionEstimate.image`,
+            for recording what the camera saw).
     """
 
     def __init__(
@@ -111,6 +114,7 @@ class EmotionClassifier(LeafSystem):
         max_range: float = 6.0,
         bearing_tolerance: float = np.deg2rad(3.0),
         smoothing: float = 1.0,
+        keep_image: bool = False,
     ) -> None:
         super().__init__()
         if not period > 0:
@@ -121,6 +125,7 @@ class EmotionClassifier(LeafSystem):
         self.classifier = classifier or FaceEmotionClassifier()
         self.camera_yaw, self.max_range = float(camera_yaw), float(max_range)
         self.bearing_tolerance, self.smoothing = float(bearing_tolerance), float(smoothing)
+        self.keep_image = bool(keep_image)
         self._state = self.DeclareAbstractState(AbstractValue.Make(EmotionEstimate.empty()))
         self._image_in = self.DeclareAbstractInputPort("image", AbstractValue.Make(ImageRgba8U()))
         self._robot_in = self.DeclareVectorInputPort("robot_state", 4)
@@ -206,6 +211,7 @@ class EmotionClassifier(LeafSystem):
             face_pedestrian=owner,
             pedestrian_emotions=ped_emotions,
             pedestrian_probabilities=ped_probs,
+            image=np.array(image.data[:, :, :3]) if self.keep_image else None,
         )
 
     def _update(self, context: Context, state: State) -> None:
