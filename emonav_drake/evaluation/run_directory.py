@@ -332,7 +332,7 @@ class RunDirectory:
             + (" — INTERRUPTED, partial" if interrupted else ""),
             f"goal radius {settings['goal_radius']} m (evaluation); configuration hash "
             f"{settings['config_sha256'][:12]}; emotion estimate: "
-            f"{'ground truth' if settings['emotion_estimate_yaml'] is None else 'confusion model'}",
+            f"{_estimate_label(settings['emotion_estimate_yaml'])}",
             f"package {pkg.get('version')} commit {str(pkg.get('commit'))[:12]}"
             + (" (with uncommitted changes)" if pkg.get("dirty") else ""),
         ]
@@ -363,3 +363,18 @@ def load_run(path: str | Path) -> tuple[dict, list[dict]]:
     trials = read_trials(rd.trials_path)
     trials.sort(key=lambda t: (rank.get(t["method"], len(rank)), t["seed"]))
     return settings, trials
+
+
+def _estimate_label(estimate_yaml: str | None) -> str:
+    """How a run perceived emotions, for its summary line."""
+    if estimate_yaml is None:
+        return "ground truth"
+    import re
+
+    mode = re.search(r"^mode:\s*(\w+)", estimate_yaml, re.M)
+    return {
+        "camera": "head camera + face classifier (0.5 Hz; unseen = neutral)",
+        "confusion": "confusion model",
+        "classifier": "face classifier",
+        "ground_truth": "ground truth",
+    }.get(mode.group(1) if mode else "", "confusion model")
