@@ -3,6 +3,8 @@ against a new one on the seeds both ran (Wilson intervals, McNemar exact).
 
     python scripts/compare_digit_tables.py                       # old timing vs the default
     python scripts/compare_digit_tables.py --old digit_table2_v2 # every method vs that run
+    python scripts/compare_digit_tables.py --new digit_camera --old digit_table2_v4 \
+        --map policy=emobipednav_digit_mpc          # a method named differently in the old run
 
 By default each method's run with the old walking timing (`PAIRS`) against
 benchmarks/results/digit_table2_v3; with `--old RUN`, every method of the new run against
@@ -44,13 +46,21 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--new", default=NEW, help="run directory under benchmarks/results")
     ap.add_argument("--old", default=None, help="compare every method with this run")
+    ap.add_argument(
+        "--map",
+        action="append",
+        default=[],
+        metavar="NEW=OLD",
+        help="with --old: the new run's method NEW is OLD in the old run (repeatable)",
+    )
     args = ap.parse_args()
     pairs = PAIRS
     if args.old is not None:
         methods = dict.fromkeys(
             t["method"] for t in read_trials(RESULTS / args.new / "trials.jsonl")
         )
-        pairs = tuple((m, args.old, m, m) for m in methods)
+        renamed = dict(m.split("=", 1) for m in args.map)
+        pairs = tuple((m, args.old, renamed.get(m, m), m) for m in methods)
     print(
         "| method | seeds (n) | old SR [95 % CI] (run) | new SR [95 % CI] | old only | new only |"
     )
