@@ -248,3 +248,22 @@ def test_the_perception_study_measures_what_the_chain_does():
     assert len(samples) == 3 * len(sample_scenario(3, cfg).pedestrians)
     assert all(s["estimate"] == NEUTRAL for s in samples if not s["detected"])
     assert confusion_counts(samples).sum() == len(samples)
+
+
+def test_a_confusion_runs_recorded_estimate_is_unchanged_by_the_camera(tmp_path):
+    """Runs with a confusion model recorded their estimate's YAML (and its hash) before
+    the camera settings existed; the same flags must give the same text so they resume."""
+    import argparse
+
+    from emonav_drake.cli.benchmark import _emotion_estimate_yaml
+    from emonav_drake.config_yaml import load_typed_yaml
+
+    f = tmp_path / "confusion.yaml"
+    f.write_text("mode: confusion\nconfusion: [[0.8, 0.1, 0.1], [0.1, 0.8, 0.1], [0, 0.2, 0.8]]\n")
+    text = _emotion_estimate_yaml(argparse.Namespace(emotion_source="truth", emotion_estimate=f))
+    assert "camera" not in text and text.endswith("period: 2.0\n")
+    assert load_typed_yaml(EmotionEstimateParams, data=text).camera == CAMERA.camera
+    camera = _emotion_estimate_yaml(
+        argparse.Namespace(emotion_source="camera", emotion_estimate=None)
+    )
+    assert load_typed_yaml(EmotionEstimateParams, data=camera) == CAMERA

@@ -99,7 +99,10 @@ def _emotion_estimate_yaml(args: argparse.Namespace) -> str | None:
         return None
     from emonav_drake.config_yaml import dump_typed_yaml
 
-    return dump_typed_yaml(params)
+    text = dump_typed_yaml(params)
+    if params.mode != "camera":  # as written before the camera existed: old runs resume
+        text = text[: text.index("camera:\n")]
+    return text
 
 
 def cmd_benchmark(args: argparse.Namespace) -> int:
