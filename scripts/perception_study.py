@@ -150,7 +150,12 @@ def plot(sweep_rows: list[dict], episode_rows: list[dict], png: Path) -> None:
     ax = axes[2]
     c = confusion_counts(episode_rows)
     frac = c / np.maximum(c.sum(axis=1, keepdims=True), 1)
-    ax.imshow(frac, cmap="Greys", vmin=0, vmax=1)
+    from matplotlib.colors import LinearSegmentedColormap
+
+    from emonav_drake.core.palette import INK_RGB, PAPER_RGB
+
+    shade = LinearSegmentedColormap.from_list("paper_to_ink", [PAPER_RGB, INK_RGB])
+    ax.imshow(frac, cmap=shade, vmin=0, vmax=1)
     for i in range(3):
         for j in range(3):
             ax.text(
@@ -159,12 +164,12 @@ def plot(sweep_rows: list[dict], episode_rows: list[dict], png: Path) -> None:
                 f"{frac[i, j]:.2f}\n({c[i, j]})",
                 ha="center",
                 va="center",
-                color="white" if frac[i, j] > 0.5 else "black",
+                color=PAPER_RGB if frac[i, j] > 0.5 else INK_RGB,
             )
     ax.set_xticks(range(3), EMOTION_NAMES)
     ax.set_yticks(range(3), EMOTION_NAMES)
     ax.set(xlabel="perceived (unseen → neutral)", ylabel="true emotion")
-    ax.set_title(f"In the loop (LIP, MPC): {c.sum()} pedestrian-classifications")
+    ax.set_title(f"In the loop (LIP, MPC), n = {c.sum()}")
     fig.tight_layout()
     png.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(png, dpi=110)
@@ -197,6 +202,9 @@ def main(argv: list[str] | None = None) -> int:
         for k, v in summary["wall_seconds"].items():
             if v != v and before.get(k) is not None:
                 summary["wall_seconds"][k] = before[k]
+        note = json.loads(old.read_text()).get("wall_seconds_note")
+        if note is not None:
+            summary["wall_seconds_note"] = note
     (args.out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
     print(json.dumps({k: summary[k] for k in ("confusion_all", "confusion_detected")}))
     if args.png is not None:

@@ -109,6 +109,15 @@ CAPTION_BOX_RGB: RGB = PAPER_RGB
 CAPTION_TEXT_RGB: RGB = _grey(0.13)
 CAPTION_NOTE_RGB: RGB = _grey(0.40)
 
+# The world the robot's head camera renders (`systems/head_camera.py`,
+# `systems/pedestrian_bodies.py`): muted and hueless but for the sky, so that the face
+# textures are the only emotion cue in the image.
+CAMERA_SKY_RGB: RGB = (0.80, 0.87, 0.94)
+CAMERA_GROUND_RGB: RGB = (0.62, 0.60, 0.56)
+CAMERA_DISC_RGB: RGB = _grey(0.55)  # a static disc
+PEDESTRIAN_CLOTHES_RGB: RGB = (0.30, 0.34, 0.40)  # the body
+PEDESTRIAN_HAIR_RGB: RGB = (0.24, 0.17, 0.11)  # the head, also seen from behind
+
 # --- charts -----------------------------------------------------------------------------
 
 # Methods of a benchmark (bars, lines): never an emotion's colour, since the IDT chart

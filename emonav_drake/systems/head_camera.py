@@ -41,12 +41,13 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import Context, DiagramBuilder, LeafSystem, OutputPort
 from pydrake.systems.sensors import CameraInfo, RgbdSensor
 
+from emonav_drake.core.palette import CAMERA_GROUND_RGB, CAMERA_SKY_RGB
 from emonav_drake.perception.noisy_emotions import HeadCameraParams
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
 RENDERER = "emonav_vtk"
-GROUND_RGBA = Rgba(0.62, 0.60, 0.56, 1.0)
-SKY_RGB = (0.80, 0.87, 0.94)
+GROUND_RGBA = Rgba(*CAMERA_GROUND_RGB)
+SKY_RGB = CAMERA_SKY_RGB
 # camera frame C (Drake: z forward, x right, y down) in the mount frame B (x fwd, z up)
 R_BC = RotationMatrix(np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]]))
 

@@ -40,6 +40,11 @@ from pydrake.geometry import (
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import Context, DiagramBuilder, LeafSystem, OutputPort
 
+from emonav_drake.core.palette import (
+    CAMERA_DISC_RGB,
+    PEDESTRIAN_CLOTHES_RGB,
+    PEDESTRIAN_HAIR_RGB,
+)
 from emonav_drake.core.pedestrian_pose import (
     HIDDEN_DEPTH,
     PedestrianBody,
@@ -50,9 +55,9 @@ from emonav_drake.core.scenario import Scenario
 from emonav_drake.params import EMOTION_NAMES
 
 FACES_DIR = Path(__file__).resolve().parent.parent / "data" / "faces"
-BODY_RGBA = Rgba(0.30, 0.34, 0.40, 1.0)  # clothes: slate grey
-HEAD_RGBA = Rgba(0.24, 0.17, 0.11, 1.0)  # hair: dark brown, also the back of the head
-DISC_RGBA = Rgba(0.55, 0.55, 0.55, 1.0)
+BODY_RGBA = Rgba(*PEDESTRIAN_CLOTHES_RGB)
+HEAD_RGBA = Rgba(*PEDESTRIAN_HAIR_RGB)  # also the back of the head
+DISC_RGBA = Rgba(*CAMERA_DISC_RGB)
 DISC_HEIGHT = 1.0  # height of a static disc's cylinder [m]
 
 
