@@ -2,7 +2,8 @@
 
     python scripts/route_stage_curve.py \\
         --dagger benchmarks/results/digit_mpc_route/dagger_history.json \\
-        --finetune benchmarks/results/digit_mpc_route/finetune_history.json \\
+        --finetune "run 1=benchmarks/results/digit_mpc_route/finetune_history.json" \\
+        --finetune "run 2=benchmarks/results/digit_mpc_route/finetune_v2_history.json" \\
         --teacher "MPC (teacher)=0.995" --n 200 \\
         --png docs/figures/digit_mpc_route_stages.png
 
@@ -50,7 +51,13 @@ def _finetune(path: Path, start: float) -> tuple[list[float], list[float], list[
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--dagger", type=Path, required=True)
-    ap.add_argument("--finetune", type=Path)
+    ap.add_argument(
+        "--finetune",
+        action="append",
+        default=[],
+        metavar="[LABEL=]HISTORY",
+        help="a fine-tuning run's history.json, each starting from the kept round (repeatable)",
+    )
     ap.add_argument("--teacher", action="append", default=[], help="LABEL=SR on the same seeds")
     ap.add_argument("--n", type=int, default=200, help="selection episodes per point")
     ap.add_argument("--title", default="Digit/Digit route in the calibrated world")
@@ -59,12 +66,16 @@ def main() -> None:
 
     fig, ax = plt.subplots(figsize=(7.5, 4.0), dpi=150)
     stages = [("DAgger rounds (MPC teacher)", _dagger(args.dagger))]
-    if args.finetune is not None:
-        xs, sr, labels = _finetune(args.finetune, stages[0][1][0][-1])
+    for i, spec in enumerate(args.finetune):
+        label, sep, path = spec.rpartition("=")
+        name = label if sep else "SAC fine-tuning from the kept round"
+        xs, sr, labels = _finetune(Path(path), stages[0][1][0][-1])
         labels[0] = ""  # its first evaluation is the student it starts from
-        stages.append(("SAC fine-tuning from the kept round", (xs, sr, labels)))
-    colours = [palette.METHOD_RGB["policy"], palette.METHOD_CYCLE[1]]
-    offsets = [7, -13]  # labels above the DAgger points, below the fine-tuning ones
+        if i > 0:
+            labels = [""] * len(labels)  # one run's step labels are enough
+        stages.append((name, (xs, sr, labels)))
+    colours = [palette.METHOD_RGB["policy"], *palette.METHOD_CYCLE[1:]]
+    offsets = [7] + [-13] * len(args.finetune)  # labels above DAgger, below fine-tuning
     for (name, (xs, sr, labels)), colour, dy in zip(stages, colours, offsets, strict=False):
         lo_hi = [wilson_interval(round(s * args.n), args.n) for s in sr]
         err = [[s - lo for s, (lo, _) in zip(sr, lo_hi, strict=True)],
