@@ -298,3 +298,25 @@ def test_an_mpc_expert_labels_every_state_with_its_nearest_grid_command():
             break
     assert demos.labels == labels and len(labels) == 12
     assert len(set(labels)) > 1  # it steers, not one constant command
+
+
+def test_a_route_starts_from_a_shipped_variant_by_name(tmp_path):
+    """`init_policy` (DAgger) and `--init` (fine-tuning) take a shipped variant's name: the
+    student starts with that file's weights; a variant without a file is refused, naming
+    how to train it."""
+    from emonav_drake.learning.config import DaggerConfig
+    from emonav_drake.learning.dagger_student import Student
+    from emonav_drake.params import ConfigError
+    from emonav_drake.planners.variants import VARIANTS, resolve_policy_file
+
+    path = resolve_policy_file("emobipednav_digit_mpc")
+    assert path == VARIANTS["emobipednav_digit_mpc"].checkpoint
+    assert resolve_policy_file("shipped") == VARIANTS["emobipednav"].checkpoint
+    model, meta = load_policy(path)
+    student = Student(DaggerConfig(), EmoNavConfig(), np.asarray(meta["commands"]))
+    student.load_weights("emobipednav_digit_mpc")
+    for k, v in model.state_dict().items():
+        assert torch.equal(student.model.state_dict()[k].cpu(), v.cpu()), k
+    unshipped = next(n for n, v in VARIANTS.items() if not v.is_shipped)
+    with pytest.raises(ConfigError, match=f"init_policy {unshipped}: .*emonav train --variant"):
+        student.load_weights(unshipped)

@@ -50,8 +50,8 @@ class DaggerConfig:
     # (`emonav calibrate fit`). See core/step_response.py.
     response: str = ""
     # Start the student from this policy checkpoint ("" = from scratch; "shipped" = the
-    # shipped LIP-trained LGM policy, `planners.policy.LIP_POLICY`); its network must be
-    # the one this configuration builds.
+    # LIP-trained LGM policy, `planners.policy.LIP_POLICY`; a shipped variant's name, e.g.
+    # "single_lgm"; or a path); its network must be the one this configuration builds.
     init_policy: str = ""
     # The expert that labels the states: "dwa" (DWA with `expert_margin`, planning with
     # `response`) or "mpc" (the OSQP MPC of core/mpc.py, planning with the LIP model; its

@@ -9,7 +9,6 @@ Used by the CPU route (`learning/dagger.py`) and the Digit rounds
 from __future__ import annotations
 
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 import torch
@@ -21,7 +20,7 @@ from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.demonstrations import Demonstrations, command_index
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.networks import CategoricalPolicy
-from emonav_drake.planners.policy import LIP_POLICY, build_encoder, encoder_spec, load_policy
+from emonav_drake.planners.policy import build_encoder, encoder_spec, load_policy
 
 
 class Student:
@@ -53,9 +52,12 @@ class Student:
         self.bounds = (env_cfg.robot.max_speed, env_cfg.robot.max_heading_change)
 
     def load_weights(self, policy: str) -> None:
-        """Start from a trained policy ("shipped" = the shipped LGM policy, or a path);
-        `ConfigError` if its network or command grid is not this student's."""
-        path = LIP_POLICY if policy == "shipped" else Path(policy)
+        """Start from a trained policy ("shipped" = the LIP-trained LGM policy, a shipped
+        variant's name, or a path: `planners.variants.resolve_policy_file`); `ConfigError`
+        if its network or command grid is not this student's."""
+        from emonav_drake.planners.variants import resolve_policy_file
+
+        path = resolve_policy_file(policy, "init_policy")
         model, meta = load_policy(path)
         ob = meta["observation"]
         if meta["kind"] != "categorical" or (ob["grid_kind"], ob["num_frames"]) != (

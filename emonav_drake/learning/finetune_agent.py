@@ -42,33 +42,17 @@ from emonav_drake.learning.config import FinetuneConfig
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.networks import VECTOR_STATE, CategoricalPolicy, mlp
 from emonav_drake.planners.policy import (
-    LIP_POLICY,
     PolicyError,
     describe_policy,
     load_policy,
     observation_spec,
 )
-from emonav_drake.planners.variants import VARIANTS
+from emonav_drake.planners.variants import resolve_policy_file
 
 
 def resolve_init(spec: str, label: str = "init policy") -> Path:
-    """The file of an initial policy: "shipped" (the LIP-trained LGM policy, `LIP_POLICY`),
-    a shipped variant's name (e.g. "emobipednav_digit", unless a file of that name exists),
-    or a path.
-    `ConfigError` starting with `label` for a variant that has no shipped policy."""
-    if spec == "shipped":
-        return LIP_POLICY
-    path = Path(spec)
-    if not path.exists() and spec in VARIANTS:
-        v = VARIANTS[spec]
-        if not v.is_shipped:
-            raise ConfigError(
-                f"{label} {spec}: {v.paper} has no shipped policy in this version; train it "
-                f"(`emonav train --variant {spec} --out runs/{spec}`) and pass "
-                f"runs/{spec}/policy.pt"
-            )
-        return v.checkpoint
-    return path
+    """The file of an initial policy (`planners.variants.resolve_policy_file`)."""
+    return resolve_policy_file(spec, label)
 
 
 def check_observation(meta: dict, env_cfg: EmoNavConfig, where: str) -> None:

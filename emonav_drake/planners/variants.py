@@ -105,6 +105,26 @@ def variant(name: str) -> PolicyVariant:
     return VARIANTS[name]
 
 
+def resolve_policy_file(spec: str, label: str = "init policy") -> Path:
+    """The file of a policy a route starts from: "shipped" (the LIP-trained LGM policy,
+    variant `emobipednav`), a shipped variant's name (e.g. "single_lgm", unless a file of
+    that name exists), or a path. `ConfigError` starting with `label` for a variant that
+    has no shipped policy."""
+    if spec == "shipped":
+        return VARIANTS["emobipednav"].checkpoint
+    path = Path(spec)
+    if not path.exists() and spec in VARIANTS:
+        v = VARIANTS[spec]
+        if not v.is_shipped:
+            raise ConfigError(
+                f"{label} {spec}: {v.paper} has no shipped policy in this version; train it "
+                f"(`emonav train --variant {spec} --out runs/{spec}`) and pass "
+                f"runs/{spec}/policy.pt"
+            )
+        return v.checkpoint
+    return path
+
+
 def shipped_checkpoint(name: str) -> Path:
     """The shipped policy of variant `name`; `ConfigError` saying how to train it if absent."""
     v = variant(name)
