@@ -10,17 +10,17 @@ planner name of `emonav sim|eval|benchmark` (`--planner NAME`, `--planners NAME,
 
 | name | paper | observation |
 |---|---|---|
-| `emobipednav` | EmoBipedNav | 9 LiDAR grid maps (the shipped policy, also `policy`) |
+| `emobipednav` | EmoBipedNav | 9 LiDAR grid maps (trained in the LIP world) |
 | `single_lgm` | Single-LGM | 1 LiDAR grid map |
 | `ogm` | OGM | 9 Cartesian occupancy grids |
 | `lidar_sac` | LiDAR-SAC | 9 raw scans, 1-D CNN |
 | `lndnl` | LNDNL | 9 raw scans, LSTM |
 | `drlvo` | DRL-VO* | scan OGM + pedestrian velocity maps (1 image) |
 | `emobipednav_digit` | EmoBipedNav, Digit/Digit | 9 LGMs; trained with Digit's dynamics |
-| `emobipednav_digit_mpc` | EmoBipedNav, Digit/Digit | the same, the MPC as the teacher |
+| `emobipednav_digit_mpc` | EmoBipedNav, Digit/Digit | the same, the MPC as the teacher (the default `policy`) |
 
-The last two differ by their training world, not its observation: the shipped policy fine-tuned
-in the Digit-calibrated reduced world (`core/step_response.py`, `learning/calibration.py`).
+The last two differ by their training world, not its observation: the LIP-trained policy
+fine-tuned in the Digit-calibrated reduced world (`core/step_response.py`, `learning/calibration.py`).
 """
 
 from __future__ import annotations
