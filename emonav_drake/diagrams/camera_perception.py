@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses as dc
 from pathlib import Path
+from typing import Any
 
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, DiagramBuilder, InputPort, LeafSystem, OutputPort
@@ -111,6 +112,25 @@ class CameraPerception:
     camera: HeadCamera
     classifier: EmotionClassifier
     estimate: EmotionEstimateSource
+
+
+def draw_in_meshcat(
+    builder: DiagramBuilder, perception: CameraPerception | None, meshcat: Any
+) -> dict[str, float]:
+    """Draw the camera's pedestrians (heads and faces) in `meshcat`; returns the keyword
+    arguments the navigation visualiser needs so that its pedestrian columns end where the
+    rendered heads start (empty without the camera)."""
+    if perception is None:
+        return {}
+    from pydrake.geometry import MeshcatVisualizer, MeshcatVisualizerParams, Role
+
+    MeshcatVisualizer.AddToBuilder(
+        builder,
+        perception.scene_graph.get_query_output_port(),
+        meshcat,
+        MeshcatVisualizerParams(role=Role.kIllustration, prefix="perception"),
+    )
+    return {"pedestrian_height": perception.bodies.body.body_height}
 
 
 def make_classifier(

@@ -232,14 +232,6 @@ def AddNavigationStack(
     return NavigationStack(crowd, maps, plan, monitor, perception)
 
 
-def pedestrian_draw_height(stack: NavigationStack) -> float:
-    """How tall the navigation visualiser draws a pedestrian [m]: up to the rendered head
-    (the camera's pedestrians, drawn on top) or the default column."""
-    if stack.perception is None:
-        return 1.7
-    return stack.perception.bodies.body.body_height
-
-
 def build_navigation_diagram(
     scenario: Scenario,
     config: EmoNavConfig,
@@ -295,6 +287,8 @@ def build_navigation_diagram(
     b.Connect(plan.GetOutputPort("command"), robot.GetInputPort("command"))
     vis = None
     if meshcat is not None:
+        from emonav_drake.diagrams.camera_perception import draw_in_meshcat
+
         vis = b.AddNamedSystem(
             "visualizer",
             NavigationMeshcatVisualizer(
@@ -303,21 +297,12 @@ def build_navigation_diagram(
                 config,
                 show_rays=show_rays,
                 goal_radius=goal_radius,
-                pedestrian_height=pedestrian_draw_height(stack),
+                **draw_in_meshcat(b, stack.perception, meshcat),
             ),
         )
         b.Connect(state, vis.GetInputPort("robot_state"))
         b.Connect(crowd.GetOutputPort("crowd"), vis.GetInputPort("crowd"))
         b.Connect(maps.GetOutputPort("scan"), vis.GetInputPort("scan"))
-        if stack.perception is not None:  # the pedestrians' bodies and faces
-            from pydrake.geometry import MeshcatVisualizer, MeshcatVisualizerParams, Role
-
-            MeshcatVisualizer.AddToBuilder(
-                b,
-                stack.perception.scene_graph.get_query_output_port(),
-                meshcat,
-                MeshcatVisualizerParams(role=Role.kIllustration, prefix="perception"),
-            )
     diagram = b.Build()
     diagram.set_name("emonav_navigation")
     return NavigationDiagram(diagram, robot, crowd, maps, plan, monitor, vis)
@@ -373,7 +358,7 @@ def run_episode(
         emotion_estimate,
         camera_frames,
     )
-    sim = _start_simulator(nav, realtime_rate, meshcat if record_html is not None else None)
+    sim = start_episode_simulator(nav, realtime_rate, meshcat if record_html is not None else None)
     ctx = sim.get_mutable_context()
     T = config.robot.step_time
     log_ = StepLog()
@@ -407,7 +392,7 @@ def run_episode(
     return record, log_
 
 
-def _start_simulator(
+def start_episode_simulator(
     nav: NavigationDiagram, realtime_rate: float, recording: Meshcat | None
 ) -> Simulator:
     """The episode's simulator, initialized, with the episode monitor's termination; with a

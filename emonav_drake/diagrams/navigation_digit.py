@@ -44,11 +44,7 @@ from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
 from emonav_drake.diagrams.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
-from emonav_drake.diagrams.navigation import (
-    AddNavigationStack,
-    SimulationProgress,
-    pedestrian_draw_height,
-)
+from emonav_drake.diagrams.navigation import AddNavigationStack, SimulationProgress
 from emonav_drake.diagrams.rates import RateMeasurement
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
@@ -135,6 +131,8 @@ def build_digit_navigation_diagram(
         b.Connect(nav.GetOutputPort("command"), obs.GetInputPort("last_action"))
         b.ExportOutput(obs.GetOutputPort("observation"), "observation")
     if meshcat is not None:
+        from emonav_drake.diagrams.camera_perception import draw_in_meshcat
+
         MeshcatVisualizer.AddToBuilder(
             b,
             station.GetOutputPort("query_object"),
@@ -149,19 +147,12 @@ def build_digit_navigation_diagram(
                 config,
                 draw_robot=False,
                 goal_radius=goal_radius,
-                pedestrian_height=pedestrian_draw_height(stack),
+                **draw_in_meshcat(b, stack.perception, meshcat),
             ),
         )
         b.Connect(robot_state, vis.GetInputPort("robot_state"))
         b.Connect(crowd.GetOutputPort("crowd"), vis.GetInputPort("crowd"))
         b.Connect(station.GetOutputPort("targets"), vis.GetInputPort("footstep_targets"))
-        if stack.perception is not None:  # the pedestrians' bodies and faces
-            MeshcatVisualizer.AddToBuilder(
-                b,
-                stack.perception.scene_graph.get_query_output_port(),
-                meshcat,
-                MeshcatVisualizerParams(role=Role.kIllustration, prefix="perception"),
-            )
     diagram = b.Build()
     diagram.set_name("emonav_navigation_digit")
     return DigitNavigationDiagram(diagram, station, crowd, nav, monitor)

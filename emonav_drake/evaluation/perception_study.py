@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.math import RigidTransform
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
 
@@ -156,13 +156,16 @@ def episode_samples(
     the updates at that instant (what the camera rendered); the estimate is the
     classifier's result of that instant, read one walking step later.
     """
-    from emonav_drake.diagrams.navigation import _start_simulator, build_navigation_diagram
+    from emonav_drake.diagrams.navigation import (
+        build_navigation_diagram,
+        start_episode_simulator,
+    )
 
     params = (params or EmotionEstimateParams(mode="camera")).validate()
     if params.mode != "camera":
         raise ValueError(f"episode_samples needs mode 'camera', not {params.mode!r}")
     nav = build_navigation_diagram(scenario, config, planner, emotion_estimate=params)
-    sim = _start_simulator(nav, 0.0, None)
+    sim = start_episode_simulator(nav, 0.0, None)
     ctx = sim.get_mutable_context()
     d = nav.diagram
     classifier = d.GetSubsystemByName("emotion_classifier")
@@ -201,7 +204,7 @@ def _geometry(ctx, t, nav, bodies, cam_pose, seed) -> list[dict]:
         .value(cam_pose.frame_id)
     )
     headings = [
-        RotationMatrix(X.rotation()).ToRollPitchYaw().yaw_angle()
+        X.rotation().ToRollPitchYaw().yaw_angle()
         for X in bodies.pedestrian_poses(bodies.GetMyContextFromRoot(ctx))
     ]
     cam_xy = X_WC.translation()[:2]

@@ -47,12 +47,7 @@ from emonav_drake.planners.policy import (
     load_policy,
     observation_spec,
 )
-from emonav_drake.planners.variants import resolve_policy_file
-
-
-def resolve_init(spec: str, label: str = "init policy") -> Path:
-    """The file of an initial policy (`planners.variants.resolve_policy_file`)."""
-    return resolve_policy_file(spec, label)
+from emonav_drake.planners.variants import resolve_policy_file as resolve_init
 
 
 def check_observation(meta: dict, env_cfg: EmoNavConfig, where: str) -> None:

@@ -17,10 +17,11 @@ planner name of `emonav sim|eval|benchmark` (`--planner NAME`, `--planners NAME,
 | `lndnl` | LNDNL | 9 raw scans, LSTM |
 | `drlvo` | DRL-VO* | scan OGM + pedestrian velocity maps (1 image) |
 | `emobipednav_digit` | EmoBipedNav, Digit/Digit | 9 LGMs; trained with Digit's dynamics |
-| `emobipednav_digit_mpc` | EmoBipedNav, Digit/Digit | the same, the MPC as the teacher (the default `policy`) |
+| `emobipednav_digit_mpc` | EmoBipedNav, Digit/Digit | the same, the MPC as teacher (`policy`) |
 
 The last two differ by their training world, not its observation: the LIP-trained policy
-fine-tuned in the Digit-calibrated reduced world (`core/step_response.py`, `learning/calibration.py`).
+fine-tuned in the Digit-calibrated reduced world (`core/step_response.py`,
+`learning/calibration.py`). `emobipednav_digit_mpc` is also the default `--planner policy`.
 """
 
 from __future__ import annotations
