@@ -48,6 +48,7 @@ def test_each_variant_trains_and_its_checkpoint_runs_on_both_plants(tiny_variant
     cfg = load_typed_yaml(DaggerConfig, path=variant(name).config)
     assert meta["observation"]["grid_kind"] == cfg.grid_kind
     assert meta["observation"]["num_frames"] == cfg.num_frames
+    assert meta["observation"]["goal_input"] == cfg.goal_input
     expected_encoder = {"lgm": "lgm", "ogm": "lgm", "drlvo": "lgm", "scan": "scan"}[cfg.grid_kind]
     if cfg.encoder == "lstm":
         expected_encoder = "scan_lstm"

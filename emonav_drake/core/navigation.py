@@ -36,7 +36,8 @@ import math
 import numpy as np
 
 from emonav_drake.core.crowd import Crowd, CrowdSnapshot, CrowdState
-from emonav_drake.core.lip import LipState, lip_in_step, lip_step, lip_velocity, wrap_angle
+from emonav_drake.core.goal_input import goal_state, policy_goal_state
+from emonav_drake.core.lip import LipState, lip_in_step, lip_step, lip_velocity
 from emonav_drake.core.metrics import EpisodeRecord, EpisodeTracker
 from emonav_drake.core.observations import observation_kind
 from emonav_drake.core.reward import StepEvaluation, evaluate_step
@@ -66,11 +67,11 @@ class PlannerInput:
         """(distance [m], bearing [rad]) of the goal in the robot frame."""
         return goal_state(self.robot, self.goal_xy)
 
-
-def goal_state(robot: LipState, goal_xy: np.ndarray) -> np.ndarray:
-    """(distance [m], bearing [rad, CCW from the heading]) of the goal."""
-    dx, dy = goal_xy[0] - robot.x, goal_xy[1] - robot.y
-    return np.array([math.hypot(dx, dy), wrap_angle(math.atan2(dy, dx) - robot.heading)])
+    def policy_goal_state(self, goal_input: str, robot_radius: float) -> np.ndarray:
+        """What a policy of `goal_input` reads as its goal (`core/goal_input.py`):
+        "goal" → `goal_state()`; "guide" → the goal's distance and a guide sub-goal's
+        bearing (static discs of `crowd`, clearance from `robot_radius` [m])."""
+        return policy_goal_state(self.robot, self.goal_xy, self.crowd, goal_input, robot_radius)
 
 
 class CommandError(ValueError):

@@ -10,6 +10,7 @@ raising `ConfigError` naming the field.
 import dataclasses as dc
 
 from emonav_drake.config_yaml import ConfigError, validate_ranges
+from emonav_drake.core.goal_input import GOAL_INPUTS
 from emonav_drake.core.observations import observation_kind, observation_kinds
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.params import NUM_BEAMS, EpisodeParams
@@ -44,6 +45,9 @@ class DaggerConfig:
     grid_kind: str = "lgm"
     num_frames: int = 9
     encoder: str = "cnn"
+    # What the student reads as its goal (`core/goal_input.py`): "goal" (the paper's) or
+    # "guide" (the bearing of a sub-goal on the shortest path around the static discs).
+    goal_input: str = "goal"
     mirror_augment: bool = True  # mirror half of every batch left-right (every kind)
     # The robot of the training world and of the expert's predictions: "" = the paper's LIP;
     # "digit" = the shipped Digit step-response model; or the path of a fitted model JSON
@@ -67,6 +71,7 @@ class DaggerConfig:
         """Raise `ConfigError` naming the field if a value is out of range."""
         validate_ranges(self, _DAGGER_RANGES)
         _check_observation(self.grid_kind, self.encoder, self.num_frames)
+        _choice("goal_input", self.goal_input, GOAL_INPUTS)
         _choice("expert", self.expert, ("dwa", "mpc"))
         return self
 

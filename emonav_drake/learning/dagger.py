@@ -243,6 +243,7 @@ def _policy_meta(run: DaggerRunState) -> dict:
             "grid_kind": cfg.grid_kind,
             "num_frames": run.n_frames,
             "grid_size": env_cfg.lidar.grid_size,
+            "goal_input": cfg.goal_input,
         },
         "bounds": [env_cfg.robot.max_speed, env_cfg.robot.max_heading_change],
     }
@@ -274,7 +275,14 @@ def _collect(
                 world = make_world(sc, env_cfg, cfg, route.response)
                 student = None if rnd == 0 else run.student
                 outcome = run_episode_collect(
-                    world, route.expert, student, beta, demos, rng, grid=run.student.commands
+                    world,
+                    route.expert,
+                    student,
+                    beta,
+                    demos,
+                    rng,
+                    grid=run.student.commands,
+                    goal_input=cfg.goal_input,
                 )
         except KeyboardInterrupt:
             set_rng_state(rng, *undo[0])

@@ -32,12 +32,14 @@ def run_episode_collect(
     demos: Demonstrations | None,
     rng: np.random.Generator,
     grid: np.ndarray | None = None,
+    goal_input: str = "goal",
 ) -> str:
     """One episode; the student acts (expert with probability `beta`); label every state.
 
     `expert` is any planner with `reset()` and `plan(PlannerInput)`; its command is
     labelled as the nearest command of the grid: the student's, else `grid` (N, 2), else
-    the expert's own DWA candidates."""
+    the expert's own DWA candidates. The student's vector state reads the goal as
+    `goal_input` says (`core/goal_input.py`)."""
     n = world.config.lidar.num_frames
     expert.reset()  # a model-aware expert remembers the episode's commands
     obs = world.planner_input()
@@ -49,9 +51,10 @@ def run_episode_collect(
     else:
         commands = grid if grid is not None else expert.candidates
     bounds = (world.config.robot.max_speed, world.config.robot.max_heading_change)
+    radius = world.config.robot.radius
     k = 0
     while True:
-        state = vector_state(obs.goal_state(), obs.last_command, bounds)
+        state = vector_state(obs.policy_goal_state(goal_input, radius), obs.last_command, bounds)
         use_expert = student is None or (beta > 0 and rng.random() < beta)
         label = None
         if demos is not None or use_expert:
@@ -96,6 +99,6 @@ def evaluate_student(
     for i in range(cfg.eval_episodes):
         sc = sample_scenario(cfg.eval_seed_offset + i, env_cfg)
         world = make_world(sc, env_cfg, cfg, response)
-        run_episode_collect(world, expert, student, 0.0, None, rng)
+        run_episode_collect(world, expert, student, 0.0, None, rng, goal_input=cfg.goal_input)
         records.append(world.record)
     return summarize(records)

@@ -75,7 +75,9 @@ class LabellingPlanner:
         expert_cmd, memory = self.expert.plan_with_memory(obs, memory)
         label = command_index(self.commands, expert_cmd)
         self.frames.append(np.array(obs.lgm_stack[-1]))
-        self.states.append(vector_state(obs.goal_state(), obs.last_command, self.student.bounds))
+        self.states.append(
+            vector_state(self.student.goal_state(obs), obs.last_command, self.student.bounds)
+        )
         self.labels.append(label)
         rng = np.random.default_rng([ACT_SALT, self.seed, obs.step])
         if rng.random() < self.beta:

@@ -79,7 +79,13 @@ from emonav_drake.learning.run_state import (
 )
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.model_aware import load_response
-from emonav_drake.planners.policy import build_model, resolve_device, save_policy, vector_state
+from emonav_drake.planners.policy import (
+    build_model,
+    goal_input_of,
+    resolve_device,
+    save_policy,
+    vector_state,
+)
 
 log = logging.getLogger(__name__)
 
@@ -169,6 +175,7 @@ class _Run:
         self.response: StepResponseModel | None = load_response(cfg.response)
         meta = init["meta"]
         self.grid_kind = meta["observation"]["grid_kind"]
+        self.goal_input = goal_input_of(meta)  # the initial student's (`core/goal_input.py`)
         self.commands = np.asarray(meta["commands"], dtype=float)
         self.bounds = (env_cfg.robot.max_speed, env_cfg.robot.max_heading_change)
         # one "frame" per step: the encoder's features; windows of one frame
@@ -287,7 +294,8 @@ class _Run:
 
     def _observe(self, world: NavigationWorld) -> tuple[np.ndarray, np.ndarray]:
         obs = world.planner_input()
-        state = vector_state(obs.goal_state(), obs.last_command, self.bounds)
+        goal = obs.policy_goal_state(self.goal_input, self.env_cfg.robot.radius)
+        state = vector_state(goal, obs.last_command, self.bounds)
         return self.agent.encode(obs.lgm_stack), state
 
     def _collect(self, guard: InterruptGuard) -> int:

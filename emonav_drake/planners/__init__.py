@@ -79,13 +79,13 @@ def _dwa_digit(config: EmoNavConfig, checkpoint: str | Path | None, device: str)
 def _policy(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
     from emonav_drake.planners.policy import PolicyPlanner
 
-    return PolicyPlanner(checkpoint, device=device)
+    return PolicyPlanner(checkpoint, device=device, robot_radius=config.robot.radius)
 
 
 def _sac(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
     from emonav_drake.planners.policy import PolicyPlanner, describe_policy, policy_kind
 
-    planner = PolicyPlanner(checkpoint, device=device)
+    planner = PolicyPlanner(checkpoint, device=device, robot_radius=config.robot.radius)
     if policy_kind(planner.meta) != "sac":
         raise ConfigError(
             f"--planner sac: {planner.path} is not a SAC actor but a "

@@ -7,7 +7,7 @@ A policy checkpoint is one `torch.save` file:
      "encoder": {"type": "lgm" | "scan" | "scan_lstm", ...}, # constructor arguments
      "hidden": int, "commands": [[u_v, u_dθ], ...] (categorical only),
      "observation": {"grid_kind": "lgm"|"ogm"|"scan"|"drlvo", "num_frames": N,
-                     "grid_size": M},
+                     "grid_size": M, "goal_input": "goal"|"guide" (absent: "goal")},
      "bounds": [ū_v, ū_Δθ], "state_dict": {...}, "provenance": {...}}
 
 `PolicyPlanner` implements the planner interface (`planners.protocol.Planner`:
@@ -16,7 +16,9 @@ policy drives the Drake diagram (`emonav sim --planner policy`) or the Gymnasium
 exactly like DWA or MPC. It uses only the map observation of its grid kind (the planner
 input's `lgm_stack`: uint8 (N, M, M) LGM/OGM stack, float32 (N, K) scan stack [m], uint8
 (1, 3, M, M) DRL-VO* image; `core/navigation.py`), the goal state and the last command —
-never the privileged crowd state.
+never the pedestrians' privileged state. A policy trained with `goal_input: guide` reads
+the bearing of a sub-goal on the shortest path around the static discs instead of the
+goal's (`core/goal_input.py`): the discs are then known map obstacles.
 """
 
 from __future__ import annotations
@@ -30,9 +32,10 @@ import numpy as np
 import torch
 
 from emonav_drake.atomic_io import atomic_write
+from emonav_drake.core.goal_input import check_goal_input
 from emonav_drake.core.navigation import PlannerInput
 from emonav_drake.core.observations import observation_kind, observation_kinds
-from emonav_drake.params import NUM_BEAMS, LidarParams
+from emonav_drake.params import NUM_BEAMS, LidarParams, RobotParams
 from emonav_drake.planners.networks import (
     Actor,
     CategoricalPolicy,
@@ -249,7 +252,14 @@ def describe_policy(meta: dict[str, Any]) -> str:
             route += f" (round {prov['round']})"
     if prov.get("variant"):
         route += f", variant {prov['variant']}"
-    return f"{route}, {ob['num_frames']} × {what}"
+    guide = ", goal input: guide sub-goal" if goal_input_of(meta) == "guide" else ""
+    return f"{route}, {ob['num_frames']} × {what}{guide}"
+
+
+def goal_input_of(meta: dict[str, Any]) -> str:
+    """The goal input a checkpoint's policy reads ("goal" or "guide"; `core/goal_input.py`);
+    checkpoints from before the key existed read "goal"."""
+    return check_goal_input(meta["observation"].get("goal_input", "goal"))
 
 
 def observation_spec(meta: dict[str, Any]) -> tuple[str, tuple[int, ...], np.dtype]:
@@ -340,12 +350,20 @@ class PolicyPlanner:
 
     name = "policy"
 
-    def __init__(self, path: str | Path | None = None, device: str = "cpu") -> None:
+    def __init__(
+        self,
+        path: str | Path | None = None,
+        device: str = "cpu",
+        robot_radius: float | None = None,
+    ) -> None:
         self.path = Path(path) if path is not None else DEFAULT_POLICY
         self.device = resolve_device(device)
         self.model, self.meta = load_policy(self.path, device)
         self.bounds = tuple(self.meta["bounds"])
         self.grid_kind, self.expected_shape, self.expected_dtype = observation_spec(self.meta)
+        self.goal_input = goal_input_of(self.meta)
+        # r_robot [m]: the clearance of a "guide" goal input (default: `RobotParams`)
+        self.robot_radius = RobotParams().radius if robot_radius is None else robot_radius
         if self.meta["kind"] == "categorical":
             self.commands = np.asarray(self.meta["commands"], dtype=float)
 
@@ -395,9 +413,13 @@ class PolicyPlanner:
         a = mean[0].cpu().numpy().astype(float)
         return np.array([(a[0] + 1) / 2 * self.bounds[0], a[1] * self.bounds[1]])
 
+    def goal_state(self, obs: PlannerInput) -> np.ndarray:
+        """(distance [m], bearing [rad]) this policy reads as its goal (its `goal_input`)."""
+        return obs.policy_goal_state(self.goal_input, self.robot_radius)
+
     def plan(self, obs: PlannerInput) -> np.ndarray:
         """The command (u_v [m/s], u_Δθ [rad]) for this walking step."""
-        return self.act(obs.lgm_stack, obs.goal_state(), obs.last_command)
+        return self.act(obs.lgm_stack, self.goal_state(obs), obs.last_command)
 
 
 def export_torchscript(path: str | Path, out: str | Path) -> Path:

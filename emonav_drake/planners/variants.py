@@ -18,10 +18,13 @@ planner name of `emonav sim|eval|benchmark` (`--planner NAME`, `--planners NAME,
 | `drlvo` | DRL-VO* | scan OGM + pedestrian velocity maps (1 image) |
 | `emobipednav_digit` | EmoBipedNav, Digit/Digit | 9 LGMs; trained with Digit's dynamics |
 | `emobipednav_digit_mpc` | EmoBipedNav, Digit/Digit | the same, the MPC as teacher (`policy`) |
+| `emobipednav_guide` | (ours) | the same route; goal bearing of a guide sub-goal |
 
-The last two differ by their training world, not its observation: the LIP-trained policy
-fine-tuned in the Digit-calibrated reduced world (`core/step_response.py`,
-`learning/calibration.py`). `emobipednav_digit_mpc` is also the default `--planner policy`.
+`emobipednav_digit` and `emobipednav_digit_mpc` differ by their training world, not its
+observation: the LIP-trained policy fine-tuned in the Digit-calibrated reduced world
+(`core/step_response.py`, `learning/calibration.py`). `emobipednav_digit_mpc` is also the
+default `--planner policy`. `emobipednav_guide` is its route with `goal_input: guide`
+(`core/goal_input.py`): a deviation from the paper's observation, measured against it.
 """
 
 from __future__ import annotations
@@ -93,6 +96,13 @@ VARIANTS: dict[str, PolicyVariant] = {
             "EmoBipedNav (Digit/Digit, MPC teacher)",
             "9 LiDAR grid maps; trained with Digit's step response, labelled by the MPC",
             "policies/emobipednav_digit_mpc.pt",
+            route="digit",
+        ),
+        PolicyVariant(
+            "emobipednav_guide",
+            "EmoBipedNav + guide sub-goal (Digit/Digit, MPC teacher; not in the paper)",
+            "9 LiDAR grid maps; the goal bearing of a sub-goal around the static discs",
+            "policies/emobipednav_guide.pt",
             route="digit",
         ),
     )
