@@ -138,8 +138,9 @@ SOURCES = {
         photo="grace_hopper",
         subject="Grace Hopper, portrait, neutral expression",
         licence=(
-            "not confirmed from the installed files: matplotlib's wheel states no licence "
-            "for this photograph"
+            "public domain in the United States as a US Navy photograph (a work of the US "
+            "federal government, 17 U.S.C. 105): the official portrait NH 96919-KN of the "
+            "Naval History and Heritage Command; not stated in matplotlib's wheel"
         ),
         licence_file="",
         licence_quote="",
@@ -148,7 +149,10 @@ SOURCES = {
             "http://commons.wikimedia.org/wiki/File:Grace_Hopper.jpg'. "
             "mpl-data/sample_data/README.txt only says the files are sample data for "
             "matplotlib's examples; matplotlib's LICENSE (dist-info) covers the software "
-            "and its listed third-party parts, not this photograph."
+            "and its listed third-party parts, not this photograph. Identified as US Navy "
+            "photograph NH 96919-KN: Pillow's test image Tests/images/hopper.jpg was cut "
+            "from http://www.history.navy.mil/photos/images/h96000/h96919k.jpg (Pillow pull "
+            "request #887) and is the same photograph (compared side by side)."
         ),
     ),
 }
