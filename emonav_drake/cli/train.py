@@ -1,5 +1,5 @@
-"""`emonav train`: the SAC trainer (paper-scale, `--algo sac`), the CPU route (`--algo dagger`)
-or the SAC fine-tuning of a trained student (`--algo finetune`).
+"""`emonav train`: the SAC trainer (paper-scale, `--algo sac`), the CPU route (`--algo dagger`),
+the SAC fine-tuning of a trained student (`--algo finetune`) or SARL (`--algo sarl`).
 
 emonav train --algo dagger --out runs/dagger --seed 0 [--device cpu] [--resume runs/dagger]
 emonav train --variant NAME [--out runs/NAME] [--seed 0] [--resume runs/NAME]
@@ -7,6 +7,8 @@ emonav train --algo sac [--config FILE] [--plant lip|digit] [--steps N] [--devic
              [--envs W] [--ray-address ADDR] [--out DIR] [--resume DIR]
 emonav train --algo finetune --init PATH|shipped|VARIANT [--config FILE] [--steps N]
              [--device cpu|cuda] [--out DIR] [--resume DIR]
+emonav train --algo sarl [--config FILE] [--seed 0] [--device cpu|cuda] [--out DIR]
+             [--resume DIR]
 """
 
 from __future__ import annotations
@@ -32,9 +34,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     )
     t.add_argument(
         "--algo",
-        choices=["sac", "dagger", "finetune"],
-        help="sac (default), dagger (the CPU route) or finetune (discrete SAC on a trained "
-        "categorical student, --init)",
+        choices=["sac", "dagger", "finetune", "sarl"],
+        help="sac (default), dagger (the CPU route), finetune (discrete SAC on a trained "
+        "categorical student, --init) or sarl (CrowdNav's SARL: imitation, then value "
+        "learning; learning/sarl_train.py)",
     )
     t.add_argument(
         "--init",
@@ -53,7 +56,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "--config",
         type=Path,
         help="YAML training configuration: top-level SacConfig fields for --algo sac, "
-        "DaggerConfig fields for --algo dagger, FinetuneConfig fields for --algo finetune "
+        "DaggerConfig fields for --algo dagger, FinetuneConfig fields for --algo finetune, "
+        "SarlConfig fields for --algo sarl "
         "(e.g. emonav_drake/configs/finetune_digit.yaml; see emonav_drake/learning/config.py; "
         "the navigation environment is the paper's default and not configurable here)",
     )
@@ -136,6 +140,20 @@ def _training_config(args: argparse.Namespace):
                 raise ConfigError(
                     f"{flag} applies to --algo sac only (fine-tuning learns in the reduced "
                     "world of its configuration's `response`)"
+                )
+    elif args.algo == "sarl":
+        from emonav_drake.learning.config import SarlConfig as schema
+
+        for flag, value in (
+            ("--steps", args.steps),
+            ("--plant", args.plant),
+            ("--envs", args.envs),
+            ("--ray-address", args.ray_address),
+        ):
+            if value is not None:
+                raise ConfigError(
+                    f"{flag} applies to --algo sac only (SARL learns in the LIP world and "
+                    "counts episodes: il_episodes, rl_episodes in its --config)"
                 )
     else:
         from emonav_drake.learning.config import SacConfig as schema
@@ -237,6 +255,12 @@ def cmd_train(args: argparse.Namespace) -> int:
             resume_command=resume_command(args, out),
         )
         print(f"policy written to {path}")
+        return 0
+    if args.algo == "sarl":
+        from emonav_drake.learning.sarl_train import train_sarl
+
+        path = train_sarl(out, cfg, resume=args.resume is not None, command=command)
+        print(f"SARL checkpoint written to {path}")
         return 0
     if args.algo == "dagger":
         from emonav_drake.learning.dagger import train_dagger

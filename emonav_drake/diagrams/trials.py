@@ -118,7 +118,9 @@ def parse_methods(
                 path = kind.default_checkpoint()
             if n == "sac":
                 _check_sac_actor(path)
-            methods.append(MethodSpec(n, "policy", str(path), sha256_file(path)))
+            # SARL's checkpoint is a value network, built by its own planner kind
+            builder = "sarl" if n == "sarl" else "policy"
+            methods.append(MethodSpec(n, builder, str(path), sha256_file(path)))
         else:
             raise ConfigError(
                 f"--planners: unknown method {n!r}; use {', '.join(model_planner_names())}, "

@@ -140,6 +140,44 @@ class SacConfig:
         return self
 
 
+@dc.dataclass
+class SarlConfig:
+    """SARL by CrowdNav's route (`learning/sarl_train.py`): imitation of an expert (value
+    regression on discounted returns), then value learning with ε-greedy exploration,
+    experience replay and a target network. CrowdNav's settings unless noted."""
+
+    seed: int = 0
+    # The expert of the imitation phase: "mpc" (our best model planner; CrowdNav imitates
+    # ORCA, which our robot cannot follow: its steps are bounded by Eq. 2) or "dwa".
+    expert: str = "mpc"
+    il_episodes: int = 1000  # CrowdNav: 3 000
+    il_epochs: int = 50
+    il_lr: float = 0.01
+    rl_episodes: int = 3000  # CrowdNav: 10 000 (a CPU budget here: docs/learning.md)
+    rl_lr: float = 0.001
+    batch_size: int = 100
+    train_batches: int = 100  # updates after every RL episode
+    target_update: int = 50  # episodes between target-network copies
+    capacity: int = 100_000  # replay memory (states)
+    epsilon_start: float = 0.5
+    epsilon_end: float = 0.1
+    epsilon_decay: int = 4000  # episodes of the linear ε decay
+    gamma: float = 0.9  # discounted per second of travel at v_pref: γ^(T·v_pref) a step
+    eval_every: int = 500  # RL episodes between selections (and after imitation, at the end)
+    eval_episodes: int = 200
+    eval_seed_offset: int = 600_000  # selection seeds (never evaluation seeds 0–499)
+    train_seed_offset: int = 4_000_000  # training scenarios (imitation, then RL)
+    goal_radius: float = EpisodeParams.eval_goal_radius
+    device: str = "cpu"
+    threads: int = 1
+
+    def validate(self) -> "SarlConfig":
+        """Raise `ConfigError` naming the field if a value is out of range."""
+        validate_ranges(self, _SARL_RANGES)
+        _choice("expert", self.expert, ("dwa", "mpc"))
+        return self
+
+
 def _check_observation(grid_kind: str, encoder: str, num_frames: int) -> None:
     """The observation variant's cross-field rules (shared by both trainers)."""
     _choice("grid_kind", grid_kind, observation_kinds())
@@ -321,4 +359,27 @@ _FINETUNE_RANGES = {
     "eval_episodes": (1, None),
     "eval_seed_offset": (0, None),
     "train_seed_offset": (0, None),
+}
+
+_SARL_RANGES = {
+    "seed": (0, None),
+    "il_episodes": (0, None),
+    "il_epochs": (0, None),
+    "il_lr": (1e-8, 1.0),
+    "rl_episodes": (0, None),
+    "rl_lr": (1e-8, 1.0),
+    "batch_size": (1, None),
+    "train_batches": (0, None),
+    "target_update": (1, None),
+    "capacity": (1, None),
+    "epsilon_start": (0.0, 1.0),
+    "epsilon_end": (0.0, 1.0),
+    "epsilon_decay": (1, None),
+    "gamma": (0.0, 1.0),
+    "eval_every": (1, None),
+    "eval_episodes": (1, None),
+    "eval_seed_offset": (0, None),
+    "train_seed_offset": (0, None),
+    "goal_radius": (0.01, 2.0),
+    "threads": (1, 1024),
 }

@@ -100,6 +100,24 @@ def _default_policy() -> Path:
     return DEFAULT_POLICY
 
 
+def _sarl(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
+    from emonav_drake.planners.sarl import SarlPlanner
+
+    return SarlPlanner(checkpoint, config, device=device)
+
+
+SARL_CHECKPOINT = Path(__file__).resolve().parent.parent / "data" / "policies" / "sarl.pt"
+
+
+def _sarl_checkpoint() -> Path:
+    if not SARL_CHECKPOINT.is_file():
+        raise ConfigError(
+            "sarl has no shipped checkpoint in this version: train it with `emonav train "
+            "--algo sarl --out runs/sarl` and pass --checkpoint runs/sarl/policy.pt"
+        )
+    return SARL_CHECKPOINT
+
+
 def _no_sac_checkpoint() -> Path:
     raise ConfigError(
         "--planner sac runs a SAC-trained checkpoint (`emonav train --algo sac`): "
@@ -116,6 +134,15 @@ register(
     PlannerKind("policy", _policy, True, _default_policy, "a policy checkpoint (default: shipped)")
 )
 register(PlannerKind("sac", _sac, True, _no_sac_checkpoint, "a SAC-trained actor"))
+register(
+    PlannerKind(
+        "sarl",
+        _sarl,
+        True,
+        _sarl_checkpoint,
+        "SARL (CrowdNav): value network on the crowd state, one-step look-ahead",
+    )
+)
 for _name, _variant in VARIANTS.items():
     register(
         PlannerKind(

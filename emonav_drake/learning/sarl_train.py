@@ -1,0 +1,479 @@
+"""Training SARL by CrowdNav's route (`emonav train --algo sarl`).
+
+1. **Imitation**: `il_episodes` episodes of the expert (`SarlConfig.expert`: the MPC by
+   default) in the LIP world; every visited joint state is stored with its discounted
+   return Σ_t γ̄^t r_t (γ̄ = γ^(T·v_pref), r the paper's reward, Eq. 6–9); the value
+   network regresses on them for `il_epochs` epochs (SGD, momentum 0.9, MSE).
+2. **Value learning**: `rl_episodes` episodes of the ε-greedy SARL planner (ε decays
+   linearly from `epsilon_start` to `epsilon_end` over `epsilon_decay` episodes); after
+   each, its states enter the replay memory with the targets r_t + γ̄ V_target(s_{t+1})
+   (r_t alone at a collision or the goal; a timeout bootstraps), then `train_batches`
+   minibatches of `batch_size` update the network; the target network is copied every
+   `target_update` episodes. The imitation states stay in the memory until overwritten.
+3. **Selection that cannot peek**: after imitation, every `eval_every` RL episodes and at
+   the end, the greedy planner runs the selection seeds `eval_seed_offset + i`; the best
+   (highest SR; ties: lower collision rate, then lower DT; an exact tie keeps the earlier)
+   is `policy.pt` (a SARL checkpoint, `planners/sarl.py`) with its provenance.
+
+Training scenarios are seeds `train_seed_offset + i` (4 000 000 … by default: disjoint from
+the DAgger routes', fine-tuning's, the selection and the evaluation seeds).
+
+The run directory: `policy.pt`, `history.json` (one entry per selection) and
+`sarl_state.pt` (`--resume DIR`), written after imitation, after every selection, at the end
+and on Ctrl-C (an episode being collected is undone and collected again on resume; an
+update or epoch finishes first). A resumed run may raise `rl_episodes` (a longer value
+learning phase); every other setting must be the run's. Everything is seeded by
+`cfg.seed`: a resumed run ends bit for bit where an uninterrupted one does.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses as dc
+import json
+import logging
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+from tqdm import tqdm
+
+from emonav_drake.atomic_io import write_text_atomic
+from emonav_drake.core.metrics import format_summary, summarize
+from emonav_drake.core.navigation import NavigationWorld
+from emonav_drake.core.sarl_state import current_rows, step_discount
+from emonav_drake.core.scenario import sample_scenario
+from emonav_drake.errors import RunInterrupted
+from emonav_drake.learning.config import SarlConfig
+from emonav_drake.learning.run_state import (
+    InterruptGuard,
+    RunStateError,
+    check_state,
+    clean_stale_temp_files,
+    config_changes,
+    read_run_state,
+    rng_state,
+    set_rng_state,
+    write_run_state,
+)
+from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.planners.sarl import SarlValue, action_values, command_grid, save_sarl
+
+log = logging.getLogger(__name__)
+STATE_FILE = "sarl_state.pt"
+SARL_STATE_FORMAT = "emonav-sarl-state/1"
+
+
+class ReplayMemory:
+    """Joint states padded to `max_agents` rows, their masks and value targets (a ring)."""
+
+    def __init__(self, capacity: int, max_agents: int, features: int) -> None:
+        self.rows = np.zeros((capacity, max_agents, features), np.float32)
+        self.mask = np.zeros((capacity, max_agents), bool)
+        self.target = np.zeros(capacity, np.float32)
+        self.size = 0
+        self.position = 0
+
+    def push(self, rows: np.ndarray, target: float) -> None:
+        h = len(rows)
+        if h > self.rows.shape[1]:
+            raise ValueError(f"{h} agents in a state, the memory holds {self.rows.shape[1]}")
+        i = self.position
+        self.rows[i] = 0.0
+        self.rows[i, :h] = rows
+        self.mask[i] = False
+        self.mask[i, :h] = True
+        self.target[i] = target
+        self.position = (i + 1) % len(self.target)
+        self.size = min(self.size + 1, len(self.target))
+
+    def batch(self, idx: np.ndarray, device) -> tuple[torch.Tensor, ...]:
+        return (
+            torch.from_numpy(self.rows[idx]).to(device),
+            torch.from_numpy(self.mask[idx]).to(device),
+            torch.from_numpy(self.target[idx]).to(device),
+        )
+
+    def state(self) -> dict:
+        n = self.size
+        return {
+            "rows": self.rows[:n].copy(),
+            "mask": self.mask[:n].copy(),
+            "target": self.target[:n].copy(),
+            "position": self.position,
+        }
+
+    def restore(self, d: dict) -> None:
+        n = len(d["target"])
+        self.rows[:n], self.mask[:n], self.target[:n] = d["rows"], d["mask"], d["target"]
+        self.size, self.position = n, int(d["position"])
+
+
+@dc.dataclass
+class Progress:
+    """Where the run is: phase "il_collect" → "il_train" → "rl" → "done"."""
+
+    phase: str = "il_collect"
+    il_episode: int = 0
+    il_epoch: int = 0
+    rl_episode: int = 0
+    evaluated_at: int = -1  # the RL episode count of the last selection (-1: none yet)
+    best: list | None = None  # the selection key of policy.pt
+    history: list = dc.field(default_factory=list)
+    il_s: float = 0.0
+    rl_s: float = 0.0
+    eval_s: float = 0.0
+
+
+class SarlRun:
+    """One training run's state: networks, optimiser, memory, random state, progress."""
+
+    def __init__(self, cfg: SarlConfig, env_cfg: EmoNavConfig) -> None:
+        self.cfg, self.env_cfg = cfg, env_cfg
+        self.device = torch.device(cfg.device)
+        torch.manual_seed(cfg.seed)
+        self.rng = np.random.default_rng(cfg.seed)
+        self.model = SarlValue().to(self.device)
+        self.target = copy.deepcopy(self.model)
+        self.optim = torch.optim.SGD(self.model.parameters(), lr=cfg.il_lr, momentum=0.9)
+        self.commands = command_grid(env_cfg)
+        c = env_cfg.crowd
+        self.memory = ReplayMemory(
+            cfg.capacity, max(1, c.max_pedestrians + c.max_static), _features()
+        )
+        self.prog = Progress()
+        self.gamma_bar = step_discount(cfg.gamma, env_cfg)
+
+    # ------------------------------------------------------------------ state file
+    def save(self, out: Path) -> None:
+        plain, tensors = rng_state(self.rng)
+        state = {
+            "config": dc.asdict(self.cfg),
+            "env_config": dc.asdict(self.env_cfg),
+            "progress": dc.asdict(self.prog),
+            "memory": self.memory.state(),
+            "rng": plain,
+        }
+        tensors |= {
+            "model": self.model.state_dict(),
+            "target": self.target.state_dict(),
+            "optim": self.optim.state_dict(),
+        }
+        write_run_state(out / STATE_FILE, SARL_STATE_FORMAT, state, tensors)
+
+    def restore(self, state: dict, tensors: dict) -> None:
+        self.prog = Progress(**state["progress"])
+        self.memory.restore(state["memory"])
+        self.model.load_state_dict(tensors["model"])
+        self.target.load_state_dict(tensors["target"])
+        if self.prog.phase == "rl":
+            self._rl_optimiser()
+        self.optim.load_state_dict(tensors["optim"])
+        set_rng_state(self.rng, state["rng"], tensors)
+
+    def _rl_optimiser(self) -> None:
+        self.optim = torch.optim.SGD(self.model.parameters(), lr=self.cfg.rl_lr, momentum=0.9)
+
+    # ------------------------------------------------------------------ episodes
+    def world(self, seed: int) -> NavigationWorld:
+        sc = sample_scenario(seed, self.env_cfg)
+        return NavigationWorld(sc, self.env_cfg, goal_radius=self.cfg.goal_radius)
+
+    def act(self, world: NavigationWorld, epsilon: float) -> np.ndarray:
+        """ε-greedy on the look-ahead values (greedy with ε = 0: no random draw)."""
+        if epsilon > 0 and self.rng.random() < epsilon:
+            return self.commands[int(self.rng.integers(len(self.commands)))].copy()
+        q = action_values(
+            self.model,
+            world.planner_input(),
+            self.commands,
+            self.env_cfg,
+            self.cfg.gamma,
+            self.cfg.goal_radius,
+            self.device,
+        )
+        return self.commands[int(np.argmax(q))].copy()
+
+    def episode(self, world: NavigationWorld, choose) -> tuple[list, list, str, bool]:
+        """Run one episode with `choose(world)`: joint states, rewards, outcome, and
+        whether the last step ended it by collision or goal (terminal)."""
+        states, rewards = [], []
+        while True:
+            obs = world.planner_input()
+            states.append(current_rows(obs.robot, obs.goal_xy, obs.crowd, self.env_cfg))
+            ev, outcome = world.step(choose(world))
+            rewards.append(ev.reward)
+            if outcome is not None:
+                return states, rewards, outcome, bool(ev.collision or ev.reached_goal)
+
+    def train_batches(self, n: int) -> float:
+        if self.memory.size == 0 or n == 0:
+            return float("nan")
+        total = 0.0
+        self.model.train()
+        for _ in range(n):
+            idx = self.rng.integers(self.memory.size, size=self.cfg.batch_size)
+            rows, mask, target = self.memory.batch(idx, self.device)
+            loss = torch.nn.functional.mse_loss(self.model(rows, mask), target)
+            self.optim.zero_grad()
+            loss.backward()
+            self.optim.step()
+            total += loss.item()
+        self.model.eval()
+        return total / n
+
+    def value(self, rows: np.ndarray) -> float:
+        with torch.no_grad():
+            x = torch.from_numpy(rows[None]).to(self.device)
+            m = torch.ones(x.shape[:2], dtype=torch.bool, device=self.device)
+            return float(self.target(x, m)[0])
+
+    def epsilon(self) -> float:
+        c = self.cfg
+        frac = min(1.0, self.prog.rl_episode / c.epsilon_decay)
+        return c.epsilon_start + frac * (c.epsilon_end - c.epsilon_start)
+
+    def evaluate(self) -> dict:
+        records = []
+        for i in range(self.cfg.eval_episodes):
+            w = self.world(self.cfg.eval_seed_offset + i)
+            self.episode(w, lambda world: self.act(world, 0.0))
+            records.append(w.record)
+        return summarize(records)
+
+
+def _features() -> int:
+    from emonav_drake.core.sarl_state import NUM_FEATURES
+
+    return NUM_FEATURES
+
+
+def _expert(cfg: SarlConfig, env_cfg: EmoNavConfig):
+    if cfg.expert == "mpc":
+        from emonav_drake.core.mpc import MpcPlanner
+
+        return MpcPlanner(env_cfg)
+    from emonav_drake.core.dwa import DwaPlanner
+
+    return DwaPlanner(env_cfg)
+
+
+def _selection_key(s: dict) -> list:
+    return [s["SR"], -s["collision_rate"], -s["DT"]]
+
+
+def train_sarl(
+    out: str | Path,
+    cfg: SarlConfig | None = None,
+    env_cfg: EmoNavConfig | None = None,
+    resume: bool = False,
+    command: str | None = None,
+    progress: bool = True,
+) -> Path:
+    """Train SARL into `out` (or continue the run there: `resume`); returns
+    `out/policy.pt`. Raises `RunInterrupted` after Ctrl-C (state saved), `RunStateError`
+    for a damaged or foreign state file, `ConfigError` for a bad configuration."""
+    out = Path(out)
+    cfg = (cfg or SarlConfig()).validate()
+    env_cfg = env_cfg or EmoNavConfig()
+    if resume:
+        state, tensors = read_run_state(out / STATE_FILE, SARL_STATE_FORMAT)
+        saved = dict(state.get("config") or {})
+        changes = config_changes(saved | {"rl_episodes": cfg.rl_episodes}, dc.asdict(cfg))
+        if changes:
+            raise ConfigError(
+                f"--resume {out}: the configuration differs from the run's (only rl_episodes "
+                f"may grow): {', '.join(changes)}"
+            )
+        if cfg.rl_episodes < saved.get("rl_episodes", 0):
+            raise ConfigError(
+                f"--resume {out}: rl_episodes {cfg.rl_episodes} is below the run's "
+                f"{saved['rl_episodes']}"
+            )
+        run = SarlRun(cfg, env_cfg)
+        check_state(f"{STATE_FILE} in {out}", lambda: run.restore(state, tensors))
+        if run.prog.phase == "done" and run.prog.rl_episode < cfg.rl_episodes:
+            run.prog.phase = "rl"  # a longer value-learning phase
+    else:
+        if (out / STATE_FILE).exists():
+            raise ConfigError(f"{out} already holds a SARL run: continue it with --resume {out}")
+        out.mkdir(parents=True, exist_ok=True)
+        run = SarlRun(cfg, env_cfg)
+    clean_stale_temp_files(out)
+    torch.set_num_threads(cfg.threads)
+    with InterruptGuard() as guard:
+        _imitate(run, out, guard, progress, command)
+        if not guard.requested:
+            _learn(run, out, guard, progress, command)
+        run.save(out)
+    if guard.requested:
+        raise RunInterrupted(
+            f"interrupted in phase {run.prog.phase}; state saved in {out}; continue with "
+            f"`emonav train --algo sarl --resume {out}`"
+        )
+    return out / "policy.pt"
+
+
+def _imitate(run: SarlRun, out: Path, guard: InterruptGuard, progress: bool, command) -> None:
+    cfg, prog = run.cfg, run.prog
+    if prog.phase == "il_collect":
+        expert = _expert(cfg, run.env_cfg)
+        t0 = time.perf_counter()
+        bar = tqdm(
+            total=cfg.il_episodes,
+            initial=prog.il_episode,
+            desc="SARL imitation",
+            unit="ep",
+            disable=not progress,
+        )
+        while prog.il_episode < cfg.il_episodes and not guard.requested:
+            undo = rng_state(run.rng)
+            try:
+                with guard.abortable():
+                    expert.reset()
+                    w = run.world(cfg.train_seed_offset + prog.il_episode)
+                    states, rewards, _, _ = run.episode(
+                        w, lambda world: expert.plan(world.planner_input())
+                    )
+            except KeyboardInterrupt:
+                set_rng_state(run.rng, *undo)
+                break
+            ret = 0.0
+            for rows, r in zip(reversed(states), reversed(rewards), strict=True):
+                ret = r + run.gamma_bar * ret
+                run.memory.push(rows, ret)
+            prog.il_episode += 1
+            bar.update(1)
+        bar.close()
+        prog.il_s += time.perf_counter() - t0
+        if prog.il_episode >= cfg.il_episodes:
+            prog.phase = "il_train"
+    if prog.phase == "il_train" and not guard.requested:
+        t0 = time.perf_counter()
+        per_epoch = max(1, run.memory.size // cfg.batch_size)
+        bar = tqdm(
+            total=cfg.il_epochs,
+            initial=prog.il_epoch,
+            desc="SARL imitation training",
+            unit="epoch",
+            disable=not progress,
+        )
+        while prog.il_epoch < cfg.il_epochs and not guard.requested:
+            loss = run.train_batches(per_epoch)
+            prog.il_epoch += 1
+            bar.set_postfix(loss=f"{loss:.4f}")
+            bar.update(1)
+        bar.close()
+        prog.il_s += time.perf_counter() - t0
+        if prog.il_epoch >= cfg.il_epochs:
+            run.target.load_state_dict(run.model.state_dict())
+            run._rl_optimiser()
+            prog.phase = "rl"
+            _select(run, out, progress, command)
+            run.save(out)
+
+
+def _learn(run: SarlRun, out: Path, guard: InterruptGuard, progress: bool, command) -> None:
+    cfg, prog = run.cfg, run.prog
+    if prog.phase != "rl":
+        return
+    bar = tqdm(
+        total=cfg.rl_episodes,
+        initial=prog.rl_episode,
+        desc="SARL value learning",
+        unit="ep",
+        disable=not progress,
+    )
+    while prog.rl_episode < cfg.rl_episodes and not guard.requested:
+        t0 = time.perf_counter()
+        undo = rng_state(run.rng)
+        eps = run.epsilon()
+        try:
+            with guard.abortable():
+                w = run.world(cfg.train_seed_offset + cfg.il_episodes + prog.rl_episode)
+                states, rewards, outcome, terminal = run.episode(
+                    w, lambda world, eps=eps: run.act(world, eps)
+                )
+        except KeyboardInterrupt:
+            set_rng_state(run.rng, *undo)
+            break
+        for i, (rows, r) in enumerate(zip(states, rewards, strict=True)):
+            last = i == len(states) - 1
+            if last and terminal:
+                target = r
+            else:
+                nxt = states[i + 1] if not last else _final_rows(run, w)
+                target = r + run.gamma_bar * run.value(nxt)
+            run.memory.push(rows, target)
+        loss = run.train_batches(cfg.train_batches)
+        prog.rl_episode += 1
+        if prog.rl_episode % cfg.target_update == 0:
+            run.target.load_state_dict(run.model.state_dict())
+        prog.rl_s += time.perf_counter() - t0
+        bar.set_postfix(eps=f"{eps:.2f}", loss=f"{loss:.4f}", last=outcome)
+        bar.update(1)
+        if prog.rl_episode % cfg.eval_every == 0 or prog.rl_episode == cfg.rl_episodes:
+            _select(run, out, progress, command)
+            run.save(out)
+    bar.close()
+    if prog.rl_episode >= cfg.rl_episodes:
+        prog.phase = "done"
+
+
+def _final_rows(run: SarlRun, world: NavigationWorld) -> np.ndarray:
+    obs = world.planner_input()
+    return current_rows(obs.robot, obs.goal_xy, obs.crowd, run.env_cfg)
+
+
+def _select(run: SarlRun, out: Path, progress: bool, command) -> None:
+    """Evaluate the greedy planner on the selection seeds; keep it if it is the best."""
+    prog, cfg = run.prog, run.cfg
+    if prog.evaluated_at == prog.rl_episode:
+        return
+    t0 = time.perf_counter()
+    summary = run.evaluate()
+    prog.eval_s += time.perf_counter() - t0
+    prog.evaluated_at = prog.rl_episode
+    key = _selection_key(summary)
+    kept = prog.best is None or key > prog.best
+    prog.history.append(
+        {"rl_episode": prog.rl_episode, "epsilon": run.epsilon(), "eval": summary, "kept": kept}
+    )
+    if kept:
+        prog.best = key
+        save_sarl(
+            out / "policy.pt",
+            run.model,
+            run.commands,
+            cfg.gamma,
+            _provenance(run, summary, command),
+        )
+    write_text_atomic(out / "history.json", json.dumps(prog.history, indent=1, default=float))
+    msg = f"SARL after {prog.rl_episode} RL episodes: {format_summary(summary)}"
+    (tqdm.write if progress else log.info)(msg + ("  [kept]" if kept else ""))
+
+
+def _provenance(run: SarlRun, summary: dict, command) -> dict:
+    cfg, prog = run.cfg, run.prog
+    last_train = cfg.train_seed_offset + cfg.il_episodes + prog.rl_episode - 1
+    return {
+        "route": "sarl",
+        "command": command,
+        "seed": cfg.seed,
+        "config": dc.asdict(cfg),
+        "episode": prog.rl_episode,
+        "training_seeds": [cfg.train_seed_offset, last_train],
+        "selection_seeds": [cfg.eval_seed_offset, cfg.eval_seed_offset + cfg.eval_episodes - 1],
+        "samples": int(run.memory.size),
+        "wall_seconds": {
+            "imitation": round(prog.il_s, 1),
+            "value_learning": round(prog.rl_s, 1),
+            "selection": round(prog.eval_s, 1),
+        },
+        "eval_SR": summary["SR"],
+        "eval": summary,
+    }
+
+
+__all__ = ["RunStateError", "SarlRun", "train_sarl"]

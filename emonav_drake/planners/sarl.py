@@ -1,0 +1,188 @@
+"""SARL: CrowdNav's value network over the joint state, acting by one-step look-ahead.
+
+The paper (§IV-A) names SARL (Chen et al., ICRA 2019) among the planners that fail on the
+biped. This is SARL on our task, to test that claim: the crowd state is privileged (every
+pedestrian's position, velocity and emotion zone, every static disc), as in CrowdNav;
+`core/sarl_state.py` builds the joint state and the look-ahead on the LIP.
+
+**Network** (`SarlValue`, CrowdNav's sizes): each row (robot ⊕ one agent, 15 features)
+→ mlp1 (150, 100) → e_i; the mean of the e_i is the global state; attention
+mlp([e_i, mean], 100, 100, 1) → softmax weights α_i; mlp2 (100, 50) of e_i → h_i; the
+crowd feature Σ α_i h_i, concatenated with the robot's six self features → mlp3
+(150, 100, 100, 1) → V. ReLU between layers (CrowdNav's). Rows may be padded: `mask`
+(B, H) marks the real ones.
+
+**Acting** (`SarlPlanner`): for every command of the grid (the DWA candidates: 9 speeds ×
+11 heading changes) the look-ahead's reward plus γ^(T·v_pref)·V(next state), argmax;
+terminal steps (collision or goal) add no value. Deterministic (no exploration) when
+planning; training explores with ε-greedy (`learning/sarl_train.py`).
+
+Checkpoint (`torch.save`, loaded with `weights_only=True`):
+    {"format": "emonav-sarl/1", "gamma": γ, "commands": [[u_v, u_Δθ], …],
+     "state_dict": {...}, "provenance": {...}}
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from torch import nn
+
+from emonav_drake.core.navigation import PlannerInput
+from emonav_drake.core.sarl_state import (
+    NUM_FEATURES,
+    SELF_FEATURES,
+    goal_distance,
+    lookahead,
+    step_discount,
+)
+from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.torch_load import load_failure
+
+SARL_FORMAT = "emonav-sarl/1"
+
+
+def _mlp(sizes: list[int], last_relu: bool) -> nn.Sequential:
+    layers: list[nn.Module] = []
+    for i in range(len(sizes) - 1):
+        layers.append(nn.Linear(sizes[i], sizes[i + 1]))
+        if i < len(sizes) - 2 or last_relu:
+            layers.append(nn.ReLU())
+    return nn.Sequential(*layers)
+
+
+class SarlValue(nn.Module):
+    """V(joint state): rows (B, H, NUM_FEATURES), mask (B, H) bool → (B,)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.mlp1 = _mlp([NUM_FEATURES, 150, 100], last_relu=True)
+        self.mlp2 = _mlp([100, 100, 50], last_relu=False)
+        self.attention = _mlp([200, 100, 100, 1], last_relu=False)
+        self.mlp3 = _mlp([50 + SELF_FEATURES, 150, 100, 100, 1], last_relu=False)
+
+    def forward(self, rows: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
+        e = self.mlp1(rows)  # (B, H, 100)
+        m = mask.unsqueeze(-1).to(e.dtype)
+        count = m.sum(dim=1).clamp(min=1.0)
+        mean = (e * m).sum(dim=1) / count  # (B, 100): the global state
+        score = self.attention(torch.cat([e, mean.unsqueeze(1).expand_as(e)], dim=-1))
+        score = score.squeeze(-1).masked_fill(~mask, float("-inf"))
+        alpha = torch.softmax(score, dim=1).unsqueeze(-1)  # (B, H, 1)
+        crowd = (alpha * self.mlp2(e)).sum(dim=1)  # (B, 50)
+        return self.mlp3(torch.cat([rows[:, 0, :SELF_FEATURES], crowd], dim=-1)).squeeze(-1)
+
+
+def command_grid(config: EmoNavConfig) -> np.ndarray:
+    """The commands SARL chooses from (A, 2): the DWA candidates of `config`."""
+    from emonav_drake.core.dwa import DwaPlanner
+
+    return DwaPlanner(config).candidates.copy()
+
+
+def action_values(
+    model: SarlValue,
+    obs: PlannerInput,
+    commands: np.ndarray,
+    config: EmoNavConfig,
+    gamma: float,
+    goal_radius: float,
+    device: torch.device | str = "cpu",
+) -> np.ndarray:
+    """R(s, a) + γ^(T·v_pref)·V(s'_a) of every command (A,) (terminal: R alone)."""
+    rows, rewards, done = lookahead(
+        obs.robot,
+        obs.goal_xy,
+        goal_distance(obs.robot, obs.goal_xy),
+        obs.crowd,
+        commands,
+        config,
+        goal_radius,
+    )
+    with torch.no_grad():
+        x = torch.from_numpy(rows).to(device)
+        v = model(x, torch.ones(x.shape[:2], dtype=torch.bool, device=device)).cpu().numpy()
+    return rewards + step_discount(gamma, config) * np.where(done, 0.0, v)
+
+
+class SarlPlanner:
+    """SARL as a planner (module docstring); memoryless; reads the privileged crowd.
+
+    Args:
+        path: a SARL checkpoint (`save_sarl`).
+        config: the robot (LIP constants, radius, bounds), the reward and `episode.
+            eval_goal_radius` (the look-ahead's goal radius).
+        device: torch device of the value network.
+    """
+
+    name = "sarl"
+
+    def __init__(self, path: str | Path, config: EmoNavConfig, device: str = "cpu") -> None:
+        from emonav_drake.planners.policy import resolve_device
+
+        self.path = Path(path)
+        self.config = config
+        self.device = resolve_device(device)
+        self.model, self.meta = load_sarl(self.path, self.device)
+        self.commands = np.asarray(self.meta["commands"], float)
+        self.gamma = float(self.meta["gamma"])
+        self.goal_radius = config.episode.eval_goal_radius
+
+    def describe(self) -> str:
+        prov = self.meta.get("provenance") or {}
+        at = f" (episode {prov['episode']})" if "episode" in prov else ""
+        return f"SARL value network{at}, one-step look-ahead on the LIP ({self.path})"
+
+    def initial_memory(self) -> None:
+        return None
+
+    def reset(self) -> None:
+        """Memoryless."""
+
+    def plan_with_memory(self, obs: PlannerInput, memory: None) -> tuple[np.ndarray, None]:
+        return self.plan(obs), None
+
+    def plan(self, obs: PlannerInput) -> np.ndarray:
+        """The command (u_v [m/s], u_Δθ [rad]) of the best look-ahead value."""
+        q = action_values(
+            self.model, obs, self.commands, self.config, self.gamma, self.goal_radius, self.device
+        )
+        return self.commands[int(np.argmax(q))].copy()
+
+
+def save_sarl(
+    path: str | Path, model: SarlValue, commands: np.ndarray, gamma: float, provenance: dict
+) -> None:
+    """Write a SARL checkpoint atomically."""
+    from emonav_drake.atomic_io import atomic_write
+
+    blob = {
+        "format": SARL_FORMAT,
+        "gamma": float(gamma),
+        "commands": np.asarray(commands, float).tolist(),
+        "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
+        "provenance": provenance,
+    }
+    atomic_write(path, lambda f: torch.save(blob, f))
+
+
+def load_sarl(path: str | Path, device: torch.device | str = "cpu") -> tuple[SarlValue, dict]:
+    """The value network and the checkpoint's metadata; `ConfigError` naming the file if it
+    is missing, damaged or not a SARL checkpoint."""
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"SARL checkpoint {path} does not exist")
+    try:
+        blob: Any = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as e:  # noqa: BLE001 — reported the same way
+        raise ConfigError(f"SARL checkpoint {path} cannot be read ({load_failure(e)})") from None
+    if not isinstance(blob, dict) or blob.get("format") != SARL_FORMAT:
+        found = blob.get("format") if isinstance(blob, dict) else type(blob).__name__
+        raise ConfigError(f"{path} is not a SARL checkpoint (format {found!r})")
+    model = SarlValue()
+    model.load_state_dict(blob["state_dict"])
+    model.to(device).eval()
+    return model, {k: v for k, v in blob.items() if k != "state_dict"}
