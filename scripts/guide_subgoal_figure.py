@@ -1,6 +1,6 @@
 """Draw what the "guide" goal input shows a policy (`core/goal_input.py`).
 
-    python scripts/guide_subgoal_figure.py [--seeds 600003 600017] [--out docs/figures/guide_subgoal.png]
+    python scripts/guide_subgoal_figure.py [--seeds 600003 600017] [--out FILE.png]
 
 For each scenario seed: the static discs (their contact and discomfort rings), the MPC's
 trajectory in the LIP world, and at every third walking step the bearing a policy reads:
@@ -11,7 +11,6 @@ two differ.
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 import matplotlib
