@@ -4,7 +4,7 @@
 
 For each scenario seed: the static discs (their contact and discomfort rings), the MPC's
 trajectory in the LIP world, and at every third walking step the bearing a policy reads:
-grey to the goal ("goal" input), orange to the guide sub-goal ("guide" input) where the
+grey to the goal ("goal" input), reddish purple to the guide sub-goal ("guide" input) where the
 two differ.
 """
 
@@ -22,8 +22,18 @@ import numpy as np  # noqa: E402
 from emonav_drake.core.goal_input import guide_subgoal  # noqa: E402
 from emonav_drake.core.mpc import MpcPlanner  # noqa: E402
 from emonav_drake.core.navigation import NavigationWorld  # noqa: E402
+from emonav_drake.core.palette import (  # noqa: E402
+    GOAL_RGB,
+    OKABE_ITO,
+    REFERENCE_RGB,
+    ROBOT_RGB,
+    STATIC_RGB,
+    ZONE_EDGE_RGB,
+)
 from emonav_drake.core.scenario import sample_scenario  # noqa: E402
 from emonav_drake.params import EmoNavConfig  # noqa: E402
+
+GUIDE_RGB = OKABE_ITO["reddish_purple"]  # the guide sub-goal's bearing
 
 
 def draw(ax: plt.Axes, seed: int, cfg: EmoNavConfig) -> None:
@@ -33,10 +43,10 @@ def draw(ax: plt.Axes, seed: int, cfg: EmoNavConfig) -> None:
     r = cfg.robot.radius
     crowd = world.planner_input().crowd
     for c, rad in zip(crowd.static_centers, crowd.static_radii, strict=True):
-        ax.add_patch(plt.Circle(c, rad, color="0.3"))
-        ax.add_patch(plt.Circle(c, rad + r, fill=False, ls="--", color="0.3", lw=0.8))
+        ax.add_patch(plt.Circle(c, rad, color=STATIC_RGB))
+        ax.add_patch(plt.Circle(c, rad + r, fill=False, ls="--", color=STATIC_RGB, lw=0.8))
         zone = rad + r + crowd.static_discomfort
-        ax.add_patch(plt.Circle(c, zone, fill=False, ls=":", color="tab:red", lw=0.8))
+        ax.add_patch(plt.Circle(c, zone, fill=False, ls=":", color=STATIC_RGB, lw=0.8))
     path, k = [], 0
     while True:
         obs = world.planner_input()
@@ -45,7 +55,9 @@ def draw(ax: plt.Axes, seed: int, cfg: EmoNavConfig) -> None:
         if k % 3 == 0:
             g = np.asarray(obs.goal_xy) - p
             g = 0.6 * g / max(np.linalg.norm(g), 1e-9)
-            ax.arrow(*p, *g, color="0.6", width=0.01, head_width=0.08, length_includes_head=True)
+            ax.arrow(
+                *p, *g, color=REFERENCE_RGB, width=0.01, head_width=0.08, length_includes_head=True
+            )
             sub = guide_subgoal(obs.robot, obs.goal_xy, obs.crowd, r)
             if sub is not None:
                 d = sub - p
@@ -53,7 +65,7 @@ def draw(ax: plt.Axes, seed: int, cfg: EmoNavConfig) -> None:
                 ax.arrow(
                     *p,
                     *d,
-                    color="tab:orange",
+                    color=GUIDE_RGB,
                     width=0.015,
                     head_width=0.1,
                     length_includes_head=True,
@@ -63,10 +75,10 @@ def draw(ax: plt.Axes, seed: int, cfg: EmoNavConfig) -> None:
         if outcome is not None:
             break
     path = np.array(path)
-    ax.plot(path[:, 0], path[:, 1], color="tab:blue", lw=1.2, label=f"MPC ({outcome})")
+    ax.plot(path[:, 0], path[:, 1], color=ROBOT_RGB, lw=1.2, label=f"MPC ({outcome})")
     goal = np.asarray(world.planner_input().goal_xy)
-    ax.plot(*goal, marker="*", color="k", ms=12, ls="none", label="goal")
-    ax.plot(*path[0], marker="s", color="tab:blue", ms=7, ls="none")
+    ax.plot(*goal, marker="*", color=GOAL_RGB, ms=12, ls="none", label="goal")
+    ax.plot(*path[0], marker="s", color=ROBOT_RGB, ms=7, ls="none")
     ax.set_aspect("equal")
     ax.set_title(f"seed {seed}")
     ax.set_xlabel("x [m]")
@@ -83,11 +95,11 @@ def main() -> None:
     for ax, seed in zip(np.atleast_1d(axes), args.seeds, strict=True):
         draw(ax, seed, cfg)
     handles = [
-        plt.Line2D([], [], color="0.6", lw=2, label='"goal": bearing of the goal'),
-        plt.Line2D([], [], color="tab:orange", lw=2, label='"guide": bearing of the sub-goal'),
-        plt.Line2D([], [], color="tab:blue", lw=1.2, label="MPC path (LIP world)"),
-        plt.Line2D([], [], color="0.3", ls="--", label="contact (r_disc + r_robot)"),
-        plt.Line2D([], [], color="tab:red", ls=":", label="discomfort zone"),
+        plt.Line2D([], [], color=REFERENCE_RGB, lw=2, label='"goal": bearing of the goal'),
+        plt.Line2D([], [], color=GUIDE_RGB, lw=2, label='"guide": bearing of the sub-goal'),
+        plt.Line2D([], [], color=ROBOT_RGB, lw=1.2, label="MPC path (LIP world)"),
+        plt.Line2D([], [], color=STATIC_RGB, ls="--", label="contact (r_disc + r_robot)"),
+        plt.Line2D([], [], color=ZONE_EDGE_RGB, ls=":", label="discomfort zone"),
     ]
     fig.legend(handles=handles, loc="lower center", ncol=5, fontsize=8)
     fig.suptitle("The goal a policy reads: goal bearing vs guide sub-goal around static discs")

@@ -152,7 +152,7 @@ SOURCES = {
             "and its listed third-party parts, not this photograph. Identified as US Navy "
             "photograph NH 96919-KN: Pillow's test image Tests/images/hopper.jpg was cut "
             "from http://www.history.navy.mil/photos/images/h96000/h96919k.jpg (Pillow pull "
-            "request #887) and is the same photograph (compared side by side)."
+            "request number 887) and is the same photograph (compared side by side)."
         ),
     ),
 }
