@@ -183,10 +183,42 @@ def test_sarl_runs_on_both_plants_through_emonav_sim_deterministically(tiny_runs
         assert records[0]["steps"] >= 1
 
 
-def test_sarl_without_a_checkpoint_says_how_to_train(tmp_path, capsys):
+def test_a_benchmark_runs_sarl_beside_a_policy(tiny_runs, tmp_path):
+    from emonav_drake.diagrams.trials import parse_methods
+    from emonav_drake.evaluation.benchmark import run_benchmark
+    from emonav_drake.evaluation.run_directory import load_run
+    from emonav_drake.params import load_config
+
+    root, _ = tiny_runs
+    methods = parse_methods("sarl,dwa", [f"sarl={root / 'whole' / 'policy.pt'}"])
+    run_benchmark(tmp_path / "b", methods, "lip", 2, 5, load_config(), workers=1, progress=False)
+    settings, trials = load_run(tmp_path / "b")
+    assert sorted(t["method"] for t in trials) == ["dwa", "dwa", "sarl", "sarl"]
+    assert settings["methods"]["sarl"]["observation"] == "state"
+
+
+def test_the_shipped_sarl_runs_by_name_on_both_plants(tmp_path):
     from emonav_drake.planners import SARL_CHECKPOINT
 
-    if SARL_CHECKPOINT.is_file():
-        pytest.skip("a SARL checkpoint is shipped")
+    _, meta = load_sarl(SARL_CHECKPOINT)
+    assert meta["provenance"]["route"] == "sarl"
+    assert meta["provenance"]["selection_seeds"] == [600_000, 600_199]
+    short = tmp_path / "short.yaml"
+    short.write_text("episode: {max_steps: 6}\n")
+    for plant, extra in (("lip", []), ("digit", ["--config", str(short)])):
+        records = []
+        for run in range(2):
+            rec = tmp_path / f"{plant}{run}.json"
+            argv = ["sim", "--planner", "sarl", "--plant", plant, "--seed", "11"]
+            assert main(argv + ["--json", str(rec)] + extra) == 0
+            records.append(json.loads(rec.read_text()))
+        assert records[0] == records[1], plant
+        assert records[0]["outcome"] in ("success", "collision", "timeout"), plant
+
+
+def test_sarl_without_a_checkpoint_says_how_to_train(tmp_path, capsys, monkeypatch):
+    import emonav_drake.planners as planners
+
+    monkeypatch.setattr(planners, "SARL_CHECKPOINT", tmp_path / "not_shipped.pt")
     assert main(["sim", "--planner", "sarl", "--json", str(tmp_path / "r.json")]) == 2
     assert "emonav train --algo sarl" in capsys.readouterr().err

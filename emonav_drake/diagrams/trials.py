@@ -40,7 +40,7 @@ class MethodSpec:
     """One compared method: a planner kind and, for learned policies, the checkpoint."""
 
     name: str
-    planner: str  # dwa | mpc | policy (a learned policy; "sac" in runs before the rename)
+    planner: str  # dwa | mpc | policy (a learned policy; "sac" in runs before the rename) | sarl
     checkpoint: str | None = None  # path of a learned policy's checkpoint
     checkpoint_sha256: str | None = None
     observation: str = "state"  # what the method sees: "state" (DWA, MPC) or the grid kind
@@ -188,7 +188,9 @@ class TrialRunner:
             m = self.spec.method(name)
             cfg = copy.deepcopy(self.config)  # a policy adapts the grid-map settings
             # a learned method is whatever its checkpoint holds ("sac" in older runs)
-            kind = "policy" if m.checkpoint is not None else m.planner
+            # a learned method runs as "policy" (runs before the rename say "sac"), SARL
+            # as itself (its checkpoint is a value network)
+            kind = "policy" if m.checkpoint is not None and m.planner != "sarl" else m.planner
             planner = make_planner(kind, cfg, checkpoint=self._checkpoint_path(m))
             cfg, grid_kind = configure_for(planner, cfg)
             self._planners[name] = (planner, cfg, grid_kind)
