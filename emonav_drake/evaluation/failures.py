@@ -119,7 +119,8 @@ def _planner_flags(method: dict) -> list[str]:
             same = False
         if same:
             return ["--planner", name]
-    return ["--planner", "policy", "--checkpoint", _shown_path(method["checkpoint"])]
+    kind = "sarl" if method["planner"] == "sarl" else "policy"
+    return ["--planner", kind, "--checkpoint", _shown_path(method["checkpoint"])]
 
 
 def rerun_command(
