@@ -87,12 +87,17 @@ def plot_summary(
     ax = axes[0]
     ax.bar(x, sr, color=colors)
     ax.errorbar(x, sr, yerr=[sr - ci[:, 0], ci[:, 1] - sr], fmt="none", ecolor=INK_RGB, capsize=4)
-    ax.set_xticks(
-        x, [f"{s}\n(n={summary[m]['episodes']})" for m, s in zip(names, shown, strict=True)]
-    )
+    counts = {summary[m]["episodes"] for m in names}
+    if len(counts) == 1:  # one trial count: said once, in the title
+        ax.set_xticks(x, shown)
+        ax.set_title(f"SR (95 % Wilson interval, n = {counts.pop()} each)")
+    else:
+        ax.set_xticks(
+            x, [f"{s}\n(n={summary[m]['episodes']})" for m, s in zip(names, shown, strict=True)]
+        )
+        ax.set_title("SR (95 % Wilson interval)")
     ax.set_ylim(0, 1.05)
     ax.set_ylabel("success rate")
-    ax.set_title("SR (95 % Wilson interval)")
 
     per = {m: [t for t in trials if t["method"] == m] for m in names}
     ax = axes[1]
@@ -102,6 +107,12 @@ def plot_summary(
         x, [d[0] for d in dt], yerr=[d[1] for d in dt], fmt="none", ecolor=INK_RGB, capsize=4
     )
     ax.set_xticks(x, shown)
+    if len(names) > 4:  # many methods: slanted names stay apart
+        for a in axes[:2]:
+            a.tick_params(axis="x", labelrotation=35)
+            for label in a.get_xticklabels():
+                label.set_horizontalalignment("right")
+                label.set_rotation_mode("anchor")
     ax.set_ylabel("discomfort steps per trial")
     ax.set_title("DT per trial (95 % t interval)")
 
@@ -122,7 +133,7 @@ def plot_summary(
     ax.set_xticks(np.arange(4), IDT_LABELS)
     ax.set_ylabel("steps per trial")
     ax.set_title("IDT per trial [static; happy, neutral, negative] (95 % t interval)")
-    ax.legend()
+    ax.legend(loc="upper center", ncol=2 if len(names) > 4 else 1, fontsize=8)
     for ax in axes:
         ax.set_ylim(bottom=0)
         ax.grid(axis="y", alpha=0.3)
