@@ -167,20 +167,14 @@ def test_a_resume_refuses_another_configuration(tiny_runs, tmp_path):
         SarlConfig(expert="orca").validate()
 
 
-def test_sarl_runs_on_both_plants_through_emonav_sim_deterministically(tiny_runs, tmp_path):
+def test_sarl_runs_on_both_plants_through_emonav_sim_deterministically(
+    tiny_runs, sim_on_both_plants
+):
     root, _ = tiny_runs
     ckpt = str(root / "whole" / "policy.pt")
-    short = tmp_path / "short.yaml"
-    short.write_text("episode: {max_steps: 6}\n")
-    for plant, extra in (("lip", []), ("digit", ["--config", str(short)])):
-        records = []
-        for run in range(2):
-            rec = tmp_path / f"{plant}{run}.json"
-            argv = ["sim", "--planner", "sarl", "--checkpoint", ckpt, "--plant", plant]
-            assert main(argv + ["--seed", "7", "--json", str(rec)] + extra) == 0
-            records.append(json.loads(rec.read_text()))
-        assert records[0] == records[1], plant
-        assert records[0]["steps"] >= 1
+    records = sim_on_both_plants(["--planner", "sarl", "--checkpoint", ckpt], 7)
+    for plant, record in records.items():
+        assert record["steps"] >= 1, plant
 
 
 def test_a_benchmark_runs_sarl_beside_a_policy(tiny_runs, tmp_path):
@@ -197,23 +191,15 @@ def test_a_benchmark_runs_sarl_beside_a_policy(tiny_runs, tmp_path):
     assert settings["methods"]["sarl"]["observation"] == "state"
 
 
-def test_the_shipped_sarl_runs_by_name_on_both_plants(tmp_path):
+def test_the_shipped_sarl_runs_by_name_on_both_plants(sim_on_both_plants):
     from emonav_drake.planners import SARL_CHECKPOINT
 
     _, meta = load_sarl(SARL_CHECKPOINT)
     assert meta["provenance"]["route"] == "sarl"
     assert meta["provenance"]["selection_seeds"] == [600_000, 600_199]
-    short = tmp_path / "short.yaml"
-    short.write_text("episode: {max_steps: 6}\n")
-    for plant, extra in (("lip", []), ("digit", ["--config", str(short)])):
-        records = []
-        for run in range(2):
-            rec = tmp_path / f"{plant}{run}.json"
-            argv = ["sim", "--planner", "sarl", "--plant", plant, "--seed", "11"]
-            assert main(argv + ["--json", str(rec)] + extra) == 0
-            records.append(json.loads(rec.read_text()))
-        assert records[0] == records[1], plant
-        assert records[0]["outcome"] in ("success", "collision", "timeout"), plant
+    records = sim_on_both_plants(["--planner", "sarl"], 11)
+    for plant, record in records.items():
+        assert record["outcome"] in ("success", "collision", "timeout"), plant
 
 
 def test_sarl_without_a_checkpoint_says_how_to_train(tmp_path, capsys, monkeypatch):

@@ -98,7 +98,7 @@ def test_the_mirrored_batch_is_the_mirrored_world_for_scans():
 
 @pytest.mark.parametrize("name", [n for n, v in VARIANTS.items() if v.is_shipped])
 def test_each_shipped_variant_runs_a_seeded_episode_on_both_plants_deterministically(
-    tmp_path, name
+    sim_on_both_plants, name
 ):
     """The shipped checkpoint loads, declares its variant's observation, and runs by name
     through `emonav sim` on each plant: a whole LIP episode and the first 6 Digit steps,
@@ -108,21 +108,12 @@ def test_each_shipped_variant_runs_a_seeded_episode_on_both_plants_deterministic
     cfg = load_typed_yaml(DaggerConfig, path=v.config)
     assert meta["observation"]["grid_kind"] == cfg.grid_kind
     assert meta["observation"]["num_frames"] == cfg.num_frames
-    short = tmp_path / "short.yaml"
-    short.write_text("episode: {max_steps: 6}\n")
-    for plant, extra in (("lip", []), ("digit", ["--config", str(short)])):
-        records = []
-        for run in range(2):
-            rec = tmp_path / f"{plant}{run}.json"
-            argv = ["sim", "--planner", name, "--plant", plant, "--seed", "7", "--json", str(rec)]
-            assert main(argv + extra) == 0
-            records.append(json.loads(rec.read_text()))
-        assert records[0] == records[1], plant
-        assert len(records[0]["trajectory"]["t"]) == records[0]["steps"] + 1, plant
-        if plant == "lip":  # the whole episode: it ends by the goal, a collision or timeout
-            assert records[0]["outcome"] in ("success", "collision", "timeout")
-        else:
-            assert records[0]["steps"] == 6 and records[0]["path_length"] > 0.3
+    records = sim_on_both_plants(["--planner", name], 7)
+    for plant, record in records.items():
+        assert len(record["trajectory"]["t"]) == record["steps"] + 1, plant
+    # the whole LIP episode ends by the goal, a collision or a timeout
+    assert records["lip"]["outcome"] in ("success", "collision", "timeout")
+    assert records["digit"]["steps"] == 6 and records["digit"]["path_length"] > 0.3
 
 
 def test_unshipped_variants_say_how_to_train(tmp_path):

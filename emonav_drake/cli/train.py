@@ -131,30 +131,20 @@ def _training_config(args: argparse.Namespace):
     elif args.algo == "finetune":
         from emonav_drake.learning.config import FinetuneConfig as schema
 
-        for flag, value in (
-            ("--plant", args.plant),
-            ("--envs", args.envs),
-            ("--ray-address", args.ray_address),
-        ):
-            if value is not None:
-                raise ConfigError(
-                    f"{flag} applies to --algo sac only (fine-tuning learns in the reduced "
-                    "world of its configuration's `response`)"
-                )
+        _refuse_sac_flags(
+            args,
+            ("--plant", "--envs", "--ray-address"),
+            "fine-tuning learns in the reduced world of its configuration's `response`",
+        )
     elif args.algo == "sarl":
         from emonav_drake.learning.config import SarlConfig as schema
 
-        for flag, value in (
-            ("--steps", args.steps),
-            ("--plant", args.plant),
-            ("--envs", args.envs),
-            ("--ray-address", args.ray_address),
-        ):
-            if value is not None:
-                raise ConfigError(
-                    f"{flag} applies to --algo sac only (SARL learns in the LIP world and "
-                    "counts episodes: il_episodes, rl_episodes in its --config)"
-                )
+        _refuse_sac_flags(
+            args,
+            ("--steps", "--plant", "--envs", "--ray-address"),
+            "SARL learns in the LIP world and counts episodes: il_episodes, rl_episodes in "
+            "its --config",
+        )
     else:
         from emonav_drake.learning.config import SacConfig as schema
     _check_init(args)
@@ -179,6 +169,13 @@ def _training_config(args: argparse.Namespace):
     except ConfigError as e:
         raise ConfigError(f"{where}{e}") from None
     return cfg
+
+
+def _refuse_sac_flags(args: argparse.Namespace, flags: tuple[str, ...], why: str) -> None:
+    """`ConfigError` for the first of `flags` (SAC-only options) that was given."""
+    for flag in flags:
+        if getattr(args, flag.lstrip("-").replace("-", "_")) is not None:
+            raise ConfigError(f"{flag} applies to --algo sac only ({why})")
 
 
 def _check_init(args: argparse.Namespace) -> None:

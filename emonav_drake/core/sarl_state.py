@@ -26,7 +26,6 @@ sagittal speed along its heading (the LIP's state at the switch).
 from __future__ import annotations
 
 import dataclasses as dc
-import math
 
 import numpy as np
 
@@ -166,8 +165,3 @@ def lookahead(
 def step_discount(gamma: float, config: EmoNavConfig) -> float:
     """CrowdNav's discount of one step, γ^(T·v_pref)."""
     return float(gamma ** (config.robot.step_time * config.robot.max_speed))
-
-
-def goal_distance(robot: LipState, goal_xy: np.ndarray) -> float:
-    """Robot → goal distance [m]."""
-    return math.hypot(goal_xy[0] - robot.x, goal_xy[1] - robot.y)

@@ -40,7 +40,7 @@ class MethodSpec:
     """One compared method: a planner kind and, for learned policies, the checkpoint."""
 
     name: str
-    planner: str  # dwa | mpc | policy (a learned policy; "sac" in runs before the rename) | sarl
+    planner: str  # the kind that builds it: dwa | mpc | policy | sarl (`PlannerKind.runs_as`)
     checkpoint: str | None = None  # path of a learned policy's checkpoint
     checkpoint_sha256: str | None = None
     observation: str = "state"  # what the method sees: "state" (DWA, MPC) or the grid kind
@@ -118,9 +118,8 @@ def parse_methods(
                 path = kind.default_checkpoint()
             if n == "sac":
                 _check_sac_actor(path)
-            # SARL's checkpoint is a value network, built by its own planner kind
-            builder = "sarl" if n == "sarl" else "policy"
-            methods.append(MethodSpec(n, builder, str(path), sha256_file(path)))
+            runs_as = kind.runs_as if kind is not None else "policy"
+            methods.append(MethodSpec(n, runs_as, str(path), sha256_file(path)))
         else:
             raise ConfigError(
                 f"--planners: unknown method {n!r}; use {', '.join(model_planner_names())}, "
@@ -140,6 +139,13 @@ def _check_sac_actor(path: str | Path) -> None:
             f"--checkpoint sac={path}: not a SAC actor but a {describe_policy(meta)}; "
             "give it another method name (e.g. policy)"
         )
+
+
+def planner_of(recorded: str) -> str:
+    """The planner kind that builds a method recorded as `recorded` (`MethodSpec.planner`):
+    itself, except "sac", which runs before the planner rename wrote for the shipped policy
+    (a policy file)."""
+    return "policy" if recorded == "sac" else recorded
 
 
 class TrialRunner:
@@ -187,10 +193,7 @@ class TrialRunner:
 
             m = self.spec.method(name)
             cfg = copy.deepcopy(self.config)  # a policy adapts the grid-map settings
-            # a learned method is whatever its checkpoint holds ("sac" in older runs)
-            # a learned method runs as "policy" (runs before the rename say "sac"), SARL
-            # as itself (its checkpoint is a value network)
-            kind = "policy" if m.checkpoint is not None and m.planner != "sarl" else m.planner
+            kind = planner_of(m.planner)
             planner = make_planner(kind, cfg, checkpoint=self._checkpoint_path(m))
             cfg, grid_kind = configure_for(planner, cfg)
             self._planners[name] = (planner, cfg, grid_kind)

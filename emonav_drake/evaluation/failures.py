@@ -119,7 +119,9 @@ def _planner_flags(method: dict) -> list[str]:
             same = False
         if same:
             return ["--planner", name]
-    kind = "sarl" if method["planner"] == "sarl" else "policy"
+    from emonav_drake.diagrams.trials import planner_of
+
+    kind = planner_of(method["planner"])
     return ["--planner", kind, "--checkpoint", _shown_path(method["checkpoint"])]
 
 

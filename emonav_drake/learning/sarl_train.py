@@ -42,13 +42,12 @@ from tqdm import tqdm
 from emonav_drake.atomic_io import write_text_atomic
 from emonav_drake.core.metrics import format_summary, summarize
 from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.sarl_state import current_rows, step_discount
+from emonav_drake.core.sarl_state import NUM_FEATURES, current_rows, step_discount
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import SarlConfig
 from emonav_drake.learning.run_state import (
     InterruptGuard,
-    RunStateError,
     check_state,
     clean_stale_temp_files,
     config_changes,
@@ -140,7 +139,7 @@ class SarlRun:
         self.commands = command_grid(env_cfg)
         c = env_cfg.crowd
         self.memory = ReplayMemory(
-            cfg.capacity, max(1, c.max_pedestrians + c.max_static), _features()
+            cfg.capacity, max(1, c.max_pedestrians + c.max_static), NUM_FEATURES
         )
         self.prog = Progress()
         self.gamma_bar = step_discount(cfg.gamma, env_cfg)
@@ -195,13 +194,17 @@ class SarlRun:
         )
         return self.commands[int(np.argmax(q))].copy()
 
+    def rows_now(self, world: NavigationWorld) -> np.ndarray:
+        """The joint state of `world` now (H, NUM_FEATURES)."""
+        obs = world.planner_input()
+        return current_rows(obs.robot, obs.goal_xy, obs.crowd, self.env_cfg)
+
     def episode(self, world: NavigationWorld, choose) -> tuple[list, list, str, bool]:
         """Run one episode with `choose(world)`: joint states, rewards, outcome, and
         whether the last step ended it by collision or goal (terminal)."""
         states, rewards = [], []
         while True:
-            obs = world.planner_input()
-            states.append(current_rows(obs.robot, obs.goal_xy, obs.crowd, self.env_cfg))
+            states.append(self.rows_now(world))
             ev, outcome = world.step(choose(world))
             rewards.append(ev.reward)
             if outcome is not None:
@@ -241,12 +244,6 @@ class SarlRun:
             self.episode(w, lambda world: self.act(world, 0.0))
             records.append(w.record)
         return summarize(records)
-
-
-def _features() -> int:
-    from emonav_drake.core.sarl_state import NUM_FEATURES
-
-    return NUM_FEATURES
 
 
 def _expert(cfg: SarlConfig, env_cfg: EmoNavConfig):
@@ -403,7 +400,7 @@ def _learn(run: SarlRun, out: Path, guard: InterruptGuard, progress: bool, comma
             if last and terminal:
                 target = r
             else:
-                nxt = states[i + 1] if not last else _final_rows(run, w)
+                nxt = states[i + 1] if not last else run.rows_now(w)
                 target = r + run.gamma_bar * run.value(nxt)
             run.memory.push(rows, target)
         loss = run.train_batches(cfg.train_batches)
@@ -419,11 +416,6 @@ def _learn(run: SarlRun, out: Path, guard: InterruptGuard, progress: bool, comma
     bar.close()
     if prog.rl_episode >= cfg.rl_episodes:
         prog.phase = "done"
-
-
-def _final_rows(run: SarlRun, world: NavigationWorld) -> np.ndarray:
-    obs = world.planner_input()
-    return current_rows(obs.robot, obs.goal_xy, obs.crowd, run.env_cfg)
 
 
 def _select(run: SarlRun, out: Path, progress: bool, command) -> None:
@@ -474,6 +466,3 @@ def _provenance(run: SarlRun, summary: dict, command) -> dict:
         "eval_SR": summary["SR"],
         "eval": summary,
     }
-
-
-__all__ = ["RunStateError", "SarlRun", "train_sarl"]

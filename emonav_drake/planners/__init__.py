@@ -141,6 +141,7 @@ register(
         True,
         _sarl_checkpoint,
         "SARL (CrowdNav): value network on the crowd state, one-step look-ahead",
+        runs_as="sarl",
     )
 )
 for _name, _variant in VARIANTS.items():

@@ -36,6 +36,9 @@ class PlannerKind:
             (called when needed: it may raise `ConfigError` saying how to train it), or
             None if one must be given.
         summary: one line for `--help` and error messages.
+        runs_as: the planner kind a benchmark records for this kind's checkpoints and
+            builds them with: "policy" (every policy file, whatever its variant name) or
+            the kind itself when its checkpoints are not policies (SARL's value network).
     """
 
     name: str
@@ -43,6 +46,7 @@ class PlannerKind:
     learned: bool = False
     default_checkpoint: Callable[[], Path] | None = None
     summary: str = ""
+    runs_as: str = "policy"
 
 
 _KINDS: Registry[PlannerKind] = Registry("planner")

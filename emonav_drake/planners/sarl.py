@@ -35,7 +35,6 @@ from emonav_drake.core.navigation import PlannerInput
 from emonav_drake.core.sarl_state import (
     NUM_FEATURES,
     SELF_FEATURES,
-    goal_distance,
     lookahead,
     step_discount,
 )
@@ -96,7 +95,7 @@ def action_values(
     rows, rewards, done = lookahead(
         obs.robot,
         obs.goal_xy,
-        goal_distance(obs.robot, obs.goal_xy),
+        obs.goal_state()[0],
         obs.crowd,
         commands,
         config,

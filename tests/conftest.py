@@ -1,0 +1,31 @@
+"""Shared fixtures of the test suite."""
+
+import json
+
+import pytest
+
+from emonav_drake.cli import main
+
+
+@pytest.fixture
+def sim_on_both_plants(tmp_path):
+    """`run(planner_args, seed)` → {plant: record}: `emonav sim PLANNER_ARGS --seed SEED`
+    on the LIP plant (a whole episode) and on Digit (its first 6 steps), each run twice
+    and asserted to give the same record (trajectory included)."""
+    short = tmp_path / "short6.yaml"
+    short.write_text("episode: {max_steps: 6}\n")
+
+    def run(planner_args: list[str], seed: int) -> dict[str, dict]:
+        out = {}
+        for plant, extra in (("lip", []), ("digit", ["--config", str(short)])):
+            records = []
+            for i in range(2):
+                rec = tmp_path / f"sim_{plant}{i}.json"
+                argv = ["sim", *planner_args, "--plant", plant, "--seed", str(seed)]
+                assert main(argv + ["--json", str(rec)] + extra) == 0
+                records.append(json.loads(rec.read_text()))
+            assert records[0] == records[1], plant
+            out[plant] = records[0]
+        return out
+
+    return run
