@@ -20,6 +20,8 @@ def test_a_tiny_digit_round_writes_a_loadable_policy(tmp_path, route):
     cfg.expert_episodes, cfg.episodes_per_round, cfg.rounds = 2, 1, 1
     cfg.grad_steps_first, cfg.grad_steps_per_round, cfg.batch_size = 2, 2, 8
     cfg.eval_episodes = 1
+    if cfg.expert == "mpc":
+        cfg.expert_clearance = 0.1  # a widened teacher labels on Digit too
     source = tmp_path / "calibrated"
     train_dagger(source, cfg.validate(), command="test")
     short = EmoNavConfig()
@@ -30,6 +32,7 @@ def test_a_tiny_digit_round_writes_a_loadable_policy(tmp_path, route):
     prov = planner.meta["provenance"]
     assert prov["route"] == "dagger+digit" and prov["round"] == 0
     assert prov["config"]["expert"] == cfg.expert  # the calibrated run's teacher labels
+    assert prov["config"]["expert_clearance"] == cfg.expert_clearance
     (entry,) = prov["history"]
     assert entry["episodes"] == 2 and entry["seeds"] == [4_000_000, 4_000_001]
     assert entry["digit_samples"] >= 6  # 3 planner instants (at least) per episode

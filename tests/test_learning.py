@@ -320,3 +320,32 @@ def test_a_route_starts_from_a_shipped_variant_by_name(tmp_path):
     unshipped = next(n for n, v in VARIANTS.items() if not v.is_shipped)
     with pytest.raises(ConfigError, match=f"init_policy {unshipped}: .*emonav train --variant"):
         student.load_weights(unshipped)
+
+
+def test_an_mpc_expert_with_clearance_keeps_more_room():
+    """`DaggerConfig.expert_clearance` widens the MPC expert's collision and discomfort
+    margins by exactly that much (the caller's configuration untouched), and the real MPC
+    then walks another path: seed 10⁶ + 6 takes 56 steps without clearance, more with it."""
+    env_cfg = EmoNavConfig()
+    before = (env_cfg.mpc.collision_margin, env_cfg.mpc.discomfort_margin)
+    wide = route_expert(env_cfg, "mpc", 0.05, "", 0.15)
+    assert (env_cfg.mpc.collision_margin, env_cfg.mpc.discomfort_margin) == before
+    assert wide.config.mpc.collision_margin == pytest.approx(before[0] + 0.15)
+    assert wide.config.mpc.discomfort_margin == pytest.approx(before[1] + 0.15)
+    assert route_expert(env_cfg, "mpc", 0.05, "", 0.0).config is env_cfg
+
+    def walk(expert) -> tuple[str, int]:
+        world = NavigationWorld(
+            sample_scenario(10**6 + 6, env_cfg), env_cfg, goal_radius=0.2, grid_kind=None
+        )
+        steps, outcome = 0, None
+        while outcome is None:
+            outcome = world.step(expert.plan(world.planner_input()))[1]
+            steps += 1
+        return outcome, steps
+
+    plain, widened = walk(MpcPlanner(env_cfg)), walk(wide)
+    assert plain[0] == widened[0] == "success"
+    assert widened[1] > plain[1]
+    with pytest.raises(Exception, match="expert_clearance"):
+        DaggerConfig(expert_clearance=1.5).validate()

@@ -62,6 +62,10 @@ class DaggerConfig:
     # continuous commands are labelled as the nearest command of the student's grid).
     expert: str = "dwa"
     expert_margin: float = 0.05  # the DWA expert's collision margin (`dwa.safety_margin`) [m]
+    # The MPC expert's extra clearance [m], added to its collision margin (`mpc.
+    # collision_margin`): a student that tracks its teacher less precisely learns to keep
+    # this much more room. 0 = the MPC as benchmarked.
+    expert_clearance: float = 0.0
     heading_noise_prob: float = 0.5  # fraction of training episodes starting off course
     heading_noise: float = 1.5  # their initial heading error, uniform in ± this [rad]
     device: str = "cpu"
@@ -223,6 +227,7 @@ _DAGGER_RANGES = {
     "threads": (1, 1024),
     "num_frames": (1, 64),
     "expert_margin": (0.0, 2.0),
+    "expert_clearance": (0.0, 1.0),
 }
 
 _SAC_RANGES = {

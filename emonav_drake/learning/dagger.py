@@ -201,7 +201,9 @@ def _start(
     torch.set_num_threads(cfg.threads)
     torch.manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
-    expert = route_expert(env_cfg, cfg.expert, cfg.expert_margin, cfg.response)
+    expert = route_expert(
+        env_cfg, cfg.expert, cfg.expert_margin, cfg.response, cfg.expert_clearance
+    )
     response = load_response(cfg.response)
     commands = DwaPlanner(env_cfg).candidates.copy()  # the student's grid: the DWA's
     student = Student(cfg, env_cfg, commands)

@@ -85,28 +85,37 @@ class LabellingPlanner:
         return self.student.plan(obs), memory
 
 
-def _round_worker(beta: float, expert_margin: float, expert: str) -> type:
+def _round_worker(beta: float, expert_margin: float, expert: str, clearance: float) -> type:
     """The Ray actor class of `collect_round`: one labelled Digit episode per task."""
     from emonav_drake.diagrams.trials import TrialWorker
 
     class RoundWorker(TrialWorker):
         def run(self, method: str, seed: int) -> dict:
-            return _labelled_episode(self.runner, method, seed, beta, expert_margin, expert)
+            return _labelled_episode(
+                self.runner, method, seed, beta, expert_margin, expert, clearance
+            )
 
     return RoundWorker
 
 
 def _labelled_episode(
-    runner, method: str, seed: int, beta: float, margin: float, expert_kind: str = "dwa"
+    runner,
+    method: str,
+    seed: int,
+    beta: float,
+    margin: float,
+    expert_kind: str = "dwa",
+    clearance: float = 0.0,
 ) -> dict:
     """One Digit episode of the student (`runner`'s method) labelled by the expert
-    (`expert_kind`: "dwa", the model-aware DWA with `margin`, or "mpc")."""
+    (`expert_kind`: "dwa", the model-aware DWA with `margin`, or "mpc" with the extra
+    `clearance`)."""
     from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
     from emonav_drake.planners.model_aware import route_expert
 
     student, cfg, grid_kind = runner.planner(method)
-    expert = route_expert(cfg, expert_kind, margin, "digit")
+    expert = route_expert(cfg, expert_kind, margin, "digit", clearance)
     planner = LabellingPlanner(student, expert, beta, seed)
     t0 = time.perf_counter()
     record = run_digit_episode(
@@ -136,9 +145,11 @@ class DigitRoundsConfig:
     digit_fraction: float = 0.5  # of every batch from Digit samples
     expert_margin: float = 0.1
     seed: int = 0
-    # The labelling expert: "dwa" or "mpc"; `run_digit_rounds` sets it to the calibrated
-    # run's (`DaggerConfig.expert`), so both kinds of demonstrations have one teacher.
+    # The labelling expert: "dwa" or "mpc", and the MPC's extra clearance [m];
+    # `run_digit_rounds` sets both to the calibrated run's (`DaggerConfig.expert`,
+    # `expert_clearance`), so both kinds of demonstrations have one teacher.
     expert: str = "dwa"
+    expert_clearance: float = 0.0
 
     def validate(self) -> DigitRoundsConfig:
         """Raise `ConfigError` naming the flag (or field) of a value out of range."""
@@ -194,14 +205,17 @@ def collect_round(
         dump_config(env_config or EmoNavConfig()),
     )
     beta = cfg.beta * 0.5**rnd
-    worker_cls = _round_worker(beta, cfg.expert_margin, cfg.expert)
+    worker_cls = _round_worker(beta, cfg.expert_margin, cfg.expert, cfg.expert_clearance)
     first = cfg.first_seed + rnd * cfg.episodes
     tasks = [("student", first + i) for i in range(cfg.episodes)]
     results: list[dict] = []
     if workers <= 1 and ray_address is None:
         runner = TrialRunner(spec)
         results = [
-            _labelled_episode(runner, m, s, beta, cfg.expert_margin, cfg.expert) for m, s in tasks
+            _labelled_episode(
+                runner, m, s, beta, cfg.expert_margin, cfg.expert, cfg.expert_clearance
+            )
+            for m, s in tasks
         ]
     else:
         run_trials(spec, tasks, results.append, workers, ray_address, worker_cls=worker_cls)
@@ -242,8 +256,9 @@ def run_digit_rounds(
 
     cfg.validate()
     out, source = Path(out), Path(source)
-    n, calibrated, digit, student, start_policy, expert = _start_from(source)
-    cfg = dc.replace(cfg, expert=expert)  # the calibrated run's teacher labels here too
+    n, calibrated, digit, student, start_policy, dcfg = _start_from(source)
+    # the calibrated run's teacher labels here too
+    cfg = dc.replace(cfg, expert=dcfg.expert, expert_clearance=dcfg.expert_clearance)
     rnd, history = _resume_rounds(out, cfg, digit, student, n) if resume else (0, [])
     out.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(cfg.seed + rnd)
@@ -274,7 +289,8 @@ def run_digit_rounds(
 def _start_from(source: Path) -> tuple:
     """What the rounds start from in the calibrated run `source`: `(num_frames, its
     demonstrations, empty Digit demonstrations, the student with its weights, the path of
-    its policy, its expert)` (`RunStateError` if its DAgger state is missing or refused)."""
+    its policy, its DAgger configuration)` (`RunStateError` if its DAgger state is missing
+    or refused)."""
     from emonav_drake.learning.dagger_state import STATE_FILE as SOURCE_STATE
     from emonav_drake.learning.dagger_state import read_dagger_state
     from emonav_drake.learning.dagger_student import Student
@@ -295,7 +311,7 @@ def _start_from(source: Path) -> tuple:
     student = Student(dcfg, env_cfg, commands)
     start_policy = source / "policy.pt"
     student.load_weights(str(start_policy))
-    return n, calibrated, digit, student, start_policy, dcfg.expert
+    return n, calibrated, digit, student, start_policy, dcfg
 
 
 def _resume_rounds(out: Path, cfg: DigitRoundsConfig, digit, student, n: int) -> tuple[int, list]:

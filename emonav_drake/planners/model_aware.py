@@ -52,14 +52,23 @@ def model_aware_expert(config: EmoNavConfig, margin: float, response: str = "dig
     return DwaPlanner(expert_cfg, response=load_response(response))
 
 
-def route_expert(config: EmoNavConfig, kind: str, margin: float, response: str = ""):
+def route_expert(
+    config: EmoNavConfig, kind: str, margin: float, response: str = "", clearance: float = 0.0
+):
     """The expert of a DAgger route (`DaggerConfig.expert`): "dwa" = `model_aware_expert`
     (collision margin `margin` [m], planning with `response`); "mpc" = the OSQP MPC of
-    `core.mpc` on the LIP model (its own margins; `margin` and `response` unused)."""
+    `core.mpc` on the LIP model, its collision and discomfort margins widened by `clearance` [m]
+    (`DaggerConfig.expert_clearance`; 0 = the MPC as benchmarked; `margin` and `response`
+    unused)."""
     if kind == "mpc":
         from emonav_drake.core.mpc import MpcPlanner
 
-        return MpcPlanner(config)
+        if not clearance:
+            return MpcPlanner(config)
+        expert_cfg = copy.deepcopy(config)
+        expert_cfg.mpc.collision_margin += clearance
+        expert_cfg.mpc.discomfort_margin += clearance
+        return MpcPlanner(expert_cfg)
     if kind != "dwa":
         raise ConfigError(f"expert = {kind!r} is invalid: must be one of ['dwa', 'mpc']")
     return model_aware_expert(config, margin, response)
