@@ -60,6 +60,15 @@ def test_each_variant_trains_and_its_checkpoint_runs_on_both_plants(tiny_variant
     assert prov["wall_seconds"] > 0 and prov["samples"] > 0
     history = json.loads((out / "history.json").read_text())
     assert [h["round"] for h in history] == [0, 1]
+    # the route trained (and selected) in its setting's discomfort distances
+    from emonav_drake.configs import load_setting
+    from emonav_drake.learning.dagger_state import STATE_FILE, read_dagger_state
+
+    _, saved, _ = read_dagger_state(out / STATE_FILE)
+    reward = saved["env_config"]["reward"]
+    trained = [reward[f"{e}_discomfort"] for e in ("happy", "neutral", "negative")]
+    assert trained == list(load_setting(cfg.setting).reward.emotion_distances())
+    assert prov["config"]["setting"] == cfg.setting
     short = out / "short.yaml"
     short.write_text("episode: {max_steps: 2}\n")
     for plant in ("lip", "digit"):
@@ -79,6 +88,24 @@ def test_variants_differ_from_the_shipped_route_by_observation_only():
         differ = {k for k, v in vars(cfg).items() if v != getattr(base, k) and k not in observation}
         assert not differ, f"{name} changes {differ}: not the same route"
     assert base.rounds == 10 and base.eval_episodes == 200 and base.eval_seed_offset == 600_000
+
+
+def test_the_table3_variants_are_the_default_route_in_a_constant_setting():
+    """Table III's constant-DD rows: the default policy's route, changed in `setting` only,
+    and the setting is the world the route trains in (its discomfort distances)."""
+    from emonav_drake.configs import load_setting
+
+    base = load_typed_yaml(DaggerConfig, path=variant("emobipednav_digit_mpc").config)
+    for name, setting, dd in (
+        ("emobipednav_dd02", "no_emotion", 0.2),
+        ("emobipednav_dd05", "constant_0.5", 0.5),
+    ):
+        cfg = load_typed_yaml(DaggerConfig, path=variant(name).config).validate()
+        differ = {k for k, v in vars(cfg).items() if v != getattr(base, k)}
+        assert differ == {"setting"} and cfg.setting == setting, (name, differ)
+        assert load_setting(setting).reward.emotion_distances() == pytest.approx([dd] * 3)
+    with pytest.raises(ConfigError, match="setting"):
+        DaggerConfig(setting="calm").validate()
 
 
 def test_the_mirrored_batch_is_the_mirrored_world_for_scans():

@@ -10,6 +10,7 @@ raising `ConfigError` naming the field.
 import dataclasses as dc
 
 from emonav_drake.config_yaml import ConfigError, validate_ranges
+from emonav_drake.configs import SETTINGS
 from emonav_drake.core.goal_input import GOAL_INPUTS
 from emonav_drake.core.observations import observation_kind, observation_kinds
 from emonav_drake.diagrams.plants import PLANTS
@@ -48,6 +49,10 @@ class DaggerConfig:
     # What the student reads as its goal (`core/goal_input.py`): "goal" (the paper's) or
     # "guide" (the bearing of a sub-goal on the shortest path around the static discs).
     goal_input: str = "goal"
+    # The paper's setting the route trains (and selects) in, by name (`emonav_drake.configs`):
+    # "var_dd" (the defaults), "no_emotion" (0.2 m for every emotion), "constant_0.5"
+    # (Table III's constant-discomfort-distance rows) or "time_varying".
+    setting: str = "var_dd"
     mirror_augment: bool = True  # mirror half of every batch left-right (every kind)
     # The robot of the training world and of the expert's predictions: "" = the paper's LIP;
     # "digit" = the shipped Digit step-response model; or the path of a fitted model JSON
@@ -76,6 +81,7 @@ class DaggerConfig:
         validate_ranges(self, _DAGGER_RANGES)
         _check_observation(self.grid_kind, self.encoder, self.num_frames)
         _choice("goal_input", self.goal_input, GOAL_INPUTS)
+        _choice("setting", self.setting, SETTINGS)
         _choice("expert", self.expert, ("dwa", "mpc"))
         return self
 

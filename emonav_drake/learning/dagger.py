@@ -54,6 +54,7 @@ import torch
 from tqdm import tqdm
 
 from emonav_drake.atomic_io import write_text_atomic
+from emonav_drake.configs import load_setting
 from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.metrics import format_summary
 from emonav_drake.core.observations import observation_dtype, observation_shape
@@ -83,7 +84,7 @@ from emonav_drake.learning.run_state import (
     rng_state,
     set_rng_state,
 )
-from emonav_drake.params import EmoNavConfig
+from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.model_aware import load_response, route_expert
 from emonav_drake.planners.policy import save_policy
 from emonav_drake.planners.protocol import Planner
@@ -130,7 +131,11 @@ def train_dagger(
         RunInterrupted: after Ctrl-C, once the state is saved.
     """
     cfg = cfg or DaggerConfig()
-    env_cfg = copy.deepcopy(env_cfg or EmoNavConfig())
+    if env_cfg is not None and cfg.setting != "var_dd":
+        raise ConfigError(
+            f"setting = {cfg.setting!r} and an explicit environment configuration: give one"
+        )
+    env_cfg = copy.deepcopy(env_cfg or load_setting(cfg.setting))
     env_cfg.lidar.num_frames = cfg.num_frames  # the variant's stack depth
     out = Path(out)
     ckpt = out / STATE_FILE

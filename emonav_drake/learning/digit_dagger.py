@@ -244,7 +244,7 @@ def run_digit_rounds(
 ) -> Path:
     """Digit rounds after the calibrated run in `source` (module docstring); returns the
     last round's policy. `env_config`: the episodes' navigation configuration (default:
-    the defaults).
+    the setting the calibrated run trained in, `DaggerConfig.setting`).
 
     Raises:
         ConfigError: a setting of `cfg` out of range (its flag named).
@@ -259,6 +259,10 @@ def run_digit_rounds(
     n, calibrated, digit, student, start_policy, dcfg = _start_from(source)
     # the calibrated run's teacher labels here too
     cfg = dc.replace(cfg, expert=dcfg.expert, expert_clearance=dcfg.expert_clearance)
+    if env_config is None:  # the calibrated run's setting (var_dd unless it trained in another)
+        from emonav_drake.configs import load_setting
+
+        env_config = load_setting(dcfg.setting)
     rnd, history = _resume_rounds(out, cfg, digit, student, n) if resume else (0, [])
     out.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(cfg.seed + rnd)

@@ -19,12 +19,16 @@ planner name of `emonav sim|eval|benchmark` (`--planner NAME`, `--planners NAME,
 | `emobipednav_digit` | EmoBipedNav, Digit/Digit | 9 LGMs; trained with Digit's dynamics |
 | `emobipednav_digit_mpc` | EmoBipedNav, Digit/Digit | the same, the MPC as teacher (`policy`) |
 | `emobipednav_guide` | (ours) | the same route; goal bearing of a guide sub-goal |
+| `emobipednav_dd02` | Table III, DD 0.2 m | the same route, trained with 0.2 m for every emotion |
+| `emobipednav_dd05` | Table III, DD 0.5 m | the same route, trained with 0.5 m for every emotion |
 
 `emobipednav_digit` and `emobipednav_digit_mpc` differ by their training world, not its
 observation: the LIP-trained policy fine-tuned in the Digit-calibrated reduced world
 (`core/step_response.py`, `learning/calibration.py`). `emobipednav_digit_mpc` is also the
 default `--planner policy`. `emobipednav_guide` is its route with `goal_input: guide`
 (`core/goal_input.py`): a deviation from the paper's observation, measured against it.
+`emobipednav_dd02` and `emobipednav_dd05` are its route trained in the constant settings
+`no_emotion` and `constant_0.5` (`DaggerConfig.setting`), Table III's first two rows.
 """
 
 from __future__ import annotations
@@ -103,6 +107,20 @@ VARIANTS: dict[str, PolicyVariant] = {
             "EmoBipedNav + guide sub-goal (Digit/Digit, MPC teacher; not in the paper)",
             "9 LiDAR grid maps; the goal bearing of a sub-goal around the static discs",
             "policies/emobipednav_guide.pt",
+            route="digit",
+        ),
+        PolicyVariant(
+            "emobipednav_dd02",
+            "EmoBipedNav, DD 0.2 m (Digit/Digit; Table III)",
+            "9 LiDAR grid maps; trained with one discomfort distance, 0.2 m",
+            "policies/emobipednav_dd02.pt",
+            route="digit",
+        ),
+        PolicyVariant(
+            "emobipednav_dd05",
+            "EmoBipedNav, DD 0.5 m (Digit/Digit; Table III)",
+            "9 LiDAR grid maps; trained with one discomfort distance, 0.5 m",
+            "policies/emobipednav_dd05.pt",
             route="digit",
         ),
     )
