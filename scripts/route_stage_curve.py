@@ -12,6 +12,21 @@ and evaluation); y: the success rate on the route's selection seeds with its 95 
 interval — every DAgger round (`history.json` of `emonav train --algo dagger`), then every
 evaluation of the SAC fine-tuning (`history.json` of `emonav train --algo finetune`). A
 dashed line marks a reference measured on the same seeds (e.g. the teacher).
+
+`--digit-rounds HISTORY=RUN` adds the Digit rounds that continue the kept round (`emonav
+digit-rounds`; HISTORY: a JSON with their `rounds`, as benchmarks/results/
+guide_digit_rounds/digit_rounds_history.json) measured on the full-order Digit: RUN is
+the `emonav benchmark --plant digit` run on Digit's selection seeds whose method
+`--start` is the kept round and r0, r1, … its rounds. Those points are on other seeds
+and another plant than the calibrated world's (their own marker, their own n); their x
+adds each round's collection (two Ray workers) and training.
+
+    python scripts/route_stage_curve.py \
+        --dagger benchmarks/results/guide_route/dagger_history.json \
+        --digit-rounds benchmarks/results/guide_digit_rounds/digit_rounds_history.json=\
+benchmarks/results/guide_digit_rounds --start emobipednav_guide \
+        --title "Guide route: calibrated world, then Digit rounds" \
+        --png docs/figures/guide_route_stages.png
 """
 
 from __future__ import annotations
@@ -48,6 +63,30 @@ def _finetune(path: Path, start: float) -> tuple[list[float], list[float], list[
     return xs, sr, labels
 
 
+def _digit_rounds(spec: str, start_method: str, start: float) -> tuple:
+    """(x, SR, n, labels) of the kept round and each Digit round on Digit's selection
+    seeds (`--digit-rounds`)."""
+    from emonav_drake.evaluation.run_directory import read_trials
+
+    history, _, run = spec.partition("=")
+    rounds = json.loads(Path(history).read_text())["rounds"]
+    trials = read_trials(Path(run) / "trials.jsonl")
+    methods = [start_method] + [f"r{e['round']}" for e in rounds]
+    xs, t = [start], start
+    for e in rounds:
+        t += (e["collect_s"] + e["train_s"]) / 60.0
+        xs.append(t)
+    sr, n = [], []
+    for m in methods:
+        outcomes = [tr["record"]["outcome"] for tr in trials if tr["method"] == m]
+        if not outcomes:
+            raise SystemExit(f"--digit-rounds: no trials of method {m!r} in {run}")
+        n.append(len(outcomes))
+        sr.append(sum(o == "success" for o in outcomes) / len(outcomes))
+    labels = ["kept"] + [f"D{e['round']}" for e in rounds]
+    return xs, sr, n, labels
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--dagger", type=Path, required=True)
@@ -58,6 +97,12 @@ def main() -> None:
         metavar="[LABEL=]HISTORY",
         help="a fine-tuning run's history.json, each starting from the kept round (repeatable)",
     )
+    ap.add_argument(
+        "--digit-rounds",
+        metavar="HISTORY=RUN",
+        help="the Digit rounds after the kept round, measured on Digit (see the docstring)",
+    )
+    ap.add_argument("--start", default="policy", help="RUN's method that is the kept round")
     ap.add_argument("--teacher", action="append", default=[], help="LABEL=SR on the same seeds")
     ap.add_argument("--n", type=int, default=200, help="selection episodes per point")
     ap.add_argument("--title", default="Digit/Digit route in the calibrated world")
@@ -65,7 +110,8 @@ def main() -> None:
     args = ap.parse_args()
 
     fig, ax = plt.subplots(figsize=(7.5, 4.0), dpi=150)
-    stages = [("DAgger rounds (MPC teacher)", _dagger(args.dagger))]
+    world = f", calibrated world ({args.n} seeds)" if args.digit_rounds else ""
+    stages = [(f"DAgger rounds (MPC teacher){world}", _dagger(args.dagger))]
     for i, spec in enumerate(args.finetune):
         label, sep, path = spec.rpartition("=")
         name = label if sep else "SAC fine-tuning from the kept round"
@@ -84,15 +130,33 @@ def main() -> None:
         for x, s, label in zip(xs, sr, labels, strict=True):
             ax.annotate(label, (x, s), textcoords="offset points", xytext=(0, dy), fontsize=7,
                         ha="center", color=palette.TEXT_RGB)  # fmt: skip
+    if args.digit_rounds:
+        xs, sr, n, labels = _digit_rounds(args.digit_rounds, args.start, stages[0][1][0][-1])
+        lo_hi = [wilson_interval(round(s * k), k) for s, k in zip(sr, n, strict=True)]
+        err = [[s - lo for s, (lo, _) in zip(sr, lo_hi, strict=True)],
+               [hi - s for s, (_, hi) in zip(sr, lo_hi, strict=True)]]  # fmt: skip
+        colour = palette.METHOD_CYCLE[len(stages) % len(palette.METHOD_CYCLE)]
+        ax.errorbar(xs, sr, yerr=err, fmt="s--", color=colour, capsize=3,
+                    label=f"Digit rounds, on Digit ({n[0]} other seeds)")  # fmt: skip
+        for x, s, label in zip(xs, sr, labels, strict=True):
+            ax.annotate(label, (x, s), textcoords="offset points", xytext=(12, -3), fontsize=7,
+                        ha="left", color=palette.TEXT_RGB)  # fmt: skip
     for spec in args.teacher:
         label, _, value = spec.partition("=")
         ax.axhline(float(value), ls="--", color=palette.INK_RGB, lw=1)
         ax.annotate(f"{label}: {float(value):.3f}", (0.01, float(value)), xycoords=("axes fraction",
                     "data"), xytext=(0, 4), textcoords="offset points", fontsize=8)  # fmt: skip
-    ax.set_xlabel("cumulative wall time of the route on one core [min]")
-    ax.set_ylabel(f"SR on {args.n} selection seeds (95 % CI)")
+    if args.digit_rounds:
+        ax.set_xlabel("cumulative wall time [min] (calibrated world: one core; Digit: two workers)")
+        ax.set_ylabel("SR on selection seeds (95 % CI)")
+    else:
+        ax.set_xlabel("cumulative wall time of the route on one core [min]")
+        ax.set_ylabel(f"SR on {args.n} selection seeds (95 % CI)")
     ax.set_title(args.title)
     ax.grid(alpha=0.3)
+    if args.digit_rounds:  # room under the points for a legend that hides none of them
+        lo, hi = ax.get_ylim()
+        ax.set_ylim(lo - 0.35 * (hi - lo), hi)
     ax.legend(loc="lower right", fontsize=8)
     fig.tight_layout()
     args.png.parent.mkdir(parents=True, exist_ok=True)
