@@ -22,7 +22,7 @@ from emonav_drake.core.sarl_state import (
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.learning.config import SarlConfig
 from emonav_drake.params import ConfigError, EmoNavConfig
-from emonav_drake.planners.sarl import SarlValue, command_grid, load_sarl
+from emonav_drake.planners.sarl import RglValue, SarlValue, command_grid, load_sarl
 
 CFG = EmoNavConfig()
 F = {name: i for i, name in enumerate(FEATURES)}
@@ -96,9 +96,10 @@ def test_the_lookahead_walks_the_lip_step_of_the_world():
     assert rewards[k] == pytest.approx(ev.reward, abs=0.11)
 
 
-def test_the_value_ignores_padding_and_the_order_of_agents():
+@pytest.mark.parametrize("network", [SarlValue, RglValue])
+def test_the_value_ignores_padding_and_the_order_of_agents(network):
     torch.manual_seed(0)
-    net = SarlValue().eval()
+    net = network().eval()
     world = NavigationWorld(sample_scenario(8, CFG), CFG)
     obs = world.planner_input()
     rows = current_rows(obs.robot, obs.goal_xy, obs.crowd, CFG)
@@ -113,13 +114,15 @@ def test_the_value_ignores_padding_and_the_order_of_agents():
     assert len(agents(obs.crowd)[0]) == len(rows)
 
 
-@pytest.fixture(scope="module")
-def tiny_runs(tmp_path_factory):
-    """One tiny run to the end, and the same run stopped after 10 RL episodes, resumed."""
+@pytest.fixture(scope="module", params=["sarl", "rgl"])
+def tiny_runs(tmp_path_factory, request):
+    """One tiny run to the end, and the same run stopped after 3 RL episodes, resumed (each
+    value network)."""
     from emonav_drake.learning.sarl_train import train_sarl
 
-    root = tmp_path_factory.mktemp("sarl")
+    root = tmp_path_factory.mktemp(request.param)
     cfg = SarlConfig(
+        network=request.param,
         expert="dwa",
         il_episodes=3,
         il_epochs=2,
@@ -142,6 +145,8 @@ def test_tiny_training_writes_a_loadable_checkpoint_and_resumes_bit_identically(
     history = json.loads((root / "whole" / "history.json").read_text())
     assert [h["rl_episode"] for h in history] == [0, 3, 6]
     model, meta = load_sarl(root / "whole" / "policy.pt")
+    assert meta["network"] == cfg.network
+    assert isinstance(model, {"sarl": SarlValue, "rgl": RglValue}[cfg.network])
     prov = meta["provenance"]
     assert prov["route"] == "sarl" and prov["selection_seeds"] == [600_000, 600_001]
     assert prov["training_seeds"][0] == 4_000_000 and prov["command"] == "test"
@@ -165,14 +170,19 @@ def test_a_resume_refuses_another_configuration(tiny_runs, tmp_path):
         train_sarl(root / "whole", cfg, progress=False)
     with pytest.raises(ConfigError, match="expert"):
         SarlConfig(expert="orca").validate()
+    with pytest.raises(ConfigError, match="network"):
+        SarlConfig(network="gcn").validate()
+    other = SarlConfig(**{**cfg.__dict__, "network": {"sarl": "rgl", "rgl": "sarl"}[cfg.network]})
+    with pytest.raises(ConfigError, match="network"):
+        train_sarl(root / "whole", other, resume=True, progress=False)
 
 
 def test_sarl_runs_on_both_plants_through_emonav_sim_deterministically(
     tiny_runs, sim_on_both_plants
 ):
-    root, _ = tiny_runs
+    root, cfg = tiny_runs
     ckpt = str(root / "whole" / "policy.pt")
-    records = sim_on_both_plants(["--planner", "sarl", "--checkpoint", ckpt], 7)
+    records = sim_on_both_plants(["--planner", cfg.network, "--checkpoint", ckpt], 7)
     for plant, record in records.items():
         assert record["steps"] >= 1, plant
 
@@ -202,9 +212,28 @@ def test_the_shipped_sarl_runs_by_name_on_both_plants(sim_on_both_plants):
         assert record["outcome"] in ("success", "collision", "timeout"), plant
 
 
-def test_sarl_without_a_checkpoint_says_how_to_train(tmp_path, capsys, monkeypatch):
+@pytest.mark.parametrize("name", ["sarl", "rgl"])
+def test_sarl_without_a_checkpoint_says_how_to_train(tmp_path, capsys, monkeypatch, name):
     import emonav_drake.planners as planners
 
-    monkeypatch.setattr(planners, "SARL_CHECKPOINT", tmp_path / "not_shipped.pt")
-    assert main(["sim", "--planner", "sarl", "--json", str(tmp_path / "r.json")]) == 2
-    assert "emonav train --algo sarl" in capsys.readouterr().err
+    monkeypatch.setattr(planners, f"{name.upper()}_CHECKPOINT", tmp_path / "not_shipped.pt")
+    assert main(["sim", "--planner", name, "--json", str(tmp_path / "r.json")]) == 2
+    err = capsys.readouterr().err
+    assert "emonav train --algo sarl" in err and name in err
+
+
+def test_an_old_sarl_state_resumes_as_sarl(tmp_path):
+    """A run saved before `network` existed (no such key) resumes as the SARL it was."""
+    from emonav_drake.learning.run_state import read_run_state, write_run_state
+    from emonav_drake.learning.sarl_train import SARL_STATE_FORMAT, STATE_FILE, train_sarl
+
+    cfg = SarlConfig(expert="dwa", il_episodes=2, il_epochs=1, rl_episodes=1, train_batches=1)
+    cfg.batch_size, cfg.eval_every, cfg.eval_episodes = 8, 1, 1
+    train_sarl(tmp_path, cfg, progress=False)
+    state, tensors = read_run_state(tmp_path / STATE_FILE, SARL_STATE_FORMAT)
+    del state["config"]["network"]
+    write_run_state(tmp_path / STATE_FILE, SARL_STATE_FORMAT, state, tensors)
+    longer = SarlConfig(**{**cfg.__dict__, "rl_episodes": 2})
+    train_sarl(tmp_path, longer, resume=True, progress=False)
+    assert json.loads((tmp_path / "history.json").read_text())[-1]["rl_episode"] == 2
+    assert load_sarl(tmp_path / "policy.pt")[1]["network"] == "sarl"

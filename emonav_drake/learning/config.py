@@ -157,6 +157,9 @@ class SarlConfig:
     experience replay and a target network. CrowdNav's settings unless noted."""
 
     seed: int = 0
+    # The value network: "sarl" (CrowdNav's SARL) or "rgl" (its relational graph network,
+    # `planners/sarl.py`: RglValue); the same rows, look-ahead and route.
+    network: str = "sarl"
     # The expert of the imitation phase: "mpc" (our best model planner; CrowdNav imitates
     # ORCA, which our robot cannot follow: its steps are bounded by Eq. 2) or "dwa".
     expert: str = "mpc"
@@ -185,6 +188,7 @@ class SarlConfig:
         """Raise `ConfigError` naming the field if a value is out of range."""
         validate_ranges(self, _SARL_RANGES)
         _choice("expert", self.expert, ("dwa", "mpc"))
+        _choice("network", self.network, ("sarl", "rgl"))
         return self
 
 

@@ -57,7 +57,7 @@ from emonav_drake.learning.run_state import (
     write_run_state,
 )
 from emonav_drake.params import ConfigError, EmoNavConfig
-from emonav_drake.planners.sarl import SarlValue, action_values, command_grid, save_sarl
+from emonav_drake.planners.sarl import action_values, command_grid, save_sarl, value_network
 
 log = logging.getLogger(__name__)
 STATE_FILE = "sarl_state.pt"
@@ -133,7 +133,7 @@ class SarlRun:
         self.device = torch.device(cfg.device)
         torch.manual_seed(cfg.seed)
         self.rng = np.random.default_rng(cfg.seed)
-        self.model = SarlValue().to(self.device)
+        self.model = value_network(cfg.network).to(self.device)
         self.target = copy.deepcopy(self.model)
         self.optim = torch.optim.SGD(self.model.parameters(), lr=cfg.il_lr, momentum=0.9)
         self.commands = command_grid(env_cfg)
@@ -260,6 +260,10 @@ def _selection_key(s: dict) -> list:
     return [s["SR"], -s["collision_rate"], -s["DT"]]
 
 
+# SarlConfig fields added after runs were saved, with the value those runs used.
+FIELDS_ADDED_LATER = {"network": "sarl"}
+
+
 def train_sarl(
     out: str | Path,
     cfg: SarlConfig | None = None,
@@ -276,7 +280,8 @@ def train_sarl(
     env_cfg = env_cfg or EmoNavConfig()
     if resume:
         state, tensors = read_run_state(out / STATE_FILE, SARL_STATE_FORMAT)
-        saved = dict(state.get("config") or {})
+        # a run saved before a field existed ran with that field's value here
+        saved = FIELDS_ADDED_LATER | dict(state.get("config") or {})
         changes = config_changes(saved | {"rl_episodes": cfg.rl_episodes}, dc.asdict(cfg))
         if changes:
             raise ConfigError(
@@ -440,6 +445,7 @@ def _select(run: SarlRun, out: Path, progress: bool, command) -> None:
             run.commands,
             cfg.gamma,
             _provenance(run, summary, command),
+            network=cfg.network,
         )
     write_text_atomic(out / "history.json", json.dumps(prog.history, indent=1, default=float))
     msg = f"SARL after {prog.rl_episode} RL episodes: {format_summary(summary)}"
@@ -451,6 +457,7 @@ def _provenance(run: SarlRun, summary: dict, command) -> dict:
     last_train = cfg.train_seed_offset + cfg.il_episodes + prog.rl_episode - 1
     return {
         "route": "sarl",
+        "network": cfg.network,
         "command": command,
         "seed": cfg.seed,
         "config": dc.asdict(cfg),

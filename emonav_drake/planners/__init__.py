@@ -107,6 +107,7 @@ def _sarl(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
 
 
 SARL_CHECKPOINT = Path(__file__).resolve().parent.parent / "data" / "policies" / "sarl.pt"
+RGL_CHECKPOINT = SARL_CHECKPOINT.with_name("rgl.pt")
 
 
 def _sarl_checkpoint() -> Path:
@@ -116,6 +117,16 @@ def _sarl_checkpoint() -> Path:
             "--algo sarl --out runs/sarl` and pass --checkpoint runs/sarl/policy.pt"
         )
     return SARL_CHECKPOINT
+
+
+def _rgl_checkpoint() -> Path:
+    if not RGL_CHECKPOINT.is_file():
+        raise ConfigError(
+            "rgl has no shipped checkpoint in this version: train it with `emonav train "
+            "--algo sarl --config emonav_drake/configs/rgl.yaml --out runs/rgl` and pass "
+            "--checkpoint runs/rgl/policy.pt"
+        )
+    return RGL_CHECKPOINT
 
 
 def _no_sac_checkpoint() -> Path:
@@ -141,6 +152,16 @@ register(
         True,
         _sarl_checkpoint,
         "SARL (CrowdNav): value network on the crowd state, one-step look-ahead",
+        runs_as="sarl",
+    )
+)
+register(
+    PlannerKind(
+        "rgl",
+        _sarl,
+        True,
+        _rgl_checkpoint,
+        "RGL (relational graph value network) on the crowd state, one-step look-ahead",
         runs_as="sarl",
     )
 )

@@ -17,9 +17,12 @@ crowd feature Σ α_i h_i, concatenated with the robot's six self features → m
 terminal steps (collision or goal) add no value. Deterministic (no exploration) when
 planning; training explores with ε-greedy (`learning/sarl_train.py`).
 
+**RGL** (`RglValue`, Chen et al., IROS 2020): the same rows, the same look-ahead and the
+same training route, with a relational graph network as the value (`network: rgl`).
+
 Checkpoint (`torch.save`, loaded with `weights_only=True`):
-    {"format": "emonav-sarl/1", "gamma": γ, "commands": [[u_v, u_Δθ], …],
-     "state_dict": {...}, "provenance": {...}}
+    {"format": "emonav-sarl/1", "network": "sarl" | "rgl" (absent: "sarl"), "gamma": γ,
+     "commands": [[u_v, u_Δθ], …], "state_dict": {...}, "provenance": {...}}
 """
 
 from __future__ import annotations
@@ -75,6 +78,52 @@ class SarlValue(nn.Module):
         return self.mlp3(torch.cat([rows[:, 0, :SELF_FEATURES], crowd], dim=-1)).squeeze(-1)
 
 
+class RglValue(nn.Module):
+    """RGL's value (Chen et al., "Relational Graph Learning for Crowd Navigation", IROS
+    2020; CrowdNav's `RGL`, sizes of its configuration): V(joint state) from the same rows
+    as `SarlValue` — rows (B, H, NUM_FEATURES), mask (B, H) bool → (B,).
+
+    The robot (its six self features, taken from the first row) and every agent (the
+    row's agent columns) are the nodes of a graph. Each kind is embedded by its own MLP
+    (w_r, w_h: 64, 32, ReLU) into X (B, 1 + H, 32); the relation matrix is the embedded
+    Gaussian A = softmax_j(X W_a X^T) (padded agents masked out as neighbours); two graph
+    convolutions with skip connections, H_{l+1} = ReLU(A H_l W_l) + H_l; the robot node's
+    final feature → value MLP (100, 100, 1). Our rows hold no prediction of the agents
+    beyond one step, so RGL's multi-step tree search is not used: it acts, like SARL, by
+    the one-step look-ahead (RGL with a depth-1 search and a constant-velocity model)."""
+
+    def __init__(self, dim: int = 32, layers: int = 2) -> None:
+        super().__init__()
+        agent = NUM_FEATURES - SELF_FEATURES
+        self.w_r = _mlp([SELF_FEATURES, 64, dim], last_relu=True)
+        self.w_h = _mlp([agent, 64, dim], last_relu=True)
+        self.w_a = nn.Parameter(torch.eye(dim))
+        self.gcn = nn.ModuleList(nn.Linear(dim, dim, bias=False) for _ in range(layers))
+        self.value = _mlp([dim, 100, 100, 1], last_relu=False)
+
+    def forward(self, rows: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
+        robot = self.w_r(rows[:, :1, :SELF_FEATURES])  # (B, 1, d)
+        x = torch.cat([robot, self.w_h(rows[:, :, SELF_FEATURES:])], dim=1)  # (B, 1 + H, d)
+        valid = torch.cat([torch.ones_like(mask[:, :1]), mask], dim=1)  # (B, 1 + H)
+        score = x @ self.w_a @ x.transpose(1, 2)  # (B, 1 + H, 1 + H)
+        adjacency = torch.softmax(score.masked_fill(~valid[:, None, :], float("-inf")), dim=2)
+        h = x
+        for layer in self.gcn:
+            h = torch.relu(adjacency @ layer(h)) + h
+        return self.value(h[:, 0]).squeeze(-1)
+
+
+# The value networks a SARL checkpoint may hold (its "network"; absent = "sarl").
+VALUE_NETWORKS: dict[str, type[nn.Module]] = {"sarl": SarlValue, "rgl": RglValue}
+
+
+def value_network(name: str) -> nn.Module:
+    """A fresh value network of kind `name` ("sarl" or "rgl"); `ConfigError` otherwise."""
+    if name not in VALUE_NETWORKS:
+        raise ConfigError(f"network = {name!r} is invalid: must be one of {list(VALUE_NETWORKS)}")
+    return VALUE_NETWORKS[name]()
+
+
 def command_grid(config: EmoNavConfig) -> np.ndarray:
     """The commands SARL chooses from (A, 2): the DWA candidates of `config`."""
     from emonav_drake.core.dwa import DwaPlanner
@@ -83,7 +132,7 @@ def command_grid(config: EmoNavConfig) -> np.ndarray:
 
 
 def action_values(
-    model: SarlValue,
+    model: nn.Module,
     obs: PlannerInput,
     commands: np.ndarray,
     config: EmoNavConfig,
@@ -133,7 +182,8 @@ class SarlPlanner:
     def describe(self) -> str:
         prov = self.meta.get("provenance") or {}
         at = f" (episode {prov['episode']})" if "episode" in prov else ""
-        return f"SARL value network{at}, one-step look-ahead on the LIP ({self.path})"
+        kind = self.meta.get("network", "sarl").upper()
+        return f"{kind} value network{at}, one-step look-ahead on the LIP ({self.path})"
 
     def initial_memory(self) -> None:
         return None
@@ -153,13 +203,19 @@ class SarlPlanner:
 
 
 def save_sarl(
-    path: str | Path, model: SarlValue, commands: np.ndarray, gamma: float, provenance: dict
+    path: str | Path,
+    model: nn.Module,
+    commands: np.ndarray,
+    gamma: float,
+    provenance: dict,
+    network: str = "sarl",
 ) -> None:
-    """Write a SARL checkpoint atomically."""
+    """Write a SARL checkpoint (value network `network`: "sarl" or "rgl") atomically."""
     from emonav_drake.atomic_io import atomic_write
 
     blob = {
         "format": SARL_FORMAT,
+        "network": network,
         "gamma": float(gamma),
         "commands": np.asarray(commands, float).tolist(),
         "state_dict": {k: v.detach().cpu() for k, v in model.state_dict().items()},
@@ -168,9 +224,10 @@ def save_sarl(
     atomic_write(path, lambda f: torch.save(blob, f))
 
 
-def load_sarl(path: str | Path, device: torch.device | str = "cpu") -> tuple[SarlValue, dict]:
-    """The value network and the checkpoint's metadata; `ConfigError` naming the file if it
-    is missing, damaged or not a SARL checkpoint."""
+def load_sarl(path: str | Path, device: torch.device | str = "cpu") -> tuple[nn.Module, dict]:
+    """The value network (SARL's or RGL's, as the checkpoint's "network" says) and the
+    checkpoint's metadata; `ConfigError` naming the file if it is missing, damaged or not a
+    SARL checkpoint."""
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"SARL checkpoint {path} does not exist")
@@ -181,7 +238,10 @@ def load_sarl(path: str | Path, device: torch.device | str = "cpu") -> tuple[Sar
     if not isinstance(blob, dict) or blob.get("format") != SARL_FORMAT:
         found = blob.get("format") if isinstance(blob, dict) else type(blob).__name__
         raise ConfigError(f"{path} is not a SARL checkpoint (format {found!r})")
-    model = SarlValue()
+    network = blob.get("network", "sarl")
+    if network not in VALUE_NETWORKS:
+        raise ConfigError(f"{path}: unknown value network {network!r}")
+    model = value_network(network)
     model.load_state_dict(blob["state_dict"])
     model.to(device).eval()
     return model, {k: v for k, v in blob.items() if k != "state_dict"}
