@@ -10,8 +10,9 @@ emonav plot RUN.json --png out.png [--times 0,5,10] [--gif out.gif]
 emonav SUB-COMMAND --help   for every other one
 
 One module per sub-command in emonav_drake/cli/ (sim.py, eval.py, lgm.py, plot.py, walk.py,
-emotion.py, train.py, export.py, benchmark.py, diagnose.py, config_cmd.py, calibrate.py,
-digit_rounds.py); --config / --setting / --scenario are resolved in one place, config.py.
+emotion.py, train.py, export.py, benchmark.py, compare.py, diagnose.py, config_cmd.py,
+calibrate.py, digit_rounds.py); --config / --setting / --scenario are resolved in one
+place, config.py.
 
 Errors: a bad flag, file or field is one line `emonav: error: ...` naming it, exit code 2
 (`--debug` shows the traceback instead). Ctrl-C: one line, exit code 130; `eval` keeps
@@ -33,6 +34,7 @@ from collections.abc import Iterator
 from emonav_drake.cli import (
     benchmark,
     calibrate,
+    compare,
     config_cmd,
     diagnose,
     digit_rounds,
@@ -67,6 +69,7 @@ SUBCOMMANDS = (
     walk,
     plot,
     benchmark,
+    compare,
     diagnose,
     config_cmd,
     calibrate,

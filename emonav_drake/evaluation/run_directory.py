@@ -336,6 +336,12 @@ class RunDirectory:
             f"package {pkg.get('version')} commit {str(pkg.get('commit'))[:12]}"
             + (" (with uncommitted changes)" if pkg.get("dirty") else ""),
         ]
+        if "runs" in settings:  # `emonav compare`: the runs the trials come from
+            notes[-1] = "combined from " + "; ".join(
+                f"{Path(r['path']).name} ({', '.join(r['planners'])}; commit "
+                f"{str(r['commit'])[:12]})"
+                for r in settings["runs"]
+            )
         write_text_atomic(
             md,
             tables.render_markdown(

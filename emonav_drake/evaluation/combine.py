@@ -1,0 +1,91 @@
+"""Several benchmark runs as one comparison: methods run at different times (a baseline
+trained later, a planner added after the others) on the same seeds and settings.
+
+`combine_runs([RUN, …])` reads each run directory and returns one `(settings, trials)` as
+if the methods had been run together; `emonav compare RUN RUN … --out DIR` writes its
+tables (Table II, Table III style, social metrics, McNemar on the seeds each pair shares).
+
+A comparison is only made of runs that agree on what a trial is: the plant, the setting
+(the configuration's hash), time-varying emotions, the emotion estimate and the goal
+radius; anything else is refused, naming the first difference. The runs may cover
+different seed ranges (the pairs are tested on the seeds both ran) and may come from
+different commits (each run's commit is listed in the combined settings). A method name
+may appear in two runs only for the same planner and checkpoint; its trials must then
+agree seed for seed (a deterministic planner gives the same trial twice).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+from emonav_drake.evaluation.run_directory import (
+    BenchmarkSettingsError,
+    comparable,
+    load_run,
+    trial_key,
+)
+
+# settings that define what a trial is: they must agree across the combined runs
+_SAME = (
+    ("plant", "plant"),
+    ("config_sha256", "configuration (hash)"),
+    ("time_varying", "time-varying emotions"),
+    ("emotion_estimate_sha256", "emotion estimate (hash)"),
+    ("goal_radius", "goal radius"),
+)
+
+
+def combine_runs(paths: Sequence[str | Path]) -> tuple[dict, list[dict]]:
+    """(settings, trials) of the runs in `paths` as one comparison (module docstring).
+
+    Raises:
+        BenchmarkSettingsError: fewer than two runs, a path that is not a run directory,
+            runs that differ in what a trial is, a method name used by two runs for
+            different planners or checkpoints, or two different results for one trial.
+    """
+    if len(paths) < 2:
+        raise BenchmarkSettingsError("give at least two run directories to combine")
+    runs = [(Path(p), *load_run(p)) for p in paths]
+    first_path, first, _ = runs[0]
+    settings = {k: first[k] for k in first if k not in ("planners", "methods", "extended")}
+    settings |= {"planners": [], "methods": {}, "runs": []}
+    trials: dict[tuple[str, int], dict] = {}
+    lo, hi = first["first_seed"], first["first_seed"] + first["trials"]
+    for path, s, run_trials in runs:
+        for key, what in _SAME:
+            if s.get(key) != first.get(key):
+                raise BenchmarkSettingsError(
+                    f"{path}: its {what} is {s.get(key)!r}, {first_path}'s is "
+                    f"{first.get(key)!r}: the runs measure different trials"
+                )
+        for name in s["planners"]:
+            method = s["methods"][name]
+            known = settings["methods"].get(name)
+            if known is None:
+                settings["planners"].append(name)
+                settings["methods"][name] = method
+            elif (known["planner"], known["checkpoint_sha256"]) != (
+                method["planner"],
+                method["checkpoint_sha256"],
+            ):
+                raise BenchmarkSettingsError(
+                    f"{path}: method {name!r} is another planner or checkpoint than in an "
+                    "earlier run; rename it in one run (--checkpoint NAME=PATH)"
+                )
+        for t in run_trials:
+            key = trial_key(t)
+            if key in trials and comparable(trials[key]) != comparable(t):
+                raise BenchmarkSettingsError(
+                    f"{path}: {key[0]} seed {key[1]} differs from the same trial in an earlier run"
+                )
+            trials.setdefault(key, t)
+        lo, hi = min(lo, s["first_seed"]), max(hi, s["first_seed"] + s["trials"])
+        pkg = s.get("package", {})
+        settings["runs"].append(
+            {"path": str(path), "planners": s["planners"], "commit": pkg.get("commit")}
+        )
+    settings["first_seed"], settings["trials"] = lo, hi - lo
+    rank = {m: i for i, m in enumerate(settings["planners"])}
+    ordered = sorted(trials.values(), key=lambda t: (rank[t["method"]], t["seed"]))
+    return settings, ordered
