@@ -403,3 +403,15 @@ def test_methods_are_named_and_coloured_as_in_every_figure():
     assert len(set(colours)) == len(names)
     assert not set(colours) & set(palette.EMOTION_RGB)
     assert colours[:3] == [palette.METHOD_RGB[m] for m in ("policy", "mpc", "dwa")]
+
+
+def test_a_benchmark_of_every_method_gives_each_its_own_colour():
+    """Table II with every method (three known + eight more): eleven distinct colours, none
+    an emotion's (the IDT chart groups its bars by emotion)."""
+    from emonav_drake.core.palette import EMOTION_RGB, method_colours
+
+    names = ["dwa", "mpc", "emobipednav", "single_lgm", "lidar_sac", "sarl", "policy", "ogm"]
+    names += ["lndnl", "drlvo", "rgl"]
+    colours = method_colours(names)
+    assert len(set(colours)) == len(names)
+    assert not set(colours) & set(EMOTION_RGB)

@@ -132,6 +132,11 @@ METHOD_CYCLE: tuple[RGB, ...] = (
     _grey(0.35),
     _grey(0.65),
     OKABE_ITO["black"],
+    # shades of the methods' hues (never of an emotion's), for charts of 8 methods or more
+    (0.93, 0.76, 0.87),  # light reddish purple
+    (0.55, 0.50, 0.05),  # olive (dark yellow)
+    (0.00, 0.24, 0.45),  # dark blue
+    (0.76, 0.88, 0.96),  # light sky blue
 )
 
 # Model against measurement (`scripts/plot_step_response.py`, tracking notebook)
@@ -182,6 +187,7 @@ def method_colours(labels: list[str]) -> list[RGB]:
     `METHOD_CYCLE` in turn (skipping colours the known ones use)."""
     taken = {METHOD_RGB[m] for m in labels if m in METHOD_RGB}
     spare = [c for c in (*METHOD_CYCLE, *SERIES_RGB) if c not in taken and c not in EMOTION_RGB]
+    spare = list(dict.fromkeys(spare))  # each colour once: no two methods share one
     out, i = [], 0
     for m in labels:
         if m in METHOD_RGB:
