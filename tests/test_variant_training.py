@@ -90,7 +90,7 @@ def test_variants_differ_from_the_shipped_route_by_observation_only():
     assert base.rounds == 10 and base.eval_episodes == 200 and base.eval_seed_offset == 600_000
 
 
-def test_the_table3_variants_are_the_default_route_in_a_constant_setting():
+def test_the_table3_variants_are_the_default_route_in_a_constant_setting(tmp_path):
     """Table III's constant-DD rows: the default policy's route, changed in `setting` only,
     and the setting is the world the route trains in (its discomfort distances)."""
     from emonav_drake.configs import load_setting
@@ -106,6 +106,13 @@ def test_the_table3_variants_are_the_default_route_in_a_constant_setting():
         assert load_setting(setting).reward.emotion_distances() == pytest.approx([dd] * 3)
     with pytest.raises(ConfigError, match="setting"):
         DaggerConfig(setting="calm").validate()
+    # a setting and an explicit environment configuration: ambiguous, refused before any work
+    from emonav_drake.learning.dagger import train_dagger
+    from emonav_drake.params import EmoNavConfig
+
+    with pytest.raises(ConfigError, match="give one"):
+        train_dagger(tmp_path, DaggerConfig(setting="no_emotion"), EmoNavConfig())
+    assert not any(tmp_path.iterdir())
 
 
 def test_the_mirrored_batch_is_the_mirrored_world_for_scans():
