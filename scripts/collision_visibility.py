@@ -20,8 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from emonav_drake.diagrams.trials import TrialRunner
-from emonav_drake.evaluation.run_directory import load_run
-from emonav_drake.evaluation.run_settings import spec_from_settings
+from emonav_drake.evaluation.run_settings import replay_outcomes
 from emonav_drake.params import EMOTION_NAMES
 
 
@@ -76,13 +75,7 @@ def main() -> None:
     ap.add_argument("--method", required=True)
     ap.add_argument("--steps", type=int, default=10, help="steps before the collision")
     args = ap.parse_args()
-    settings, trials = load_run(args.run)
-    runner = TrialRunner(spec_from_settings(settings))
-    seeds = [
-        t["seed"]
-        for t in trials
-        if t["method"] == args.method and t["record"]["outcome"] == "collision"
-    ]
+    runner, seeds = replay_outcomes(args.run, args.method, "collision")
     rows = [collision(runner, args.method, s, args.steps) for s in seeds]
     print("| seed | hit | emotion | visible (last steps, 1 = in sight) | pedestrian → robot "
           "[m/s] | robot speed [m/s] |")  # fmt: skip

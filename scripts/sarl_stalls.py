@@ -18,8 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from emonav_drake.diagrams.trials import TrialRunner
-from emonav_drake.evaluation.run_directory import load_run
-from emonav_drake.evaluation.run_settings import spec_from_settings
+from emonav_drake.evaluation.run_settings import replay_outcomes
 
 
 def stall(runner: TrialRunner, method: str, seed: int) -> dict:
@@ -53,13 +52,7 @@ def main() -> None:
     ap.add_argument("--method", required=True)
     ap.add_argument("--blocked", type=float, default=0.5, help="line clearance below: blocked [m]")
     args = ap.parse_args()
-    settings, trials = load_run(args.run)
-    runner = TrialRunner(spec_from_settings(settings))
-    seeds = [
-        t["seed"]
-        for t in trials
-        if t["method"] == args.method and t["record"]["outcome"] == "timeout"
-    ]
+    runner, seeds = replay_outcomes(args.run, args.method, "timeout")
     rows = [stall(runner, args.method, s) for s in seeds]
     print("| seed | freeze step / steps | goal [m] | disc surface [m] | pedestrian [m] "
           "| goal line past discs [m] |")  # fmt: skip
