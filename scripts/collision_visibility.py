@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from emonav_drake.diagrams.trials import TrialRunner
-from emonav_drake.evaluation.run_settings import replay_outcomes
+from emonav_drake.evaluation.run_directory import replay_outcomes
 from emonav_drake.params import EMOTION_NAMES
 
 

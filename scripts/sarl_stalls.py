@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from emonav_drake.diagrams.trials import TrialRunner
-from emonav_drake.evaluation.run_settings import replay_outcomes
+from emonav_drake.evaluation.run_directory import replay_outcomes
 
 
 def stall(runner: TrialRunner, method: str, seed: int) -> dict:

@@ -384,3 +384,16 @@ def _estimate_label(estimate_yaml: str | None) -> str:
         "classifier": "face classifier",
         "ground_truth": "ground truth",
     }.get(mode.group(1) if mode else "", "confusion model")
+
+
+def replay_outcomes(run: str | Path, method: str, outcome: str) -> tuple[Any, list[int]]:
+    """A runner that re-simulates the trials of the run directory `run` as they ran, and the
+    seeds on which `method` ended with `outcome` ("collision", "timeout", …), in order."""
+    from emonav_drake.diagrams.trials import TrialRunner
+    from emonav_drake.evaluation.run_settings import spec_from_settings
+
+    settings, trials = load_run(run)
+    seeds = [
+        t["seed"] for t in trials if t["method"] == method and t["record"]["outcome"] == outcome
+    ]
+    return TrialRunner(spec_from_settings(settings)), seeds

@@ -19,7 +19,6 @@ from typing import Any
 from emonav_drake.diagrams.trials import (
     BenchmarkSpec,
     MethodSpec,
-    TrialRunner,
 )
 from emonav_drake.params import ConfigError, EmoNavConfig, dump_config
 from emonav_drake.provenance import package_identity, sha256_bytes
@@ -147,15 +146,3 @@ def _config_diff(a: str, b: str) -> str:
             there, here = (x.split(":", 1)[-1].strip() for x in (la, lb))
             return f"{section}.{key}: {there} there, {here} here"
     return "the dumps differ in length"
-
-
-def replay_outcomes(run: str | Path, method: str, outcome: str) -> tuple[TrialRunner, list[int]]:
-    """A runner that re-simulates the trials of the run directory `run` as they ran, and the
-    seeds on which `method` ended with `outcome` ("collision", "timeout", …), in order."""
-    from emonav_drake.evaluation.run_directory import load_run
-
-    settings, trials = load_run(run)
-    seeds = [
-        t["seed"] for t in trials if t["method"] == method and t["record"]["outcome"] == outcome
-    ]
-    return TrialRunner(spec_from_settings(settings)), seeds
