@@ -26,7 +26,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
-    """Combine the runs, write settings.json (with the runs it came from) and the tables."""
+    """Combine the runs; write combined.json (their settings and the runs they came from) and
+    the tables."""
     from emonav_drake.atomic_io import write_json
     from emonav_drake.evaluation.combine import combine_runs
     from emonav_drake.evaluation.run_directory import (

@@ -53,6 +53,8 @@ FEATURES = (
     "static1",  # 1 for a static disc, 0 for a pedestrian
 )
 NUM_FEATURES = len(FEATURES)
+# The value networks over these rows (`planners/sarl.py`): CrowdNav's SARL and RGL.
+VALUE_NETWORKS = ("sarl", "rgl")
 SELF_FEATURES = 6  # the robot's columns (the first six)
 # With no agent at all (possible in a hand-written scenario) the state holds one placeholder
 # agent this far behind the robot, at rest, of radius 0.

@@ -6,10 +6,11 @@ if the methods had been run together; `emonav compare RUN RUN … --out DIR` wri
 tables (Table II, Table III style, social metrics, McNemar on the seeds each pair shares).
 
 A comparison is only made of runs that agree on what a trial is: the plant, the setting
-(the configuration's hash), time-varying emotions, the emotion estimate and the goal
-radius; anything else is refused, naming the first difference. The runs may cover
-different seed ranges (the pairs are tested on the seeds both ran) and may come from
-different commits (each run's commit is listed in the combined settings). A method name
+(the configuration's hash, which holds the goal radius), time-varying emotions and the
+emotion estimate (`run_settings.TRIAL_SETTINGS`); anything else is refused, naming the
+first difference. The runs may cover different seed ranges (the pairs are tested on the
+seeds both ran) and may come from different commits (each run's commit is listed in the
+combined settings). A method name
 may appear in two runs only for the same planner and checkpoint; its trials must then
 agree seed for seed (a deterministic planner gives the same trial twice).
 """
@@ -25,15 +26,7 @@ from emonav_drake.evaluation.run_directory import (
     load_run,
     trial_key,
 )
-
-# settings that define what a trial is: they must agree across the combined runs
-_SAME = (
-    ("plant", "plant"),
-    ("config_sha256", "configuration (hash)"),
-    ("time_varying", "time-varying emotions"),
-    ("emotion_estimate_sha256", "emotion estimate (hash)"),
-    ("goal_radius", "goal radius"),
-)
+from emonav_drake.evaluation.run_settings import TRIAL_SETTINGS
 
 
 def combine_runs(paths: Sequence[str | Path]) -> tuple[dict, list[dict]]:
@@ -53,7 +46,7 @@ def combine_runs(paths: Sequence[str | Path]) -> tuple[dict, list[dict]]:
     trials: dict[tuple[str, int], dict] = {}
     lo, hi = first["first_seed"], first["first_seed"] + first["trials"]
     for path, s, run_trials in runs:
-        for key, what in _SAME:
+        for key, what in TRIAL_SETTINGS:
             if s.get(key) != first.get(key):
                 raise BenchmarkSettingsError(
                     f"{path}: its {what} is {s.get(key)!r}, {first_path}'s is "

@@ -18,7 +18,7 @@ import math
 import os
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from emonav_drake.atomic_io import (
     json_safe,
@@ -33,6 +33,9 @@ from emonav_drake.evaluation import tables
 from emonav_drake.evaluation.run_settings import BenchmarkSettingsError, settings_difference
 
 log = logging.getLogger(__name__)
+
+if TYPE_CHECKING:
+    from emonav_drake.diagrams.trials import TrialRunner
 
 SETTINGS_FILE = "settings.json"
 TRIALS_FILE = "trials.jsonl"
@@ -386,7 +389,7 @@ def _estimate_label(estimate_yaml: str | None) -> str:
     }.get(mode.group(1) if mode else "", "confusion model")
 
 
-def replay_outcomes(run: str | Path, method: str, outcome: str) -> tuple[Any, list[int]]:
+def replay_outcomes(run: str | Path, method: str, outcome: str) -> tuple[TrialRunner, list[int]]:
     """A runner that re-simulates the trials of the run directory `run` as they ran, and the
     seeds on which `method` ended with `outcome` ("collision", "timeout", …), in order."""
     from emonav_drake.diagrams.trials import TrialRunner

@@ -99,19 +99,23 @@ def _short(v: Any) -> str:
     return str(v)
 
 
+# The settings that say what a trial is (its goal radius is in the configuration): two
+# runs whose settings agree on these ran the same trial for a method and seed.
+TRIAL_SETTINGS = (
+    ("plant", "plant"),
+    ("time_varying", "time-varying emotions"),
+    ("config_sha256", "configuration (hash)"),
+    ("emotion_estimate_sha256", "emotion estimate (hash)"),
+)
+
+
 def settings_difference(old: dict, new: dict) -> str | None:
     """The first setting in which `new` differs from a run directory's `old`, as words."""
     if old.get("format") != FORMAT:
         return f"format is {old.get('format')!r} there, {FORMAT} here"
     if set(old["planners"]) != set(new["planners"]):
         return f"planners are {','.join(old['planners'])} there, {','.join(new['planners'])} here"
-    simple = [
-        ("plant", "plant"),
-        ("first_seed", "first seed"),
-        ("time_varying", "time-varying emotions"),
-        ("config_sha256", "configuration (hash)"),
-        ("emotion_estimate_sha256", "emotion estimate (hash)"),
-    ]
+    simple = [TRIAL_SETTINGS[0], ("first_seed", "first seed"), *TRIAL_SETTINGS[1:]]
     for key, what in simple:
         if old.get(key) != new.get(key):
             extra = ""

@@ -13,6 +13,7 @@ from emonav_drake.config_yaml import ConfigError, validate_ranges
 from emonav_drake.configs import SETTINGS
 from emonav_drake.core.goal_input import GOAL_INPUTS
 from emonav_drake.core.observations import observation_kind, observation_kinds
+from emonav_drake.core.sarl_state import VALUE_NETWORKS
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.params import NUM_BEAMS, EpisodeParams
 
@@ -67,9 +68,9 @@ class DaggerConfig:
     # continuous commands are labelled as the nearest command of the student's grid).
     expert: str = "dwa"
     expert_margin: float = 0.05  # the DWA expert's collision margin (`dwa.safety_margin`) [m]
-    # The MPC expert's extra clearance [m], added to its collision margin (`mpc.
-    # collision_margin`): a student that tracks its teacher less precisely learns to keep
-    # this much more room. 0 = the MPC as benchmarked.
+    # The MPC expert's extra clearance [m], added to its collision and discomfort margins
+    # (`mpc.collision_margin`, `mpc.discomfort_margin`): a student that tracks its teacher
+    # less precisely learns to keep this much more room. 0 = the MPC as benchmarked.
     expert_clearance: float = 0.0
     heading_noise_prob: float = 0.5  # fraction of training episodes starting off course
     heading_noise: float = 1.5  # their initial heading error, uniform in ± this [rad]
@@ -188,7 +189,7 @@ class SarlConfig:
         """Raise `ConfigError` naming the field if a value is out of range."""
         validate_ranges(self, _SARL_RANGES)
         _choice("expert", self.expert, ("dwa", "mpc"))
-        _choice("network", self.network, ("sarl", "rgl"))
+        _choice("network", self.network, VALUE_NETWORKS)
         return self
 
 

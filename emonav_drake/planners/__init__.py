@@ -110,23 +110,17 @@ SARL_CHECKPOINT = Path(__file__).resolve().parent.parent / "data" / "policies" /
 RGL_CHECKPOINT = SARL_CHECKPOINT.with_name("rgl.pt")
 
 
-def _sarl_checkpoint() -> Path:
-    if not SARL_CHECKPOINT.is_file():
+def _value_checkpoint(name: str, train_flags: str) -> Path:
+    """The shipped checkpoint of value-network planner `name` (the module's
+    `<NAME>_CHECKPOINT`), or a `ConfigError` with the command that trains it."""
+    path = globals()[f"{name.upper()}_CHECKPOINT"]
+    if not path.is_file():
         raise ConfigError(
-            "sarl has no shipped checkpoint in this version: train it with `emonav train "
-            "--algo sarl --out runs/sarl` and pass --checkpoint runs/sarl/policy.pt"
+            f"{name} has no shipped checkpoint in this version: train it with `emonav train "
+            f"--algo sarl {train_flags}--out runs/{name}` and pass --checkpoint "
+            f"runs/{name}/policy.pt"
         )
-    return SARL_CHECKPOINT
-
-
-def _rgl_checkpoint() -> Path:
-    if not RGL_CHECKPOINT.is_file():
-        raise ConfigError(
-            "rgl has no shipped checkpoint in this version: train it with `emonav train "
-            "--algo sarl --config emonav_drake/configs/rgl.yaml --out runs/rgl` and pass "
-            "--checkpoint runs/rgl/policy.pt"
-        )
-    return RGL_CHECKPOINT
+    return path
 
 
 def _no_sac_checkpoint() -> Path:
@@ -150,7 +144,7 @@ register(
         "sarl",
         _sarl,
         True,
-        _sarl_checkpoint,
+        functools.partial(_value_checkpoint, "sarl", ""),
         "SARL (CrowdNav): value network on the crowd state, one-step look-ahead",
         runs_as="sarl",
     )
@@ -160,7 +154,7 @@ register(
         "rgl",
         _sarl,
         True,
-        _rgl_checkpoint,
+        functools.partial(_value_checkpoint, "rgl", "--config emonav_drake/configs/rgl.yaml "),
         "RGL (relational graph value network) on the crowd state, one-step look-ahead",
         runs_as="sarl",
     )

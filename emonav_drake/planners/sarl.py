@@ -38,6 +38,7 @@ from emonav_drake.core.navigation import PlannerInput
 from emonav_drake.core.sarl_state import (
     NUM_FEATURES,
     SELF_FEATURES,
+    VALUE_NETWORKS,
     lookahead,
     step_discount,
 )
@@ -113,15 +114,16 @@ class RglValue(nn.Module):
         return self.value(h[:, 0]).squeeze(-1)
 
 
-# The value networks a SARL checkpoint may hold (its "network"; absent = "sarl").
-VALUE_NETWORKS: dict[str, type[nn.Module]] = {"sarl": SarlValue, "rgl": RglValue}
+# The value networks a SARL checkpoint may hold (its "network"; absent = "sarl"), under the
+# names of `core.sarl_state.VALUE_NETWORKS`.
+_NETWORK_CLASSES: dict[str, type[nn.Module]] = {"sarl": SarlValue, "rgl": RglValue}
 
 
 def value_network(name: str) -> nn.Module:
     """A fresh value network of kind `name` ("sarl" or "rgl"); `ConfigError` otherwise."""
-    if name not in VALUE_NETWORKS:
+    if name not in _NETWORK_CLASSES:
         raise ConfigError(f"network = {name!r} is invalid: must be one of {list(VALUE_NETWORKS)}")
-    return VALUE_NETWORKS[name]()
+    return _NETWORK_CLASSES[name]()
 
 
 def command_grid(config: EmoNavConfig) -> np.ndarray:
@@ -238,10 +240,10 @@ def load_sarl(path: str | Path, device: torch.device | str = "cpu") -> tuple[nn.
     if not isinstance(blob, dict) or blob.get("format") != SARL_FORMAT:
         found = blob.get("format") if isinstance(blob, dict) else type(blob).__name__
         raise ConfigError(f"{path} is not a SARL checkpoint (format {found!r})")
-    network = blob.get("network", "sarl")
-    if network not in VALUE_NETWORKS:
-        raise ConfigError(f"{path}: unknown value network {network!r}")
-    model = value_network(network)
+    try:
+        model = value_network(blob.get("network", "sarl"))
+    except ConfigError as e:
+        raise ConfigError(f"{path}: {e}") from None
     model.load_state_dict(blob["state_dict"])
     model.to(device).eval()
     return model, {k: v for k, v in blob.items() if k != "state_dict"}
