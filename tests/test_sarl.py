@@ -201,13 +201,17 @@ def test_a_benchmark_runs_sarl_beside_a_policy(tiny_runs, tmp_path):
     assert settings["methods"]["sarl"]["observation"] == "state"
 
 
-def test_the_shipped_sarl_runs_by_name_on_both_plants(sim_on_both_plants):
-    from emonav_drake.planners import SARL_CHECKPOINT
+@pytest.mark.parametrize("name", ["sarl", "rgl"])
+def test_the_shipped_value_planner_runs_by_name_on_both_plants(sim_on_both_plants, name):
+    """SARL's and RGL's shipped checkpoints load as their value network and run by name
+    through `emonav sim` on each plant, twice each with the same seed, to the same record."""
+    import emonav_drake.planners as planners
 
-    _, meta = load_sarl(SARL_CHECKPOINT)
+    _, meta = load_sarl(getattr(planners, f"{name.upper()}_CHECKPOINT"))
+    assert meta.get("network", "sarl") == name
     assert meta["provenance"]["route"] == "sarl"
     assert meta["provenance"]["selection_seeds"] == [600_000, 600_199]
-    records = sim_on_both_plants(["--planner", "sarl"], 11)
+    records = sim_on_both_plants(["--planner", name], 11)
     for plant, record in records.items():
         assert record["outcome"] in ("success", "collision", "timeout"), plant
 
