@@ -415,3 +415,17 @@ def test_a_benchmark_of_every_method_gives_each_its_own_colour():
     colours = method_colours(names)
     assert len(set(colours)) == len(names)
     assert not set(colours) & set(EMOTION_RGB)
+
+
+def test_a_table_ii_method_keeps_its_colour_in_any_order():
+    """The LIP and the Digit charts list the methods in different orders and subsets; each
+    of the paper's Table II methods is drawn in the same colour in both."""
+    from emonav_drake.core.palette import method_colours
+
+    lip = ["dwa", "mpc", "emobipednav", "single_lgm", "lidar_sac", "sarl", "policy", "ogm"]
+    lip += ["lndnl", "drlvo", "rgl"]
+    digit = ["dwa", "lndnl", "drlvo", "lidar_sac", "single_lgm", "ogm", "emobipednav", "sarl"]
+    digit += ["rgl", "mpc"]
+    a = dict(zip(lip, method_colours(lip), strict=True))
+    b = dict(zip(digit, method_colours(digit), strict=True))
+    assert all(a[m] == b[m] for m in digit)

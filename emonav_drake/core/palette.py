@@ -122,11 +122,6 @@ PEDESTRIAN_HAIR_RGB: RGB = (0.24, 0.17, 0.11)  # the head, also seen from behind
 
 # Methods of a benchmark (bars, lines): never an emotion's colour, since the IDT chart
 # groups its bars by emotion. Unlisted methods take `METHOD_CYCLE` in turn.
-METHOD_RGB: dict[str, RGB] = {
-    "policy": OKABE_ITO["blue"],
-    "mpc": OKABE_ITO["reddish_purple"],
-    "dwa": OKABE_ITO["sky_blue"],
-}
 METHOD_CYCLE: tuple[RGB, ...] = (
     OKABE_ITO["yellow"],
     _grey(0.35),
@@ -138,6 +133,20 @@ METHOD_CYCLE: tuple[RGB, ...] = (
     (0.00, 0.24, 0.45),  # dark blue
     (0.76, 0.88, 0.96),  # light sky blue
 )
+# Every method of the paper's Table II keeps one colour in every figure (the LIP and the
+# Digit charts of notebooks/benchmark.ipynb draw them in different orders).
+METHOD_RGB: dict[str, RGB] = {
+    "policy": OKABE_ITO["blue"],
+    "mpc": OKABE_ITO["reddish_purple"],
+    "dwa": OKABE_ITO["sky_blue"],
+    **dict(
+        zip(
+            ("emobipednav", "single_lgm", "lidar_sac", "sarl", "ogm", "lndnl", "drlvo", "rgl"),
+            METHOD_CYCLE,
+            strict=True,
+        )
+    ),
+}
 
 # Model against measurement (`scripts/plot_step_response.py`, tracking notebook)
 MEASURED_RGB: RGB = INK_RGB  # what Digit did
