@@ -1,13 +1,18 @@
-"""Success rate of model planners in the Digit-calibrated reduced world (or the LIP world).
+"""Success rate of planners in the Digit-calibrated reduced world (or the LIP world).
 
     python scripts/calibrated_world_sr.py --planners mpc,mpc_digit --first-seed 700000 \\
         --episodes 200 [--response digit|''|PATH] [--grid]
+    python scripts/calibrated_world_sr.py --planners emobipednav_guide,guide_shield_digit \\
+        --first-seed 700000 --episodes 300 --shield-margin 0.1 --brake-steps 2
 
 Each planner walks `NavigationWorld(sample_scenario(seed), response=model)` (the world the
 Digit/Digit routes train in, `docs/learning.md`) on the seeds first-seed … first-seed +
 episodes − 1, from the default configuration, the evaluation goal radius. `--grid` rounds
 every command to the nearest of the DAgger student's command grid (what a student that
-imitated the planner perfectly would do). Prints SR, collision and timeout counts, NT and
+imitated the planner perfectly would do). Learned planners run their default checkpoint
+on the observation it reads; `--shield-margin`, `--brake-steps` and `--static-margin` set
+the LGM shield's parameters of the shielded ones (`core/lgm_shield.py`), whose line also
+counts the steps where no command passed the shield. Prints SR, collision and timeout counts, NT and
 DT per planner, and the failing seeds. Use tuning seeds (e.g. 700 000+), never the
 evaluation seeds 0–499.
 """
@@ -15,6 +20,7 @@ evaluation seeds 0–499.
 from __future__ import annotations
 
 import argparse
+import dataclasses as dc
 
 from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.metrics import summarize
@@ -22,7 +28,7 @@ from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.learning.demonstrations import command_index
 from emonav_drake.params import EmoNavConfig, EpisodeParams
-from emonav_drake.planners import make_planner
+from emonav_drake.planners import configure_for, make_planner
 from emonav_drake.planners.model_aware import load_response
 
 
@@ -33,12 +39,27 @@ def main() -> None:
     ap.add_argument("--episodes", type=int, default=200)
     ap.add_argument("--response", default="digit", help="'' = the LIP world")
     ap.add_argument("--grid", action="store_true", help="round commands to the student grid")
+    ap.add_argument("--shield-margin", type=float, help="shielded planners: margin [m]")
+    ap.add_argument("--brake-steps", type=int, help="shielded planners: braking steps")
+    ap.add_argument("--static-margin", type=float, help="shielded planners: still points [m]")
     args = ap.parse_args()
-    cfg = EmoNavConfig()
+    cfg0 = EmoNavConfig()
     response = load_response(args.response)
-    grid = DwaPlanner(cfg).candidates
+    grid = DwaPlanner(cfg0).candidates
     for name in args.planners.split(","):
-        planner, records = make_planner(name, cfg), []
+        planner, records, blocked = make_planner(name, cfg0), [], 0
+        cfg = configure_for(planner, cfg0)[0]
+        shielded = hasattr(planner, "last_admissible")
+        if shielded:
+            changes = {
+                "margin": args.shield_margin,
+                "brake_steps": args.brake_steps,
+                "static_margin": args.static_margin,
+            }
+            params = dc.replace(
+                planner.params, **{k: v for k, v in changes.items() if v is not None}
+            )
+            planner = type(planner)(planner.policy, cfg, planner.response, params)
         for seed in range(args.first_seed, args.first_seed + args.episodes):
             world = NavigationWorld(
                 sample_scenario(seed, cfg),
@@ -50,6 +71,7 @@ def main() -> None:
             outcome = None
             while outcome is None:
                 u = planner.plan(world.planner_input())
+                blocked += shielded and not planner.last_admissible
                 if args.grid:
                     u = grid[command_index(grid, u)]
                 _, outcome = world.step(u)
@@ -62,8 +84,9 @@ def main() -> None:
         ]
         print(
             f"{name}: SR {s['SR']:.3f} (n={s['episodes']})  collision {s['collision_rate']:.3f}  "
-            f"timeout {s['timeout_rate']:.3f}  NT {s['NT_mean']:.2f} s  DT {s['DT']}  "
-            f"failures {failed}"
+            f"timeout {s['timeout_rate']:.3f}  NT {s['NT_mean']:.2f} s  DT {s['DT']}"
+            + (f"  steps with no admissible command {blocked}" if shielded else "")
+            + f"  failures {failed}"
         )
 
 

@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from emonav_drake.core.lip import LipState
+from emonav_drake.core.lip import LipState, held_plans, lip_rollout
 from emonav_drake.core.navigation import PlannerInput
 from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.params import DwaParams, EmoNavConfig
@@ -80,10 +80,6 @@ class DwaPlanner:
         turns = np.linspace(-r.max_heading_change, r.max_heading_change, p.heading_samples)
         grid_v, grid_t = np.meshgrid(speeds, turns, indexing="ij")
         self.candidates = np.stack([grid_v.ravel(), grid_t.ravel()], axis=1)  # (C, 2)
-        wt = r.omega * r.step_time
-        self._ch, self._sh = math.cosh(wt), math.sinh(wt)
-        wh = r.omega * r.step_time / 2
-        self._ch_mid, self._sh_mid = math.cosh(wh), math.sinh(wh)
 
     def initial_memory(self) -> ResponseMemory | None:
         """None on the LIP; with a response model, what the robot did one step ago."""
@@ -116,23 +112,8 @@ class DwaPlanner:
     def _rollout(self, x0: float, y0: float, th0: float, v0: float) -> np.ndarray:
         """CoM positions (C, 2·H, 2) at the middle and end of each of H steps."""
         r, p = self.config.robot, self.config.dwa
-        om = r.omega
-        v_cmd, turn = self.candidates[:, 0], self.candidates[:, 1]
-        c = len(v_cmd)
-        out = np.empty((c, 2 * p.horizon_steps, 2))
-        x, y = np.full(c, x0), np.full(c, y0)
-        th, v = np.full(c, th0), np.full(c, v0)
-        for h in range(p.horizon_steps):
-            th = th + turn
-            d = (v * self._ch - v_cmd) / (om * self._sh)
-            dx_mid = v * self._sh_mid / om + d * (1.0 - self._ch_mid)
-            dx_end = v * self._sh / om + d * (1.0 - self._ch)
-            cos, sin = np.cos(th), np.sin(th)
-            out[:, 2 * h, 0], out[:, 2 * h, 1] = x + dx_mid * cos, y + dx_mid * sin
-            x, y = x + dx_end * cos, y + dx_end * sin
-            out[:, 2 * h + 1, 0], out[:, 2 * h + 1, 1] = x, y
-            v = v_cmd
-        return out
+        plans = held_plans(self.candidates, p.horizon_steps)
+        return lip_rollout(LipState(x0, y0, th0, v0), plans, r.omega, r.step_time)
 
     def plan(self, obs: PlannerInput) -> np.ndarray:
         """The command (u_v [m/s], u_Δθ [rad]) for this walking step."""

@@ -114,3 +114,36 @@ def lip_steps(
         for a, c in zip(s, u, strict=True)
     ]
     return np.array(out, float).reshape(-1, 4)
+
+
+def lip_rollout(state: LipState, plans: np.ndarray, omega: float, step_time: float) -> np.ndarray:
+    """CoM positions (C, 2·H, 2) at the middle and the end of each of H steps of the LIP
+    (Eq. 1) from `state`, for C command plans (C, H, 2) = (u_v [m/s], u_Δθ [rad]) per step
+    (world frame, or whichever frame `state` is written in)."""
+    plan = np.asarray(plans, float)
+    if plan.ndim != 3 or plan.shape[2] != 2:
+        raise ValueError(f"plans must be (C, H, 2), got {plan.shape}")
+    c, steps = plan.shape[:2]
+    wt, wh = omega * step_time, omega * step_time / 2
+    ch, sh, ch_mid, sh_mid = math.cosh(wt), math.sinh(wt), math.cosh(wh), math.sinh(wh)
+    out = np.empty((c, 2 * steps, 2))
+    x, y = np.full(c, state.x), np.full(c, state.y)
+    th, v = np.full(c, state.heading), np.full(c, state.speed)
+    for h in range(steps):
+        v_cmd = plan[:, h, 0]
+        th = th + plan[:, h, 1]
+        d = (v * ch - v_cmd) / (omega * sh)
+        dx_mid = v * sh_mid / omega + d * (1.0 - ch_mid)
+        dx_end = v * sh / omega + d * (1.0 - ch)
+        cos, sin = np.cos(th), np.sin(th)
+        out[:, 2 * h, 0], out[:, 2 * h, 1] = x + dx_mid * cos, y + dx_mid * sin
+        x, y = x + dx_end * cos, y + dx_end * sin
+        out[:, 2 * h + 1, 0], out[:, 2 * h + 1, 1] = x, y
+        v = v_cmd
+    return out
+
+
+def held_plans(candidates: np.ndarray, steps: int) -> np.ndarray:
+    """Plans (C, steps, 2) that hold each candidate command (C, 2) for `steps` steps."""
+    cand = np.asarray(candidates, float).reshape(-1, 2)
+    return np.repeat(cand[:, None, :], steps, axis=1)

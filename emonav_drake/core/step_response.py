@@ -33,7 +33,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
-from emonav_drake.core.lip import LipState, lip_steps, wrap_angle, wrap_angles
+from emonav_drake.core.lip import LipState, held_plans, lip_steps, wrap_angle, wrap_angles
 
 FEATURES = (
     "u_v[k-2]",  # commanded speed of step k − 2 [m/s]
@@ -170,14 +170,22 @@ class StepResponseModel:
         """Expected CoM positions (C, 2·steps, 2) at the middle (halfway along the step's
         displacement) and end of each of `steps` steps, for every candidate command (C, 2)
         held from this step on; `committed` (2, 2) = (u_{k−2}, u_{k−1}), already sent."""
-        cand = np.asarray(candidates, float)
-        n = len(cand)
+        return self.rollout_plans(state, committed, held_plans(candidates, steps))
+
+    def rollout_plans(
+        self, state: LipState, committed: np.ndarray, plans: np.ndarray
+    ) -> np.ndarray:
+        """`rollout` for command plans (C, H, 2): plan c sends plans[c, h] at step h."""
+        plan = np.asarray(plans, float)
+        if plan.ndim != 3 or plan.shape[2] != 2:
+            raise ValueError(f"plans must be (C, H, 2), got {plan.shape}")
+        n, steps = plan.shape[:2]
         hist = np.broadcast_to(np.asarray(committed, float), (n, LAGS - 1, 2))
         out = np.empty((n, 2 * steps, 2))
         x, y = np.full(n, state.x), np.full(n, state.y)
         th, v = np.full(n, state.heading), np.full(n, state.speed)
         for h in range(steps):
-            cmds = np.concatenate([hist, cand[:, None, :]], axis=1)
+            cmds = np.concatenate([hist, plan[:, h, None, :]], axis=1)
             yk = self.predict(v, cmds)
             c, s = np.cos(th), np.sin(th)
             dx, dy = c * yk[:, 0] - s * yk[:, 1], s * yk[:, 0] + c * yk[:, 1]

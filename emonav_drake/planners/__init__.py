@@ -94,6 +94,29 @@ def _sac(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
     return planner
 
 
+def _shielded(name: str, response: str, config: EmoNavConfig, checkpoint, device: str):
+    from emonav_drake.core.lgm_shield import ShieldParams
+    from emonav_drake.planners.model_aware import load_response
+    from emonav_drake.planners.policy import PolicyPlanner
+    from emonav_drake.planners.shield import ShieldedPolicy
+
+    policy = PolicyPlanner(checkpoint, device=device, robot_radius=config.robot.radius)
+    # Digit answers a command a step late: it needs two steps of (0, 0) to stop. The
+    # margins are the best of 0.1 / 0.2 / 0.3 m on tuning seeds (docs/shield.md).
+    params = ShieldParams(margin=0.1, brake_steps=2) if response else ShieldParams(margin=0.2)
+    planner = ShieldedPolicy(policy, config, response=load_response(response), params=params)
+    planner.name = name
+    return planner
+
+
+# The LGM shield (`planners/shield.py`) in front of a policy: NAME predicts with the LIP,
+# NAME_digit with Digit's fitted step response (as dwa / dwa_digit).
+SHIELDED = {
+    "policy_shield": ("policy", "a categorical policy (default: the shipped one)"),
+    "guide_shield": ("emobipednav_guide", "the guide-sub-goal policy"),
+}
+
+
 def _default_policy() -> Path:
     from emonav_drake.planners.policy import DEFAULT_POLICY
 
@@ -138,6 +161,20 @@ register(PlannerKind("dwa_digit", _dwa_digit, summary="DWA with Digit's step res
 register(
     PlannerKind("policy", _policy, True, _default_policy, "a policy checkpoint (default: shipped)")
 )
+for _name, (_default, _what) in SHIELDED.items():
+    for _suffix, _response, _model in (("", "", "LIP"), ("_digit", "digit", "Digit's response")):
+        register(
+            PlannerKind(
+                _name + _suffix,
+                functools.partial(_shielded, _name + _suffix, _response),
+                True,
+                _default_policy
+                if _default == "policy"
+                else functools.partial(shipped_checkpoint, _default),
+                f"{_what} behind the LGM shield ({_model} prediction)",
+                runs_as=_name + _suffix,
+            )
+        )
 register(PlannerKind("sac", _sac, True, _no_sac_checkpoint, "a SAC-trained actor"))
 register(
     PlannerKind(

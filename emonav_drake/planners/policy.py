@@ -404,14 +404,34 @@ class PolicyPlanner:
     ) -> np.ndarray:
         """The command (u_v [m/s], u_Δθ [rad]) for one observation (`lgm_stack`: the map
         observation of `grid_kind`, of shape `expected_shape` and dtype `expected_dtype`)."""
-        obs = torch.from_numpy(self.check_observation(lgm_stack)[None]).to(self.device)
-        state = torch.from_numpy(vector_state(goal_state, last_command, self.bounds)[None])
-        state = state.to(self.device)
         if self.meta["kind"] == "categorical":
-            return self.commands[int(self.model(obs, state).argmax())].copy()
+            scores = self.command_scores(lgm_stack, goal_state, last_command)
+            return self.commands[int(scores.argmax())].copy()
+        obs, state = self._inputs(lgm_stack, goal_state, last_command)
         _, _, mean = self.model.sample(obs, state)
         a = mean[0].cpu().numpy().astype(float)
         return np.array([(a[0] + 1) / 2 * self.bounds[0], a[1] * self.bounds[1]])
+
+    def _inputs(
+        self, lgm_stack: np.ndarray, goal_state: np.ndarray, last_command: np.ndarray
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        obs = torch.from_numpy(self.check_observation(lgm_stack)[None]).to(self.device)
+        state = torch.from_numpy(vector_state(goal_state, last_command, self.bounds)[None])
+        return obs, state.to(self.device)
+
+    @torch.no_grad()
+    def command_scores(
+        self, lgm_stack: np.ndarray, goal_state: np.ndarray, last_command: np.ndarray
+    ) -> np.ndarray:
+        """A categorical policy's logits (C,) over its commands `self.commands` (C, 2):
+        `act` walks the argmax. `PolicyError` for a Gaussian (SAC) actor."""
+        if self.meta["kind"] != "categorical":
+            raise PolicyError(
+                f"policy {self.path.name} is a {describe_policy(self.meta)}: only a categorical "
+                "policy scores a grid of commands"
+            )
+        obs, state = self._inputs(lgm_stack, goal_state, last_command)
+        return self.model(obs, state)[0].cpu().numpy().astype(float)
 
     def goal_state(self, obs: PlannerInput) -> np.ndarray:
         """(distance [m], bearing [rad]) this policy reads as its goal (its `goal_input`)."""

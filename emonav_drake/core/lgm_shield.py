@@ -1,0 +1,153 @@
+"""A safety shield on a categorical policy that reads only the policy's own LGM.
+
+Not part of the paper's method: an optional layer between a learned policy and the
+walking controller (`planners/shield.py`). At each walking step it
+
+1. reads the obstacles the robot sees from the newest LGM frame: every collision cell
+   (value 255: a real LiDAR hit) becomes a point in the robot frame, at the angle of its
+   sector's centre and the near edge of its ring (`lgm_hit_points`);
+2. predicts, for every command of the policy's grid, where the CoM goes if the robot
+   walks this step with that command and then stops: `brake_steps` steps of (0, 0)
+   (the LIP of Eq. 1, or the fitted step response of the full-order robot, which answers
+   a command a step late);
+3. keeps the commands whose predicted CoM stays at least r_robot + `margin` from every
+   point, and walks the one the policy scores highest among them; when none is, the one
+   whose path keeps the largest gap (`shield_choice`).
+
+The points are treated as still: a pedestrian's motion during the prediction is what
+`margin` covers. With `static_margin` set, a point that was seen (within `static_match`,
+in the world frame, after the robot's own motion) in the previous walking step's frame
+counts as still and keeps only `static_margin`; the rest, and every point of the same
+body (a chain of points closer than `body`), keep `margin` (`moving_points`). The
+robot's pose at the foot switch places both frames in the world.
+
+A stop is the safe end of every prediction because a pedestrian who walks faster than
+the robot sees it and steers round it (the crowd's visibility rule): a standing robot is
+seen by every moving pedestrian. The shield never sees the crowd state, the emotions or
+the map of the discs; only the LGM the policy reads.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+from functools import lru_cache
+
+import numpy as np
+
+from emonav_drake.core.grid_maps import COLLISION_VALUE, check_beams_per_sector
+from emonav_drake.core.lidar import beam_table
+
+
+@dc.dataclass(frozen=True)
+class ShieldParams:
+    """The shield's two numbers.
+
+    Attributes:
+        margin: clearance kept beyond the robot's radius from every seen LiDAR hit along
+            the predicted path [m]; covers the pedestrians' motion during it.
+        brake_steps: walking steps of (u_v, u_Δθ) = (0, 0) after the command's step in
+            the prediction (the robot must be able to stop clear).
+        static_margin: None: `margin` for every point; else the clearance [m] kept from
+            points seen still since the previous walking step.
+        static_match: a point within this distance [m] of one of the previous frame's
+            (world frame) counts as still; covers the LGM's cell size.
+        body: points closer than this [m] to a moving point move with it (one body).
+    """
+
+    margin: float = 0.2
+    brake_steps: int = 1
+    static_margin: float | None = 0.0
+    static_match: float = 0.12
+    body: float = 0.25
+
+    def __post_init__(self) -> None:
+        for name in ("margin", "static_match", "body") + (
+            ("static_margin",) if self.static_margin is not None else ()
+        ):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v >= 0.0):
+                raise ValueError(f"shield {name} must be a finite number >= 0 m, got {v}")
+        if not isinstance(self.brake_steps, int) or self.brake_steps < 0:
+            raise ValueError(f"brake_steps must be an int >= 0, got {self.brake_steps!r}")
+
+
+@lru_cache(maxsize=8)
+def _sector_geometry(num_beams: int, grid_size: int) -> tuple[np.ndarray, np.ndarray]:
+    """(cos, sin) (M,) of each LGM sector's central direction (robot frame)."""
+    per = check_beams_per_sector(num_beams, grid_size)
+    angles = beam_table(num_beams)[0].reshape(grid_size, per).mean(axis=1)
+    return np.cos(angles), np.sin(angles)
+
+
+def lgm_hit_points(frame: np.ndarray, num_beams: int, max_range: float) -> np.ndarray:
+    """The collision cells (255) of one LGM frame as points (n, 2) in the robot frame [m]
+    (x forward, y left): each at its sector's central angle and its ring's near edge."""
+    f = np.asarray(frame)
+    if f.ndim != 2 or f.shape[0] != f.shape[1]:
+        raise ValueError(f"an LGM frame is a square (M, M) array, got shape {f.shape}")
+    m = f.shape[0]
+    cos, sin = _sector_geometry(num_beams, m)
+    rows, cols = np.nonzero(f == COLLISION_VALUE)
+    ranges = cols * (max_range / m)
+    return np.stack([ranges * cos[rows], ranges * sin[rows]], axis=1)
+
+
+def brake_plans(candidates: np.ndarray, brake_steps: int) -> np.ndarray:
+    """Plans (C, 1 + brake_steps, 2): each candidate command (C, 2), then stop."""
+    cand = np.asarray(candidates, float).reshape(-1, 2)
+    plans = np.zeros((len(cand), 1 + brake_steps, 2))
+    plans[:, 0] = cand
+    return plans
+
+
+def path_gaps(
+    paths: np.ndarray, points: np.ndarray, margins: np.ndarray | None = None
+) -> np.ndarray:
+    """Smallest distance (C,) [m] from each predicted CoM path (C, S, 2) to the points
+    (n, 2), less each point's own extra margin (n,) [m] when given; +inf where there are
+    no points."""
+    if len(points) == 0:
+        return np.full(len(paths), np.inf)
+    d = np.sqrt(((paths[:, :, None, :] - np.asarray(points, float)[None, None]) ** 2).sum(-1))
+    if margins is not None:
+        d = d - np.asarray(margins, float)[None, None]
+    return d.min(axis=(1, 2))
+
+
+def to_world(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """Robot-frame points (n, 2) at pose (x [m], y [m], θ [rad]) in the world frame."""
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    p = np.asarray(points, float)
+    return np.stack([pose[0] + c * p[:, 0] - s * p[:, 1], pose[1] + s * p[:, 0] + c * p[:, 1]], 1)
+
+
+def moving_points(
+    world: np.ndarray, previous: np.ndarray | None, match: float, body: float = 0.0
+) -> np.ndarray:
+    """(n,) bool: which points (world frame) move: those with no point of the previous
+    frame within `match` [m] (all of them when there is no previous frame), and every point
+    joined to a moving one by a chain of points less than `body` [m] apart (the seen side
+    of one body moves as a whole, though part of it may fall where it was seen before)."""
+    if previous is None or len(previous) == 0 or len(world) == 0:
+        return np.ones(len(world), bool)
+    d2 = ((world[:, None, :] - np.asarray(previous, float)[None]) ** 2).sum(-1)
+    moving = d2.min(axis=1) > match**2
+    if body > 0.0 and moving.any() and not moving.all():
+        near = ((world[:, None, :] - world[None]) ** 2).sum(-1) < body**2
+        while True:
+            grown = moving | near[:, moving].any(axis=1)
+            if (grown == moving).all():
+                break
+            moving = grown
+    return moving
+
+
+def shield_choice(scores: np.ndarray, gaps: np.ndarray, clearance: float) -> tuple[int, bool]:
+    """(index, whether it was admissible): the best-scored candidate whose gap is at least
+    `clearance` [m]; if none is, the one with the largest gap (ties: the better score)."""
+    s, g = np.asarray(scores, float), np.asarray(gaps, float)
+    ok = g >= clearance
+    if ok.any():
+        return int(np.argmax(np.where(ok, s, -np.inf))), True
+    best = np.flatnonzero(g == g.max())
+    return int(best[np.argmax(s[best])]), False

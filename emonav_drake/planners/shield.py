@@ -1,0 +1,168 @@
+"""A categorical policy behind the LGM safety shield (`core/lgm_shield.py`).
+
+`--planner policy_shield` runs a policy checkpoint (by default the shipped policy) and
+walks, of its 99 grid commands, the best-scored one after which the robot can still stop
+clear of every LiDAR hit of its newest LGM frame, predicting with the LIP of Eq. 1.
+`policy_shield_digit` predicts with the full-order Digit's fitted step response instead
+(it remembers u_{k−2} and the previous pose, as `dwa_digit` does). Neither is the paper's
+method: both are the paper's policy plus a layer that reads nothing the policy does not.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+from pathlib import Path
+
+import numpy as np
+
+from emonav_drake.core.dwa import ResponseMemory
+from emonav_drake.core.lgm_shield import (
+    ShieldParams,
+    brake_plans,
+    lgm_hit_points,
+    moving_points,
+    path_gaps,
+    shield_choice,
+    to_world,
+)
+from emonav_drake.core.lip import LipState, lip_rollout
+from emonav_drake.core.navigation import PlannerInput
+from emonav_drake.core.step_response import StepResponseModel
+from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.policy import PolicyError, PolicyPlanner, describe_policy
+
+
+@dc.dataclass(frozen=True)
+class ShieldMemory:
+    """What the shield carries from one walking step to the next.
+
+    Attributes:
+        response: u_{k−2} and the previous pose for a response-model prediction, else None.
+        seen: the previous frame's LiDAR hits in the world frame (n, 2) [m], None at the
+            first step or when every point keeps the same margin.
+    """
+
+    response: ResponseMemory | None = None
+    seen: np.ndarray | None = None
+
+
+class ShieldedPolicy:
+    """A categorical `PolicyPlanner` whose command passes the LGM shield.
+
+    Args:
+        policy: the policy (categorical, reading an "lgm" observation).
+        config: robot radius, LIP constants (ω, T) and the LiDAR (K, L) the LGM was built with.
+        response: None predicts with the LIP; a `StepResponseModel` with the fitted response
+            of the full-order robot (commands u_{k−2}, u_{k−1} already sent come first).
+        params: the shield's margin and braking steps.
+
+    The planner input's `lgm_stack` is the policy's observation (uint8 (N, M, M), oldest
+    first, robot frame at the foot switch); the command is (u_v [m/s], u_Δθ [rad]).
+    `last_admissible` says whether the last command passed the shield (False: no command
+    did, and the one keeping the largest gap was walked).
+    """
+
+    name = "policy_shield"
+
+    def __init__(
+        self,
+        policy: PolicyPlanner,
+        config: EmoNavConfig,
+        response: StepResponseModel | None = None,
+        params: ShieldParams | None = None,
+    ) -> None:
+        if policy.meta["kind"] != "categorical" or policy.grid_kind != "lgm":
+            raise PolicyError(
+                f"the LGM shield needs a categorical policy reading the LGM; {policy.path.name} "
+                f"is a {describe_policy(policy.meta)} reading {policy.grid_kind!r}"
+            )
+        self.policy = policy
+        self.config = config
+        self.response = response
+        self.params = params if params is not None else ShieldParams()
+        self.plans = brake_plans(policy.commands, self.params.brake_steps)
+        self.last_admissible = True
+        self._memory = self.initial_memory()
+
+    # What the diagram's map builder must produce: the policy's observation.
+    @property
+    def grid_kind(self) -> str:
+        return self.policy.grid_kind
+
+    @property
+    def expected_shape(self) -> tuple[int, ...]:
+        return self.policy.expected_shape
+
+    @property
+    def expected_dtype(self) -> np.dtype:
+        return self.policy.expected_dtype
+
+    @property
+    def path(self) -> Path:
+        return self.policy.path
+
+    def describe(self) -> str:
+        """The policy, and the shield's prediction and margin."""
+        model = "LIP" if self.response is None else "Digit's step response"
+        p = self.params
+        return (
+            f"{self.policy.describe()} behind the LGM shield ({model}, margin {p.margin:g} m, "
+            f"{p.brake_steps} braking step(s))"
+        )
+
+    def initial_memory(self) -> ShieldMemory:
+        """Nothing seen yet (and, with a response model, no command sent before)."""
+        return ShieldMemory(None if self.response is None else ResponseMemory())
+
+    def reset(self) -> None:
+        """Back to `initial_memory()` (a new episode)."""
+        self._memory = self.initial_memory()
+
+    def predicted_paths(self, obs: PlannerInput, memory: ShieldMemory | None) -> np.ndarray:
+        """CoM positions (C, 2·(1 + brake_steps), 2) in the robot frame of the foot switch
+        (x forward, y left) [m], for every command followed by the braking steps."""
+        r = self.config.robot
+        if self.response is None:
+            start = LipState(0.0, 0.0, 0.0, float(obs.robot.speed))
+            return lip_rollout(start, self.plans, r.omega, r.step_time)
+        mem = memory.response if memory is not None and memory.response else ResponseMemory()
+        start = LipState(0.0, 0.0, 0.0, mem.step_speed(obs.robot, r.step_time))
+        committed = np.stack([mem.command, np.asarray(obs.last_command, float)])
+        return self.response.rollout_plans(start, committed, self.plans)
+
+    def point_margins(
+        self, points: np.ndarray, pose: np.ndarray, memory: ShieldMemory | None
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """(each point's margin (n,) [m], the points in the world frame to remember: None
+        when every point keeps `margin`)."""
+        p = self.params
+        if p.static_margin is None:
+            return np.full(len(points), p.margin), None
+        world = to_world(points, pose)
+        seen = memory.seen if memory is not None else None
+        moving = moving_points(world, seen, p.static_match, p.body)
+        return np.where(moving, p.margin, p.static_margin), world
+
+    def plan_with_memory(
+        self, obs: PlannerInput, memory: ShieldMemory | None
+    ) -> tuple[np.ndarray, ShieldMemory]:
+        """The shielded command and the next memory (the planner interface of the diagram)."""
+        stack = self.policy.check_observation(obs.lgm_stack)
+        scores = self.policy.command_scores(stack, self.policy.goal_state(obs), obs.last_command)
+        li = self.config.lidar
+        points = lgm_hit_points(stack[-1], li.num_beams, li.max_range)
+        rb = obs.robot
+        pose = np.array([rb.x, rb.y, rb.heading])
+        margins, world = self.point_margins(points, pose, memory)
+        gaps = path_gaps(self.predicted_paths(obs, memory), points, margins)
+        best, self.last_admissible = shield_choice(scores, gaps, self.config.robot.radius)
+        command = self.policy.commands[best].copy()
+        sent = None
+        if self.response is not None:
+            sent = ResponseMemory(np.asarray(obs.last_command, float).copy(), pose)
+        return command, ShieldMemory(sent, world)
+
+    def plan(self, obs: PlannerInput) -> np.ndarray:
+        """The command (u_v [m/s], u_Δθ [rad]) for this walking step."""
+        command, self._memory = self.plan_with_memory(obs, self._memory)
+        return command
