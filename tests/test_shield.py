@@ -18,7 +18,7 @@ from emonav_drake.core.lgm_shield import (
 )
 from emonav_drake.core.lip import LipState, held_plans, lip_in_step, lip_rollout, lip_step
 from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.scenario import Scenario, StaticDiscSpec
+from emonav_drake.core.scenario import Scenario, StaticDiscSpec, sample_scenario
 from emonav_drake.params import EmoNavConfig, EpisodeParams
 from emonav_drake.planners import SHIELDED, configure_for, make_planner
 from emonav_drake.planners.model_aware import load_response
@@ -175,3 +175,27 @@ def test_shielded_planners_run_a_seeded_episode_on_both_plants(sim_on_both_plant
     assert records["digit"]["steps"] == 6 and records["digit"]["path_length"] > 0.3
     planner = make_planner(name, EmoNavConfig())
     assert (planner.initial_memory().response is None) == (not name.endswith("_digit"))
+
+
+def test_the_shield_turns_a_collision_of_the_default_policy_into_a_success():
+    """Tuning seed 700 075 in the LIP world (docs/shield.md): the default policy walks into
+    a pedestrian; behind the shield, with nothing else changed, it reaches the goal and
+    at least one of its steps was the shield's choice, not the policy's."""
+    cfg0 = EmoNavConfig()
+    outcomes, overridden = {}, 0
+    for name in ("policy", "policy_shield"):
+        planner = make_planner(name, cfg0)
+        cfg, _ = configure_for(planner, cfg0)
+        world = NavigationWorld(
+            sample_scenario(700_075, cfg), cfg, goal_radius=EpisodeParams.eval_goal_radius
+        )
+        outcome = None
+        while outcome is None:
+            obs = world.planner_input()
+            u = planner.plan(obs)
+            if name == "policy_shield":
+                overridden += not np.array_equal(u, planner.policy.plan(obs))
+            _, outcome = world.step(u)
+        outcomes[name] = outcome
+    assert outcomes == {"policy": "collision", "policy_shield": "success"}
+    assert overridden > 0

@@ -114,6 +114,7 @@ def _shielded(name: str, response: str, config: EmoNavConfig, checkpoint, device
 SHIELDED = {
     "policy_shield": ("policy", "a categorical policy (default: the shipped one)"),
     "guide_shield": ("emobipednav_guide", "the guide-sub-goal policy"),
+    "emobipednav_shield": ("emobipednav", "the LIP-trained policy"),
 }
 
 
