@@ -10,11 +10,11 @@ Digit/Digit routes train in, `docs/learning.md`) on the seeds first-seed … fir
 episodes − 1, from the default configuration, the evaluation goal radius. `--grid` rounds
 every command to the nearest of the DAgger student's command grid (what a student that
 imitated the planner perfectly would do). Learned planners run their default checkpoint
-on the observation it reads; `--shield-margin`, `--brake-steps`, `--static-margin` and
-`--uniform` set the LGM shield's parameters of the shielded ones (`core/lgm_shield.py`),
-whose line also counts the steps where no command passed the shield. Prints SR,
-collision and timeout counts, NT and DT per planner, and the failing seeds. Use tuning
-seeds (e.g. 700 000+), never the evaluation seeds 0–499.
+on the observation it reads; `--shield-margin`, `--brake-steps`, `--static-margin`,
+`--uniform` and `--predict-motion` set the LGM shield's parameters of the shielded ones
+(`core/lgm_shield.py`), whose line also counts the steps where no command passed the
+shield. Prints SR, collision and timeout counts, NT and DT per planner, and the failing
+seeds. Use tuning seeds (e.g. 700 000+), never the evaluation seeds 0–499.
 """
 
 from __future__ import annotations
@@ -45,6 +45,9 @@ def main() -> None:
     ap.add_argument(
         "--uniform", action="store_true", help="shielded planners: --shield-margin for all points"
     )
+    ap.add_argument(
+        "--predict-motion", action="store_true", help="shielded planners: bodies at their velocity"
+    )
     args = ap.parse_args()
     cfg0 = EmoNavConfig()
     response = load_response(args.response)
@@ -64,6 +67,8 @@ def main() -> None:
             )
             if args.uniform:
                 params = dc.replace(params, static_margin=None)
+            if args.predict_motion:
+                params = dc.replace(params, predict_motion=True)
             planner = type(planner)(planner.policy, cfg, planner.response, params)
         for seed in range(args.first_seed, args.first_seed + args.episodes):
             world = NavigationWorld(

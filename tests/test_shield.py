@@ -9,6 +9,8 @@ import pytest
 from emonav_drake.core.grid_maps import lgm_frame
 from emonav_drake.core.lgm_shield import (
     ShieldParams,
+    body_labels,
+    body_velocities,
     brake_plans,
     lgm_hit_points,
     moving_points,
@@ -199,3 +201,28 @@ def test_the_shield_turns_a_collision_of_the_default_policy_into_a_success():
         outcomes[name] = outcome
     assert outcomes == {"policy": "collision", "policy_shield": "success"}
     assert overridden > 0
+
+
+def test_a_body_moves_at_its_measured_velocity():
+    """Two frames of a pedestrian walking 0.2 m towards a robot that stands still: its
+    points get ≈ its 0.5 m/s (the centroid of the seen side moves with it), the disc's 0;
+    a point moving at that velocity closes the gap of a path that holds still."""
+    li = EmoNavConfig().lidar
+    disc, ped, pose = np.array([2.0, 1.0]), np.array([2.0, -0.8]), np.zeros(3)
+    frames = []
+    for p in (ped, ped - [0.2, 0.0]):
+        frame = lgm_frame(
+            pose[:2], 0.0, np.stack([disc, p]), [0.3, 0.3], [0.2, 0.2],
+            li.num_beams, li.grid_size, li.max_range,
+        )  # fmt: skip
+        frames.append(to_world(lgm_hit_points(frame, li.num_beams, li.max_range), pose))
+    v = body_velocities(frames[1], frames[0], 0.25, 0.4, 1.5)
+    on_ped = np.linalg.norm(frames[1] - (ped - [0.2, 0.0]), axis=1) < 0.5
+    # the seen side's centroid also slides as the angle of view changes: ≈ 0.12 m/s here
+    np.testing.assert_allclose(v[on_ped].mean(axis=0), [-0.5, 0.0], atol=0.15)
+    assert np.abs(v[~on_ped]).max() < 0.08
+    assert (body_labels(frames[1], 0.25)[on_ped] != body_labels(frames[1], 0.25)[~on_ped][0]).all()
+    still_path = np.zeros((1, 2, 2))
+    points, vel = np.array([[1.0, 0.0]]), np.array([[-1.0, 0.0]])
+    assert path_gaps(still_path, points)[0] == 1.0
+    assert path_gaps(still_path, points, None, vel, np.array([0.2, 0.4]))[0] == pytest.approx(0.6)

@@ -52,6 +52,10 @@ class ShieldParams:
         static_match: a point within this distance [m] of one of the previous frame's
             (world frame) counts as still; covers the LGM's cell size.
         body: points closer than this [m] to a moving point move with it (one body).
+        predict_motion: move each moving body's points along the path's samples at the
+            body's measured velocity (`body_velocities`) instead of holding them still.
+        max_body_speed: the fastest a body may have moved between two frames [m/s] to be
+            matched with one of the previous frame.
     """
 
     margin: float = 0.2
@@ -59,9 +63,11 @@ class ShieldParams:
     static_margin: float | None = 0.0
     static_match: float = 0.12
     body: float = 0.25
+    predict_motion: bool = False
+    max_body_speed: float = 1.5
 
     def __post_init__(self) -> None:
-        for name in ("margin", "static_match", "body") + (
+        for name in ("margin", "static_match", "body", "max_body_speed") + (
             ("static_margin",) if self.static_margin is not None else ()
         ):
             v = getattr(self, name)
@@ -101,14 +107,24 @@ def brake_plans(candidates: np.ndarray, brake_steps: int) -> np.ndarray:
 
 
 def path_gaps(
-    paths: np.ndarray, points: np.ndarray, margins: np.ndarray | None = None
+    paths: np.ndarray,
+    points: np.ndarray,
+    margins: np.ndarray | None = None,
+    velocities: np.ndarray | None = None,
+    times: np.ndarray | None = None,
 ) -> np.ndarray:
     """Smallest distance (C,) [m] from each predicted CoM path (C, S, 2) to the points
     (n, 2), less each point's own extra margin (n,) [m] when given; +inf where there are
-    no points."""
+    no points. With `velocities` (n, 2) [m/s] and the samples' `times` (S,) [s], point i
+    is at points[i] + velocities[i]·t at each sample."""
     if len(points) == 0:
         return np.full(len(paths), np.inf)
-    d = np.sqrt(((paths[:, :, None, :] - np.asarray(points, float)[None, None]) ** 2).sum(-1))
+    pts = np.asarray(points, float)[None, None]
+    if velocities is not None:
+        pts = (
+            pts + np.asarray(times, float)[None, :, None, None] * np.asarray(velocities)[None, None]
+        )
+    d = np.sqrt(((paths[:, :, None, :] - pts) ** 2).sum(-1))
     if margins is not None:
         d = d - np.asarray(margins, float)[None, None]
     return d.min(axis=(1, 2))
@@ -119,6 +135,51 @@ def to_world(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
     c, s = np.cos(pose[2]), np.sin(pose[2])
     p = np.asarray(points, float)
     return np.stack([pose[0] + c * p[:, 0] - s * p[:, 1], pose[1] + s * p[:, 0] + c * p[:, 1]], 1)
+
+
+def body_labels(points: np.ndarray, body: float) -> np.ndarray:
+    """(n,) int: the connected groups of points (n, 2) joined by chains of points less than
+    `body` [m] apart, numbered 0, 1, … in the order of their first point."""
+    n = len(points)
+    labels = np.full(n, -1)
+    if n == 0:
+        return labels
+    near = ((points[:, None, :] - points[None]) ** 2).sum(-1) < body**2
+    current = 0
+    for i in range(n):
+        if labels[i] >= 0:
+            continue
+        member = np.zeros(n, bool)
+        member[i] = True
+        while True:
+            grown = member | near[:, member].any(axis=1)
+            if (grown == member).all():
+                break
+            member = grown
+        labels[member] = current
+        current += 1
+    return labels
+
+
+def body_velocities(
+    world: np.ndarray, previous: np.ndarray, body: float, step_time: float, max_speed: float
+) -> np.ndarray:
+    """(n, 2) [m/s]: for each point (world frame) its body's velocity — the displacement of
+    the body's centroid from the nearest body centroid of the previous frame, over
+    `step_time`; zero when none is within max_speed · step_time."""
+    out = np.zeros((len(world), 2))
+    if len(world) == 0 or previous is None or len(previous) == 0:
+        return out
+    prev = np.asarray(previous, float)
+    lab, lab_prev = body_labels(world, body), body_labels(prev, body)
+    c_prev = np.array([prev[lab_prev == j].mean(axis=0) for j in range(lab_prev.max() + 1)])
+    for j in range(lab.max() + 1):
+        c = world[lab == j].mean(axis=0)
+        jump = np.linalg.norm(c_prev - c, axis=1)
+        k = int(np.argmin(jump))
+        if jump[k] <= max_speed * step_time:
+            out[lab == j] = (c - c_prev[k]) / step_time
+    return out
 
 
 def moving_points(

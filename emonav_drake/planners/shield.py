@@ -18,6 +18,7 @@ import numpy as np
 from emonav_drake.core.dwa import ResponseMemory
 from emonav_drake.core.lgm_shield import (
     ShieldParams,
+    body_velocities,
     brake_plans,
     lgm_hit_points,
     moving_points,
@@ -143,6 +144,22 @@ class ShieldedPolicy:
         moving = moving_points(world, seen, p.static_match, p.body)
         return np.where(moving, p.margin, p.static_margin), world
 
+    def point_velocities(
+        self, world: np.ndarray | None, pose: np.ndarray, memory: ShieldMemory | None, samples: int
+    ) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """(each point's velocity (n, 2) in the robot frame [m/s], the path samples' times
+        (S,) [s]) with `predict_motion`, else (None, None): still points never move."""
+        p = self.params
+        seen = memory.seen if memory is not None else None
+        if not p.predict_motion or world is None or seen is None:
+            return None, None
+        step_time = self.config.robot.step_time
+        v = body_velocities(world, seen, p.body, step_time, p.max_body_speed)
+        v[~moving_points(world, seen, p.static_match, p.body)] = 0.0
+        c, s = np.cos(pose[2]), np.sin(pose[2])
+        v_robot = np.stack([c * v[:, 0] + s * v[:, 1], -s * v[:, 0] + c * v[:, 1]], axis=1)
+        return v_robot, step_time * (np.arange(samples) + 1) / 2
+
     def plan_with_memory(
         self, obs: PlannerInput, memory: ShieldMemory | None
     ) -> tuple[np.ndarray, ShieldMemory]:
@@ -154,7 +171,9 @@ class ShieldedPolicy:
         rb = obs.robot
         pose = np.array([rb.x, rb.y, rb.heading])
         margins, world = self.point_margins(points, pose, memory)
-        gaps = path_gaps(self.predicted_paths(obs, memory), points, margins)
+        paths = self.predicted_paths(obs, memory)
+        velocities, times = self.point_velocities(world, pose, memory, paths.shape[1])
+        gaps = path_gaps(paths, points, margins, velocities, times)
         best, self.last_admissible = shield_choice(scores, gaps, self.config.robot.radius)
         command = self.policy.commands[best].copy()
         sent = None
