@@ -32,6 +32,7 @@ from emonav_drake.core.palette import (  # noqa: E402
     OKABE_ITO,
     ROBOT_LIGHT_RGB,
     ROBOT_RGB,
+    SHADE_RGB,
     STATIC_RGB,
 )
 from emonav_drake.core.scenario import sample_scenario  # noqa: E402
@@ -39,7 +40,7 @@ from emonav_drake.params import EmoNavConfig, EpisodeParams  # noqa: E402
 from emonav_drake.planners import configure_for, make_planner  # noqa: E402
 
 MOVING_RGB = OKABE_ITO["vermillion"]
-BLOCKED_RGB = (0.82, 0.82, 0.82)
+BLOCKED_RGB = SHADE_RGB  # a blocked command's path
 
 
 def first_override(planner, world: NavigationWorld, min_speed: float, max_steps: int = 200):

@@ -300,14 +300,14 @@ def test_an_mpc_expert_labels_every_state_with_its_nearest_grid_command():
     assert len(set(labels)) > 1  # it steers, not one constant command
 
 
-def test_a_route_starts_from_a_shipped_variant_by_name(tmp_path):
+def test_a_route_starts_from_a_shipped_variant_by_name(tmp_path, monkeypatch):
     """`init_policy` (DAgger) and `--init` (fine-tuning) take a shipped variant's name: the
     student starts with that file's weights; a variant without a file is refused, naming
     how to train it."""
     from emonav_drake.learning.config import DaggerConfig
     from emonav_drake.learning.dagger_student import Student
     from emonav_drake.params import ConfigError
-    from emonav_drake.planners.variants import VARIANTS, resolve_policy_file
+    from emonav_drake.planners.variants import VARIANTS, PolicyVariant, resolve_policy_file
 
     path = resolve_policy_file("emobipednav_digit_mpc")
     assert path == VARIANTS["emobipednav_digit_mpc"].checkpoint
@@ -317,7 +317,12 @@ def test_a_route_starts_from_a_shipped_variant_by_name(tmp_path):
     student.load_weights("emobipednav_digit_mpc")
     for k, v in model.state_dict().items():
         assert torch.equal(student.model.state_dict()[k].cpu(), v.cpu()), k
-    unshipped = next(n for n, v in VARIANTS.items() if not v.is_shipped)
+    # every variant of this version is shipped: one that is not, as a later one would be
+    unshipped = "not_trained"
+    monkeypatch.setitem(
+        VARIANTS, unshipped, PolicyVariant(unshipped, "X", "y", "policies/not_trained.pt")
+    )
+    assert not VARIANTS[unshipped].is_shipped
     with pytest.raises(ConfigError, match=f"init_policy {unshipped}: .*emonav train --variant"):
         student.load_weights(unshipped)
 
