@@ -390,14 +390,21 @@ def test_meshcat_and_its_replay_legend_draw_with_the_palette():
 def test_methods_are_named_and_coloured_as_in_every_figure():
     from emonav_drake.evaluation.benchmark_plots import run_labels
 
-    assert palette.method_label("sac") == "policy"  # an old run's shipped policy
-    assert palette.method_label("sac", "/x/emonav_drake/data/policy_lgm.pt") == "policy"
+    lip_trained = "/x/emonav_drake/data/policy_lgm.pt"
+    assert palette.method_label("sac") == "emobipednav"  # an old run's shipped policy
+    assert palette.method_label("sac", lip_trained) == "emobipednav"
+    assert palette.method_label("policy", lip_trained) == "emobipednav"  # the default then
     assert palette.method_label("sac", "runs/sac/actor.pt") == "sac"  # a SAC-trained actor
+    default = "/x/emonav_drake/data/policies/emobipednav_digit_mpc.pt"
+    assert palette.method_label("policy", default) == "policy"  # today's default
+    assert palette.method_label("policy") == "policy"
     assert palette.method_label("dwa") == "dwa"
     settings = json.loads((ROOT / "benchmarks/results/lip_table2/settings.json").read_text())
-    assert run_labels(settings) == {"sac": "policy", "mpc": "mpc", "dwa": "dwa"}
-    both = {"planners": ["sac", "policy"], "methods": {}}
-    assert run_labels(both) == {"sac": "sac", "policy": "policy"}  # never two "policy"
+    assert run_labels(settings) == {"sac": "emobipednav", "mpc": "mpc", "dwa": "dwa"}
+    v3 = json.loads((ROOT / "benchmarks/results/digit_table2_v3/settings.json").read_text())
+    assert run_labels(v3)["policy"] == "emobipednav"  # policy_lgm.pt, the default then
+    both = {"planners": ["sac", "emobipednav"], "methods": {}}
+    assert run_labels(both) == {"sac": "sac", "emobipednav": "emobipednav"}  # never two alike
     names = ["policy", "mpc", "dwa", "round0", "round1", "dwa_digit", "orca"]
     colours = palette.method_colours(names)
     assert len(set(colours)) == len(names)

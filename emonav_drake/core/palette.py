@@ -174,21 +174,23 @@ SERIES_RGB: tuple[RGB, ...] = tuple(
 
 # --- names of methods -------------------------------------------------------------------
 
-# Run directories written before the planner rename call the shipped policy "sac" (it is
-# a DAgger student: `--planner policy`, docs/results.md); the figures say "policy".
+# The LIP-trained EmoBipedNav (`--planner emobipednav`) was the default policy until the
+# Digit route's student replaced it: runs made before call it "policy", and runs made
+# before the planner rename "sac" (it is a DAgger student). Figures name it by its file.
 SHIPPED_POLICY_FILE = "policy_lgm.pt"
-METHOD_LABELS: dict[str, str] = {"sac": "policy"}
+LIP_TRAINED_LABEL = "emobipednav"
 
 
 def method_label(name: str, checkpoint: str | None = None) -> str:
-    """The name a figure gives a benchmark method: "sac" of an old run (the shipped policy)
-    is "policy"; with its `checkpoint` known, only when that is the shipped policy's file
-    (a SAC-trained actor of today's `--planner sac` keeps its name)."""
-    if name not in METHOD_LABELS:
+    """The name a figure gives a benchmark method: a "policy" or "sac" that ran the
+    LIP-trained policy's file is "emobipednav" (an old run's "sac" without a recorded
+    checkpoint is that policy too); today's default `policy` and a SAC-trained actor of
+    `--planner sac` keep their names."""
+    if name not in ("sac", "policy"):
         return name
-    if checkpoint is not None and PurePath(checkpoint).name != SHIPPED_POLICY_FILE:
-        return name
-    return METHOD_LABELS[name]
+    if checkpoint is None:
+        return LIP_TRAINED_LABEL if name == "sac" else name
+    return LIP_TRAINED_LABEL if PurePath(checkpoint).name == SHIPPED_POLICY_FILE else name
 
 
 def method_colours(labels: list[str]) -> list[RGB]:

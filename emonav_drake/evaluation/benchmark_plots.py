@@ -6,8 +6,9 @@ intervals and the trajectories of chosen trials.
 * `plot_trajectory(ax, scenario, step_log, config)`: the robot's path, every pedestrian's
   path coloured by its emotion at each step (a time-varying emotion changes colour along
   the path), the static discs with their discomfort rings, start and goal.
-* `run_labels(settings)`: the name each method of a run is shown under (the shipped
-  policy is "policy", also in old runs that call it "sac": `palette.method_label`).
+* `run_labels(settings)`: the name each method of a run is shown under (the LIP-trained
+  policy is "emobipednav", also in old runs that call it "policy" or "sac":
+  `palette.method_label`).
 
 Colours: the shared palette (`core/palette.py`): the scene's roles as in every view, the
 methods `palette.METHOD_RGB` (never an emotion's colour).
