@@ -60,7 +60,9 @@ class ShieldedPolicy:
     The planner input's `lgm_stack` is the policy's observation (uint8 (N, M, M), oldest
     first, robot frame at the foot switch); the command is (u_v [m/s], u_Δθ [rad]).
     `last_admissible` says whether the last command passed the shield (False: no command
-    did, and the one keeping the largest gap was walked).
+    did, and the one keeping the largest gap was walked); it is a diagnostic written by
+    every planning step and never read back, so the command stays a function of
+    (input, memory) alone.
     """
 
     name = "policy_shield"
@@ -103,12 +105,18 @@ class ShieldedPolicy:
         return self.policy.path
 
     def describe(self) -> str:
-        """The policy, and the shield's prediction and margin."""
+        """The policy, and the shield's prediction, margins and braking steps."""
         model = "LIP" if self.response is None else "Digit's step response"
         p = self.params
+        margins = (
+            f"margin {p.margin:g} m"
+            if p.static_margin is None
+            else f"margin {p.margin:g} m from moving hits, {p.static_margin:g} m from still ones"
+        )
+        motion = ", moving hits at their velocity" if p.predict_motion else ""
         return (
-            f"{self.policy.describe()} behind the LGM shield ({model}, margin {p.margin:g} m, "
-            f"{p.brake_steps} braking step(s))"
+            f"{self.policy.describe()} behind the LGM shield ({model} prediction, {margins}"
+            f"{motion}, {p.brake_steps} braking step(s))"
         )
 
     def initial_memory(self) -> ShieldMemory:
