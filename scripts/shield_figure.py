@@ -23,7 +23,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from emonav_drake.core.lgm_shield import lgm_hit_points, moving_points, path_gaps  # noqa: E402
+from emonav_drake.core.lgm_shield import lgm_hit_points, path_gaps  # noqa: E402
 from emonav_drake.core.navigation import NavigationWorld  # noqa: E402
 from emonav_drake.core.palette import (  # noqa: E402
     EMOTION_RGB,
@@ -82,13 +82,7 @@ def main() -> None:
     stack = obs.lgm_stack
     points = lgm_hit_points(stack[-1], li.num_beams, li.max_range)
     pose = np.array([obs.robot.x, obs.robot.y, obs.robot.heading])
-    margins, world_pts = planner.point_margins(points, pose, memory)
-    p = planner.params
-    moving = (
-        moving_points(world_pts, memory.seen, p.static_match, p.body)
-        if world_pts is not None
-        else np.ones(len(points), bool)
-    )
+    margins, _, moving = planner.point_margins(points, pose, memory)
     paths = planner.predicted_paths(obs, memory)
     ok = path_gaps(paths, points, margins) >= r
     scores = planner.policy.command_scores(stack, planner.policy.goal_state(obs), obs.last_command)

@@ -44,6 +44,19 @@ class ResponseMemory:
     command: np.ndarray = dc.field(default_factory=lambda: np.zeros(2))
     pose: np.ndarray | None = None
 
+    def committed(self, obs: PlannerInput) -> np.ndarray:
+        """(u_{k−2}, u_{k−1}) (2, 2): the commands already sent when `obs` is planned."""
+        return np.stack([self.command, np.asarray(obs.last_command, float)])
+
+    @staticmethod
+    def after(obs: PlannerInput) -> ResponseMemory:
+        """What the next planner instant remembers of this one: u_{k−1} (which will then be
+        u_{k−2}) and the robot's pose now."""
+        rb = obs.robot
+        return ResponseMemory(
+            np.asarray(obs.last_command, float).copy(), np.array([rb.x, rb.y, rb.heading])
+        )
+
     def step_speed(self, robot: LipState, step_time: float) -> float:
         """v̄: the forward displacement since then over T (the robot's own speed at the
         first step) — the speed the response model is written in."""
@@ -99,15 +112,11 @@ class DwaPlanner:
         memory = memory if memory is not None else ResponseMemory()
         rb = obs.robot
         speed = memory.step_speed(rb, self.config.robot.step_time)
-        committed = np.stack([memory.command, np.asarray(obs.last_command, float)])
         start = type(rb)(rb.x, rb.y, rb.heading, speed)
         traj = self.response.rollout(
-            start, committed, self.candidates, self.config.dwa.horizon_steps
+            start, memory.committed(obs), self.candidates, self.config.dwa.horizon_steps
         )
-        command = self._choose(obs, traj)
-        return command, ResponseMemory(
-            np.asarray(obs.last_command, float).copy(), np.array([rb.x, rb.y, rb.heading])
-        )
+        return self._choose(obs, traj), ResponseMemory.after(obs)
 
     def _rollout(self, x0: float, y0: float, th0: float, v0: float) -> np.ndarray:
         """CoM positions (C, 2·H, 2) at the middle and end of each of H steps."""

@@ -250,8 +250,8 @@ class MpcPlanner:
         if self.response is not None:  # the commands already sent, the speed v̄
             sent = memory.response or ResponseMemory()
             v0 = sent.step_speed(rb, self.config.robot.step_time)
-            model = self.model.with_committed(np.stack([sent.command, last]))
-            response_memory = ResponseMemory(last.copy(), np.array([rb.x, rb.y, rb.heading]))
+            model = self.model.with_committed(sent.committed(obs))
+            response_memory = ResponseMemory.after(obs)
         goal = np.asarray(obs.goal_xy, dtype=float)
         obst = self.model.obstacles(obs.crowd)
         guide, guide_key = self._guide_for(p0, goal, obs, memory)

@@ -136,24 +136,28 @@ class ShieldedPolicy:
             return lip_rollout(start, self.plans, r.omega, r.step_time)
         mem = memory.response if memory is not None and memory.response else ResponseMemory()
         start = LipState(0.0, 0.0, 0.0, mem.step_speed(obs.robot, r.step_time))
-        committed = np.stack([mem.command, np.asarray(obs.last_command, float)])
-        return self.response.rollout_plans(start, committed, self.plans)
+        return self.response.rollout_plans(start, mem.committed(obs), self.plans)
 
     def point_margins(
         self, points: np.ndarray, pose: np.ndarray, memory: ShieldMemory | None
-    ) -> tuple[np.ndarray, np.ndarray | None]:
-        """(each point's margin (n,) [m], the points in the world frame to remember: None
-        when every point keeps `margin`)."""
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+        """(each point's margin (n,) [m], the points in the world frame to remember — None
+        when every point keeps `margin` —, which points move (n,) bool)."""
         p = self.params
         if p.static_margin is None:
-            return np.full(len(points), p.margin), None
+            return np.full(len(points), p.margin), None, np.ones(len(points), bool)
         world = to_world(points, pose)
         seen = memory.seen if memory is not None else None
         moving = moving_points(world, seen, p.static_match, p.body)
-        return np.where(moving, p.margin, p.static_margin), world
+        return np.where(moving, p.margin, p.static_margin), world, moving
 
     def point_velocities(
-        self, world: np.ndarray | None, pose: np.ndarray, memory: ShieldMemory | None, samples: int
+        self,
+        world: np.ndarray | None,
+        moving: np.ndarray,
+        pose: np.ndarray,
+        memory: ShieldMemory | None,
+        samples: int,
     ) -> tuple[np.ndarray | None, np.ndarray | None]:
         """(each point's velocity (n, 2) in the robot frame [m/s], the path samples' times
         (S,) [s]) with `predict_motion`, else (None, None): still points never move."""
@@ -163,7 +167,7 @@ class ShieldedPolicy:
             return None, None
         step_time = self.config.robot.step_time
         v = body_velocities(world, seen, p.body, step_time, p.max_body_speed)
-        v[~moving_points(world, seen, p.static_match, p.body)] = 0.0
+        v[~moving] = 0.0
         c, s = np.cos(pose[2]), np.sin(pose[2])
         v_robot = np.stack([c * v[:, 0] + s * v[:, 1], -s * v[:, 0] + c * v[:, 1]], axis=1)
         return v_robot, step_time * (np.arange(samples) + 1) / 2
@@ -178,15 +182,13 @@ class ShieldedPolicy:
         points = lgm_hit_points(stack[-1], li.num_beams, li.max_range)
         rb = obs.robot
         pose = np.array([rb.x, rb.y, rb.heading])
-        margins, world = self.point_margins(points, pose, memory)
+        margins, world, moving = self.point_margins(points, pose, memory)
         paths = self.predicted_paths(obs, memory)
-        velocities, times = self.point_velocities(world, pose, memory, paths.shape[1])
+        velocities, times = self.point_velocities(world, moving, pose, memory, paths.shape[1])
         gaps = path_gaps(paths, points, margins, velocities, times)
         best, self.last_admissible = shield_choice(scores, gaps, self.config.robot.radius)
         command = self.policy.commands[best].copy()
-        sent = None
-        if self.response is not None:
-            sent = ResponseMemory(np.asarray(obs.last_command, float).copy(), pose)
+        sent = None if self.response is None else ResponseMemory.after(obs)
         return command, ShieldMemory(sent, world)
 
     def plan(self, obs: PlannerInput) -> np.ndarray:
