@@ -194,12 +194,8 @@ def moving_points(
     d2 = ((world[:, None, :] - np.asarray(previous, float)[None]) ** 2).sum(-1)
     moving = d2.min(axis=1) > match**2
     if body > 0.0 and moving.any() and not moving.all():
-        near = ((world[:, None, :] - world[None]) ** 2).sum(-1) < body**2
-        while True:
-            grown = moving | near[:, moving].any(axis=1)
-            if (grown == moving).all():
-                break
-            moving = grown
+        labels = body_labels(world, body)
+        moving = np.isin(labels, labels[moving])
     return moving
 
 
