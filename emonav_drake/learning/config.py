@@ -64,14 +64,19 @@ class DaggerConfig:
     # "single_lgm"; or a path); its network must be the one this configuration builds.
     init_policy: str = ""
     # The expert that labels the states: "dwa" (DWA with `expert_margin`, planning with
-    # `response`) or "mpc" (the OSQP MPC of core/mpc.py, planning with the LIP model; its
-    # continuous commands are labelled as the nearest command of the student's grid).
+    # `response`), "mpc" (the OSQP MPC of core/mpc.py, planning with the LIP model; its
+    # continuous commands are labelled as the nearest command of the student's grid) or
+    # "shield" (`expert_policy` behind the LGM shield).
     expert: str = "dwa"
     expert_margin: float = 0.05  # the DWA expert's collision margin (`dwa.safety_margin`) [m]
     # The MPC expert's extra clearance [m], added to its collision and discomfort margins
     # (`mpc.collision_margin`, `mpc.discomfort_margin`): a student that tracks its teacher
     # less precisely learns to keep this much more room. 0 = the MPC as benchmarked.
     expert_clearance: float = 0.0
+    # The policy the "shield" expert wraps ("" = `init_policy`): a categorical student that
+    # reads what this route's student reads, behind the LGM shield (`planners/shield.py`,
+    # predicting with `response`). Its labels are a function of the student's observation.
+    expert_policy: str = ""
     heading_noise_prob: float = 0.5  # fraction of training episodes starting off course
     heading_noise: float = 1.5  # their initial heading error, uniform in ± this [rad]
     device: str = "cpu"
@@ -83,7 +88,9 @@ class DaggerConfig:
         _check_observation(self.grid_kind, self.encoder, self.num_frames)
         _choice("goal_input", self.goal_input, GOAL_INPUTS)
         _choice("setting", self.setting, SETTINGS)
-        _choice("expert", self.expert, ("dwa", "mpc"))
+        _choice("expert", self.expert, ("dwa", "mpc", "shield"))
+        if self.expert == "shield" and not (self.expert_policy or self.init_policy):
+            raise ConfigError("expert = shield needs expert_policy (or init_policy) to shield")
         return self
 
 

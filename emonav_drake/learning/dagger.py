@@ -207,7 +207,12 @@ def _start(
     torch.manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
     expert = route_expert(
-        env_cfg, cfg.expert, cfg.expert_margin, cfg.response, cfg.expert_clearance
+        env_cfg,
+        cfg.expert,
+        cfg.expert_margin,
+        cfg.response,
+        cfg.expert_clearance,
+        cfg.expert_policy or cfg.init_policy,
     )
     response = load_response(cfg.response)
     commands = DwaPlanner(env_cfg).candidates.copy()  # the student's grid: the DWA's

@@ -85,14 +85,16 @@ class LabellingPlanner:
         return self.student.plan(obs), memory
 
 
-def _round_worker(beta: float, expert_margin: float, expert: str, clearance: float) -> type:
+def _round_worker(
+    beta: float, expert_margin: float, expert: str, clearance: float, expert_policy: str
+) -> type:
     """The Ray actor class of `collect_round`: one labelled Digit episode per task."""
     from emonav_drake.diagrams.trials import TrialWorker
 
     class RoundWorker(TrialWorker):
         def run(self, method: str, seed: int) -> dict:
             return _labelled_episode(
-                self.runner, method, seed, beta, expert_margin, expert, clearance
+                self.runner, method, seed, beta, expert_margin, expert, clearance, expert_policy
             )
 
     return RoundWorker
@@ -106,16 +108,17 @@ def _labelled_episode(
     margin: float,
     expert_kind: str = "dwa",
     clearance: float = 0.0,
+    expert_policy: str = "",
 ) -> dict:
     """One Digit episode of the student (`runner`'s method) labelled by the expert
-    (`expert_kind`: "dwa", the model-aware DWA with `margin`, or "mpc" with the extra
-    `clearance`)."""
+    (`expert_kind`: "dwa", the model-aware DWA with `margin`, "mpc" with the extra
+    `clearance`, or "shield": `expert_policy` behind the LGM shield)."""
     from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
     from emonav_drake.planners.model_aware import route_expert
 
     student, cfg, grid_kind = runner.planner(method)
-    expert = route_expert(cfg, expert_kind, margin, "digit", clearance)
+    expert = route_expert(cfg, expert_kind, margin, "digit", clearance, expert_policy)
     planner = LabellingPlanner(student, expert, beta, seed)
     t0 = time.perf_counter()
     record = run_digit_episode(
@@ -145,11 +148,13 @@ class DigitRoundsConfig:
     digit_fraction: float = 0.5  # of every batch from Digit samples
     expert_margin: float = 0.1
     seed: int = 0
-    # The labelling expert: "dwa" or "mpc", and the MPC's extra clearance [m];
-    # `run_digit_rounds` sets both to the calibrated run's (`DaggerConfig.expert`,
-    # `expert_clearance`), so both kinds of demonstrations have one teacher.
+    # The labelling expert: "dwa", "mpc" or "shield", the MPC's extra clearance [m] and the
+    # policy the shield wraps; `run_digit_rounds` sets them to the calibrated run's
+    # (`DaggerConfig.expert`, `expert_clearance`, `expert_policy`), so both kinds of
+    # demonstrations have one teacher.
     expert: str = "dwa"
     expert_clearance: float = 0.0
+    expert_policy: str = ""
 
     def validate(self) -> DigitRoundsConfig:
         """Raise `ConfigError` naming the flag (or field) of a value out of range."""
@@ -205,18 +210,14 @@ def collect_round(
         dump_config(env_config or EmoNavConfig()),
     )
     beta = cfg.beta * 0.5**rnd
-    worker_cls = _round_worker(beta, cfg.expert_margin, cfg.expert, cfg.expert_clearance)
+    teacher = (cfg.expert_margin, cfg.expert, cfg.expert_clearance, cfg.expert_policy)
+    worker_cls = _round_worker(beta, *teacher)
     first = cfg.first_seed + rnd * cfg.episodes
     tasks = [("student", first + i) for i in range(cfg.episodes)]
     results: list[dict] = []
     if workers <= 1 and ray_address is None:
         runner = TrialRunner(spec)
-        results = [
-            _labelled_episode(
-                runner, m, s, beta, cfg.expert_margin, cfg.expert, cfg.expert_clearance
-            )
-            for m, s in tasks
-        ]
+        results = [_labelled_episode(runner, m, s, beta, *teacher) for m, s in tasks]
     else:
         run_trials(spec, tasks, results.append, workers, ray_address, worker_cls=worker_cls)
     return sorted(results, key=lambda r: r["seed"])
@@ -258,7 +259,12 @@ def run_digit_rounds(
     out, source = Path(out), Path(source)
     n, calibrated, digit, student, start_policy, dcfg = _start_from(source)
     # the calibrated run's teacher labels here too
-    cfg = dc.replace(cfg, expert=dcfg.expert, expert_clearance=dcfg.expert_clearance)
+    cfg = dc.replace(
+        cfg,
+        expert=dcfg.expert,
+        expert_clearance=dcfg.expert_clearance,
+        expert_policy=dcfg.expert_policy or dcfg.init_policy,
+    )
     if env_config is None:  # the calibrated run's setting (var_dd unless it trained in another)
         from emonav_drake.configs import load_setting
 

@@ -95,15 +95,12 @@ def _sac(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
 
 
 def _shielded(name: str, response: str, config: EmoNavConfig, checkpoint, device: str):
-    from emonav_drake.core.lgm_shield import ShieldParams
     from emonav_drake.planners.model_aware import load_response
     from emonav_drake.planners.policy import PolicyPlanner
-    from emonav_drake.planners.shield import ShieldedPolicy
+    from emonav_drake.planners.shield import ShieldedPolicy, default_shield_params
 
     policy = PolicyPlanner(checkpoint, device=device, robot_radius=config.robot.radius)
-    # Digit answers a command a step late: it needs two steps of (0, 0) to stop. The
-    # margins are the best of 0.1 / 0.2 / 0.3 m on tuning seeds (docs/shield.md).
-    params = ShieldParams(margin=0.1, brake_steps=2) if response else ShieldParams(margin=0.2)
+    params = default_shield_params(response)
     planner = ShieldedPolicy(policy, config, response=load_response(response), params=params)
     planner.name = name
     return planner

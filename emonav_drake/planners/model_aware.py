@@ -53,13 +53,32 @@ def model_aware_expert(config: EmoNavConfig, margin: float, response: str = "dig
 
 
 def route_expert(
-    config: EmoNavConfig, kind: str, margin: float, response: str = "", clearance: float = 0.0
+    config: EmoNavConfig,
+    kind: str,
+    margin: float,
+    response: str = "",
+    clearance: float = 0.0,
+    policy: str = "",
 ):
     """The expert of a DAgger route (`DaggerConfig.expert`): "dwa" = `model_aware_expert`
     (collision margin `margin` [m], planning with `response`); "mpc" = the OSQP MPC of
     `core.mpc` on the LIP model, its collision and discomfort margins widened by `clearance` [m]
     (`DaggerConfig.expert_clearance`; 0 = the MPC as benchmarked; `margin` and `response`
-    unused)."""
+    unused); "shield" = the categorical `policy` ("shipped", a shipped variant's name or a
+    path) behind the LGM shield, predicting with `response` (the registered shielded
+    planners' settings, `planners.shield.default_shield_params`)."""
+    if kind == "shield":
+        from emonav_drake.planners.policy import PolicyPlanner
+        from emonav_drake.planners.shield import ShieldedPolicy, default_shield_params
+        from emonav_drake.planners.variants import resolve_policy_file
+
+        if not policy:
+            raise ConfigError("expert = 'shield' needs the policy it shields (expert_policy)")
+        wrapped = PolicyPlanner(
+            resolve_policy_file(policy, "expert_policy"), robot_radius=config.robot.radius
+        )
+        model = load_response(response)
+        return ShieldedPolicy(wrapped, config, model, default_shield_params(model))
     if kind == "mpc":
         from emonav_drake.core.mpc import MpcPlanner
 
@@ -70,7 +89,7 @@ def route_expert(
         expert_cfg.mpc.discomfort_margin += clearance
         return MpcPlanner(expert_cfg)
     if kind != "dwa":
-        raise ConfigError(f"expert = {kind!r} is invalid: must be one of ['dwa', 'mpc']")
+        raise ConfigError(f"expert = {kind!r} is invalid: must be one of ['dwa', 'mpc', 'shield']")
     return model_aware_expert(config, margin, response)
 
 

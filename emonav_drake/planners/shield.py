@@ -33,6 +33,16 @@ from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import PolicyError, PolicyPlanner, describe_policy
 
 
+def default_shield_params(response: StepResponseModel | str | None) -> ShieldParams:
+    """The registered shields' settings for a prediction model: Digit answers a command a
+    step late, so with a response model it brakes two steps and keeps 0.1 m from moving
+    hits; the LIP brakes one step and keeps 0.2 m (the best of 0.1 / 0.2 / 0.3 m on tuning
+    seeds, docs/shield.md)."""
+    if response:
+        return ShieldParams(margin=0.1, brake_steps=2)
+    return ShieldParams(margin=0.2)
+
+
 @dc.dataclass(frozen=True)
 class ShieldMemory:
     """What the shield carries from one walking step to the next.
