@@ -11,12 +11,14 @@ from emonav_drake.learning.dagger import train_dagger
 from emonav_drake.learning.digit_dagger import DigitRoundsConfig, run_digit_rounds
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import PolicyPlanner
-from emonav_drake.planners.variants import variant
+from emonav_drake.planners.variants import CONFIG_DIR as ROUTES
 
 
-@pytest.mark.parametrize("route", ["emobipednav_digit", "emobipednav_digit_mpc"])
+@pytest.mark.parametrize(
+    "route", ["emobipednav_digit", "emobipednav_digit_mpc", "emobipednav_distilled"]
+)
 def test_a_tiny_digit_round_writes_a_loadable_policy(tmp_path, route):
-    cfg = load_typed_yaml(DaggerConfig, path=variant(route).config)
+    cfg = load_typed_yaml(DaggerConfig, path=ROUTES / f"{route}.yaml")
     cfg.expert_episodes, cfg.episodes_per_round, cfg.rounds = 2, 1, 1
     cfg.grad_steps_first, cfg.grad_steps_per_round, cfg.batch_size = 2, 2, 8
     cfg.eval_episodes = 1
@@ -33,6 +35,8 @@ def test_a_tiny_digit_round_writes_a_loadable_policy(tmp_path, route):
     assert prov["route"] == "dagger+digit" and prov["round"] == 0
     assert prov["config"]["expert"] == cfg.expert  # the calibrated run's teacher labels
     assert prov["config"]["expert_clearance"] == cfg.expert_clearance
+    if cfg.expert == "shield":  # the policy it shields: the calibrated run's initial one
+        assert prov["config"]["expert_policy"] == cfg.init_policy
     (entry,) = prov["history"]
     assert entry["episodes"] == 2 and entry["seeds"] == [4_000_000, 4_000_001]
     assert entry["digit_samples"] >= 6  # 3 planner instants (at least) per episode

@@ -354,3 +354,45 @@ def test_an_mpc_expert_with_clearance_keeps_more_room():
     assert widened[1] > plain[1]
     with pytest.raises(Exception, match="expert_clearance"):
         DaggerConfig(expert_clearance=1.5).validate()
+
+
+def test_a_shield_expert_labels_with_the_registered_shielded_policy():
+    """`DaggerConfig.expert = "shield"`: in the calibrated world the labels are the
+    commands of `policy_shield_digit` (the default policy behind the LGM shield with
+    Digit's response), step for step; on seed 10⁶ + 34 the shield overrides the bare
+    policy within 12 steps, so the labels are not the policy's own choices."""
+    from emonav_drake.planners import make_planner
+
+    env_cfg = EmoNavConfig()
+    env_cfg.episode.max_steps = 12
+    response = load_response("digit")
+
+    def world():
+        return NavigationWorld(
+            sample_scenario(10**6 + 34, env_cfg), env_cfg, goal_radius=0.2, response=response
+        )
+
+    expert = route_expert(env_cfg, "shield", 0.0, "digit", policy="emobipednav_digit_mpc")
+    grid = expert.policy.commands
+    demos = Demonstrations(FrameStore(100))
+    run_episode_collect(world(), expert, None, 1.0, demos, np.random.default_rng(0), grid=grid)
+    shielded, w = make_planner("policy_shield_digit", env_cfg), world()
+    labels, overridden = [], 0
+    while True:
+        obs = w.planner_input()
+        labels.append(command_index(grid, shielded.plan(obs)))
+        overridden += labels[-1] != command_index(grid, shielded.policy.plan(obs))
+        if w.step(grid[labels[-1]])[1] is not None:
+            break
+    assert demos.labels == labels and len(labels) == 12
+    assert overridden > 0
+
+
+def test_a_shield_expert_needs_a_policy_to_shield():
+    from emonav_drake.params import ConfigError
+
+    with pytest.raises(ConfigError, match="expert = shield needs expert_policy"):
+        DaggerConfig(expert="shield").validate()
+    DaggerConfig(expert="shield", init_policy="shipped").validate()
+    with pytest.raises(ConfigError, match="needs the policy it shields"):
+        route_expert(EmoNavConfig(), "shield", 0.0, "digit")
