@@ -8,7 +8,12 @@ import pytest
 from emonav_drake.config_yaml import load_typed_yaml
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.dagger import train_dagger
-from emonav_drake.learning.digit_dagger import DigitRoundsConfig, run_digit_rounds
+from emonav_drake.learning.digit_dagger import (
+    DIGIT_ROUNDS_FORMAT,
+    DigitRoundsConfig,
+    run_digit_rounds,
+)
+from emonav_drake.learning.run_state import read_run_state
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import PolicyPlanner
 from emonav_drake.planners.variants import CONFIG_DIR as ROUTES
@@ -35,12 +40,16 @@ def test_a_tiny_digit_round_writes_a_loadable_policy(tmp_path, route):
     assert prov["route"] == "dagger+digit" and prov["round"] == 0
     assert prov["config"]["expert"] == cfg.expert  # the calibrated run's teacher labels
     assert prov["config"]["expert_clearance"] == cfg.expert_clearance
-    if cfg.expert == "shield":  # the policy it shields: the calibrated run's initial one
-        assert prov["config"]["expert_policy"] == cfg.init_policy
     (entry,) = prov["history"]
     assert entry["episodes"] == 2 and entry["seeds"] == [4_000_000, 4_000_001]
     assert entry["digit_samples"] >= 6  # 3 planner instants (at least) per episode
     assert entry["digit_steps_per_second_per_worker"] > 0
+    if cfg.expert == "shield":  # the policy it shields: the calibrated run's initial one
+        assert prov["config"]["expert_policy"] == cfg.init_policy
+        state, _ = read_run_state(tmp_path / "digit" / "digit_rounds.pt", DIGIT_ROUNDS_FORMAT)
+        targets = state["demos"]["targets"]  # soft labels on Digit too
+        assert len(targets) == entry["digit_samples"]
+        np.testing.assert_allclose(targets.sum(axis=1), 1.0, atol=1e-5)
     assert (tmp_path / "digit" / "digit_rounds.pt").is_file()
     u = planner.act(np.zeros((9, 100, 100), np.uint8), np.array([8.0, 0.0]), np.zeros(2))
     assert 0 <= u[0] <= 0.4 and abs(u[1]) <= 0.2

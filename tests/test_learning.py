@@ -396,3 +396,27 @@ def test_a_shield_expert_needs_a_policy_to_shield():
     DaggerConfig(expert="shield", init_policy="shipped").validate()
     with pytest.raises(ConfigError, match="needs the policy it shields"):
         route_expert(EmoNavConfig(), "shield", 0.0, "digit")
+
+
+def test_soft_labels_of_one_hot_targets_are_the_hard_loss_mirrored_or_not():
+    """`Student.loss_on_stacks` with soft labels: one-hot targets give exactly the hard
+    cross-entropy, with half the batch mirrored (the target columns permuted as the
+    labels are); a spread target gives another loss."""
+    env_cfg = EmoNavConfig()
+    cfg = DaggerConfig(hidden=16, pool=4)
+    student = Student(cfg, env_cfg, DwaPlanner(env_cfg).candidates)
+    rng = np.random.default_rng(5)
+    stacks = (rng.random((6, 9, 100, 100)) < 0.05).astype(np.uint8)
+    states = rng.normal(size=(6, 4)).astype(np.float32)
+    labels = rng.integers(0, 99, 6)
+    mirror = np.array([True, False, True, False, True, False])
+    one_hot = np.eye(99, dtype=np.float32)[labels]
+    with torch.no_grad():
+        hard = student.loss_on_stacks(stacks, states, labels, mirror)
+        soft = student.loss_on_stacks(stacks, states, labels, mirror, one_hot)
+        spread = student.loss_on_stacks(
+            stacks, states, labels, mirror, np.full((6, 99), 1 / 99, np.float32)
+        )
+    assert soft.item() == pytest.approx(hard.item(), rel=1e-6)
+    assert spread.item() != pytest.approx(hard.item(), rel=1e-3)
+    assert (labels == one_hot.argmax(axis=1)).all()  # the inputs were not changed in place

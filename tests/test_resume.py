@@ -417,19 +417,35 @@ def test_dagger_ctrl_c_at_a_random_point_then_resume_is_bit_exact(
         assert np.array_equal(array, demos[key]), key
 
 
-def test_an_mpc_expert_route_stopped_in_its_rollouts_resumes_bit_exact(tmp_path, monkeypatch):
-    """The route of the shipped Digit policy (MPC expert, calibrated world) at tiny scale:
-    one expert round and one DAgger round write a loadable policy; Ctrl-C inside a
-    rollout, then resume, gives the same weights, optimiser, history and demonstrations."""
-    cfg = _dagger_cfg(expert="mpc", response="digit")
+@pytest.mark.parametrize(
+    "expert",
+    [
+        dict(expert="mpc"),
+        dict(expert="shield", expert_policy="emobipednav_digit_mpc", soft_labels=True),
+    ],
+    ids=["mpc", "shield_soft"],
+)
+def test_an_expert_route_stopped_in_its_rollouts_resumes_bit_exact(tmp_path, monkeypatch, expert):
+    """The routes of the shipped Digit policy (MPC expert) and of its distilled successor
+    (the shield's soft labels), calibrated world, at tiny scale: one expert round and one
+    DAgger round write a loadable policy; Ctrl-C inside a rollout, then resume, gives the
+    same weights, optimiser, history and demonstrations (soft labels included)."""
+    cfg = _dagger_cfg(response="digit", **expert)
     reference = tmp_path / "reference"
     calls = []
     with pytest.MonkeyPatch.context() as mp:
         _dagger_hooks(mp, calls)
         policy_path = train_dagger(reference, cfg, _dagger_env())
     _, meta = load_policy(policy_path)
-    assert meta["provenance"]["config"]["expert"] == "mpc"
+    assert meta["provenance"]["config"]["expert"] == expert["expert"]
     expected = _dagger_result(reference)
+    targets = expected[4].get("targets")
+    if cfg.soft_labels:  # a distribution per sample, whose argmax is the hard label
+        assert targets.shape == (len(expected[4]["labels"]), 99)
+        np.testing.assert_allclose(targets.sum(axis=1), 1.0, atol=1e-5)
+        assert (targets.argmax(axis=1) == expected[4]["labels"]).all()
+    else:
+        assert targets is None
     last_rollout_step = max(i for i, c in enumerate(calls) if c == "collect")  # round 1
     run, seen = tmp_path / "run", []
     _dagger_hooks(monkeypatch, seen, at=last_rollout_step)

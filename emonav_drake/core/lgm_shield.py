@@ -199,6 +199,22 @@ def moving_points(
     return moving
 
 
+def shield_distribution(scores: np.ndarray, gaps: np.ndarray, clearance: float) -> np.ndarray:
+    """The shield as a distribution over the candidates (C,): softmax(`scores`) restricted to
+    those whose gap is at least `clearance` [m] and renormalised — its argmax is
+    `shield_choice`'s —, or, when none is admissible, all mass on `shield_choice`'s
+    candidate. A distilled student learns this (`DaggerConfig.soft_labels`)."""
+    s, g = np.asarray(scores, float), np.asarray(gaps, float)
+    ok = g >= clearance
+    if not ok.any():
+        out = np.zeros(len(s))
+        out[shield_choice(s, g, clearance)[0]] = 1.0
+        return out
+    z = np.where(ok, s - s[ok].max(), -np.inf)
+    p = np.exp(z)
+    return p / p.sum()
+
+
 def shield_choice(scores: np.ndarray, gaps: np.ndarray, clearance: float) -> tuple[int, bool]:
     """(index, whether it was admissible): the best-scored candidate whose gap is at least
     `clearance` [m]; if none is, the one with the largest gap (ties: the better score)."""

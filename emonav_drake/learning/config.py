@@ -77,6 +77,10 @@ class DaggerConfig:
     # reads what this route's student reads, behind the LGM shield (`planners/shield.py`,
     # predicting with `response`). Its labels are a function of the student's observation.
     expert_policy: str = ""
+    # Soft labels (expert "shield" only): the student learns the shield's distribution over
+    # the grid (the policy's softmax on the admissible commands) by cross-entropy, not its
+    # argmax alone, so near-ties and the admissible set are both in the label.
+    soft_labels: bool = False
     heading_noise_prob: float = 0.5  # fraction of training episodes starting off course
     heading_noise: float = 1.5  # their initial heading error, uniform in ± this [rad]
     device: str = "cpu"
@@ -91,6 +95,11 @@ class DaggerConfig:
         _choice("expert", self.expert, ("dwa", "mpc", "shield"))
         if self.expert == "shield" and not (self.expert_policy or self.init_policy):
             raise ConfigError("expert = shield needs expert_policy (or init_policy) to shield")
+        if self.soft_labels and self.expert != "shield":
+            raise ConfigError(
+                f"soft_labels needs expert = shield (a distribution over the grid), not "
+                f"{self.expert!r}"
+            )
         return self
 
 

@@ -295,6 +295,7 @@ def _collect(
                     rng,
                     grid=run.student.commands,
                     goal_input=cfg.goal_input,
+                    soft=cfg.soft_labels,
                 )
         except KeyboardInterrupt:
             set_rng_state(rng, *undo[0])

@@ -33,13 +33,15 @@ def run_episode_collect(
     rng: np.random.Generator,
     grid: np.ndarray | None = None,
     goal_input: str = "goal",
+    soft: bool = False,
 ) -> str:
     """One episode; the student acts (expert with probability `beta`); label every state.
 
     `expert` is any planner with `reset()` and `plan(PlannerInput)`; its command is
     labelled as the nearest command of the grid: the student's, else `grid` (N, 2), else
     the expert's own DWA candidates. The student's vector state reads the goal as
-    `goal_input` says (`core/goal_input.py`)."""
+    `goal_input` says (`core/goal_input.py`). With `soft` the expert's distribution over
+    the grid (`last_distribution`, written by its `plan`) is stored as the soft label."""
     n = world.config.lidar.num_frames
     expert.reset()  # a model-aware expert remembers the episode's commands
     obs = world.planner_input()
@@ -64,6 +66,8 @@ def run_episode_collect(
             demos.windows.append(np.asarray(window, np.int64))
             demos.states.append(state)
             demos.labels.append(label)
+            if soft:
+                demos.targets.append(np.asarray(expert.last_distribution, np.float32))
         choice = label if use_expert else student.act(obs.lgm_stack, state)
         _, outcome = world.step(commands[choice])
         if outcome is not None:

@@ -53,7 +53,8 @@ def read_dagger_state(path: str | Path) -> tuple[DaggerConfig, dict, dict]:
             missing = [f"demos.{k}" for k in DEMO_KEYS if k not in saved["demos"]]
         if missing:
             raise ValueError(f"no {', '.join(missing)} in it")
-        bad = [k for k in DEMO_KEYS if not isinstance(saved["demos"][k], np.ndarray)]
+        keys = (*DEMO_KEYS, *(("targets",) if "targets" in saved["demos"] else ()))
+        bad = [k for k in keys if not isinstance(saved["demos"][k], np.ndarray)]
         if bad:
             raise ValueError(f"demos.{bad[0]} is not an array")
         for key in ("model", "optim"):

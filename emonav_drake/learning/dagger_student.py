@@ -93,9 +93,11 @@ class Student:
         states: np.ndarray,
         labels: np.ndarray,
         mirror: np.ndarray | None = None,
+        targets: np.ndarray | None = None,
     ) -> torch.Tensor:
-        """Cross-entropy on a batch; rows where `mirror` is True are mirrored left↔right."""
-        return self.loss_on_stacks(frames[windows], states, labels, mirror)
+        """Cross-entropy on a batch — on the hard `labels`, or on the soft labels `targets`
+        (B, C) when given; rows where `mirror` is True are mirrored left↔right."""
+        return self.loss_on_stacks(frames[windows], states, labels, mirror, targets)
 
     def loss_on_stacks(
         self,
@@ -103,6 +105,7 @@ class Student:
         states: np.ndarray,
         labels: np.ndarray,
         mirror: np.ndarray | None = None,
+        targets: np.ndarray | None = None,
     ) -> torch.Tensor:
         """`loss` on gathered observation stacks (B, …)."""
         if mirror is not None and mirror.any():
@@ -111,8 +114,14 @@ class Student:
             states[mirror, 1] *= -1.0  # goal bearing
             states[mirror, 3] *= -1.0  # last heading change
             labels[mirror] = self.mirrored[labels[mirror]]
+            if targets is not None:  # the mirror of command i is command mirrored[i]
+                targets = targets.copy()
+                targets[mirror] = targets[mirror][:, self.mirrored]
         obs = torch.from_numpy(np.ascontiguousarray(stacks)).to(self.device)
         logits = self.model(obs, torch.from_numpy(states).to(self.device))
+        if targets is not None:
+            t = torch.from_numpy(np.ascontiguousarray(targets)).to(self.device)
+            return -(t * F.log_softmax(logits, dim=1)).sum(dim=1).mean()
         return F.cross_entropy(logits, torch.from_numpy(labels).to(self.device))
 
     def train(
@@ -137,6 +146,7 @@ class Student:
         """Updates `done`..`steps` − 1, appending each loss to `losses`; `stop()` is asked
         after every update and ends the loop early. Returns the updates done in all."""
         windows, states, labels = demos.arrays()
+        targets = demos.target_array()
         frames = demos.store.frames
         self.model.train()
         bar = tqdm(
@@ -145,7 +155,8 @@ class Student:
         for _ in bar:
             idx = rng.integers(0, len(labels), batch)
             mirror = rng.random(batch) < 0.5 if self.mirror_augment else None
-            loss = self.loss(frames, windows[idx], states[idx], labels[idx], mirror)
+            soft = targets[idx] if targets is not None else None
+            loss = self.loss(frames, windows[idx], states[idx], labels[idx], mirror, soft)
             self.optim.zero_grad(set_to_none=True)
             loss.backward()
             self.optim.step()

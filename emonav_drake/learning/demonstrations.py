@@ -3,10 +3,11 @@
 A sample is a window of N indices into a `FrameStore` (a 9-frame stack of 90 KB would
 not fit in memory for every sample; a 10 KB frame stored once does), the vector state
 (`planners.policy.vector_state`) and the expert's label: the index of its command in
-the expert's command grid (`command_index`). `Demonstrations` aggregates them over the
-rounds of the CPU route (`learning/dagger.py`) and of the Digit rounds
-(`learning/digit_dagger.py`), and converts them to plain arrays for a run's state file
-and back.
+the expert's command grid (`command_index`), and — when the expert is a distribution over
+that grid (the LGM shield, `DaggerConfig.soft_labels`) — that distribution, the soft
+label. `Demonstrations` aggregates them over the rounds of the CPU route
+(`learning/dagger.py`) and of the Digit rounds (`learning/digit_dagger.py`), and converts
+them to plain arrays for a run's state file and back.
 """
 
 from __future__ import annotations
@@ -50,9 +51,20 @@ class Demonstrations:
     windows: list[np.ndarray] = dc.field(default_factory=list)  # (N,) frame indices
     states: list[np.ndarray] = dc.field(default_factory=list)  # (4,) vector state
     labels: list[int] = dc.field(default_factory=list)  # expert's command index
+    # the expert's distribution over the grid (C,) per sample; empty for hard labels
+    targets: list[np.ndarray] = dc.field(default_factory=list)
 
     def __len__(self) -> int:
         return len(self.labels)
+
+    @property
+    def soft(self) -> bool:
+        """Whether every sample has a soft label (and there is at least one)."""
+        return bool(self.targets) and len(self.targets) == len(self.labels)
+
+    def target_array(self) -> np.ndarray | None:
+        """The soft labels (n, C) float32, or None for hard labels."""
+        return np.asarray(self.targets, np.float32) if self.soft else None
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return (
@@ -64,17 +76,21 @@ class Demonstrations:
     def truncate(self, samples: int, frames: int) -> None:
         """Back to `samples` samples and `frames` stored frames (undo a partial episode)."""
         del self.windows[samples:], self.states[samples:], self.labels[samples:]
+        del self.targets[samples:]
         self.store.count = frames
 
     def to_plain(self, num_frames: int) -> dict:
         """Frames, windows, vector states and labels as arrays (plain data)."""
         n = len(self)
-        return {
+        plain = {
             "frames": self.store.frames[: self.store.count].copy(),
             "windows": np.asarray(self.windows, np.int64).reshape(n, num_frames),
             "states": np.asarray(self.states, np.float32).reshape(n, 4),
             "labels": np.asarray(self.labels, np.int64).reshape(n),
         }
+        if self.targets:
+            plain["targets"] = np.asarray(self.targets, np.float32)
+        return plain
 
     def load_plain(self, d: dict, num_frames: int) -> None:
         """Inverse of `to_plain` (`ValueError` if the arrays are inconsistent)."""
@@ -91,6 +107,7 @@ class Demonstrations:
             or labels.dtype != np.int64
             or labels.shape != (n,)
             or (n and not ((windows >= 0) & (windows < len(frames))).all())
+            or ("targets" in d and (d["targets"].dtype != np.float32 or len(d["targets"]) != n))
         ):
             raise ValueError("the saved demonstrations are inconsistent or of another size")
         self.store.frames = frames.copy() if len(frames) else self.store.frames
@@ -98,6 +115,7 @@ class Demonstrations:
         self.windows = list(windows)
         self.states = list(states)
         self.labels = labels.tolist()
+        self.targets = list(d["targets"]) if "targets" in d else []
 
 
 def command_index(commands: np.ndarray, command: np.ndarray) -> int:

@@ -50,8 +50,9 @@ class LabellingPlanner:
 
     Records, as a side effect, one sample per planner instant (the diagram calls
     `plan_with_memory` exactly once per instant, in order): `frames` (the newest frame of
-    the observation stack), `states` (the vector state) and `labels` (the expert's
-    command index). Its memory is the expert's.
+    the observation stack), `states` (the vector state), `labels` (the expert's
+    command index) and, for an expert that is a distribution over the grid (the LGM
+    shield's `last_distribution`), `targets`. Its memory is the expert's.
     """
 
     name = "labelling"
@@ -65,6 +66,7 @@ class LabellingPlanner:
         self.frames: list[np.ndarray] = []
         self.states: list[np.ndarray] = []
         self.labels: list[int] = []
+        self.targets: list[np.ndarray] = []
 
     def initial_memory(self):
         return self.expert.initial_memory()
@@ -79,6 +81,8 @@ class LabellingPlanner:
             vector_state(self.student.goal_state(obs), obs.last_command, self.student.bounds)
         )
         self.labels.append(label)
+        if getattr(self.expert, "last_distribution", None) is not None:
+            self.targets.append(np.asarray(self.expert.last_distribution, np.float32))
         rng = np.random.default_rng([ACT_SALT, self.seed, obs.step])
         if rng.random() < self.beta:
             return self.commands[label].copy(), memory
@@ -132,6 +136,9 @@ def _labelled_episode(
         "frames": np.asarray(planner.frames),
         "states": np.asarray(planner.states, np.float32).reshape(-1, 4),
         "labels": np.asarray(planner.labels, np.int64),
+        "targets": np.asarray(planner.targets, np.float32).reshape(
+            len(planner.targets), len(planner.commands)
+        ),
     }
 
 
@@ -223,8 +230,9 @@ def collect_round(
     return sorted(results, key=lambda r: r["seed"])
 
 
-def episodes_to_demos(episodes: list[dict], demos, num_frames: int) -> None:
-    """Append labelled episodes to `Demonstrations` (windows as the LIP route builds them)."""
+def episodes_to_demos(episodes: list[dict], demos, num_frames: int, soft: bool = False) -> None:
+    """Append labelled episodes to `Demonstrations` (windows as the LIP route builds them);
+    with `soft`, their soft labels too."""
     for ep in episodes:
         ids = [demos.store.add(f) for f in ep["frames"]]
         for k in range(len(ids)):
@@ -232,6 +240,8 @@ def episodes_to_demos(episodes: list[dict], demos, num_frames: int) -> None:
             demos.windows.append(np.asarray(window, np.int64))
             demos.states.append(ep["states"][k])
             demos.labels.append(int(ep["labels"][k]))
+            if soft:
+                demos.targets.append(ep["targets"][k])
 
 
 def run_digit_rounds(
@@ -279,7 +289,7 @@ def run_digit_rounds(
         t0 = time.perf_counter()
         episodes = collect_round(policy, cfg, rnd, workers, ray_address, env_config)
         collect_s = time.perf_counter() - t0
-        episodes_to_demos(episodes, digit, n)
+        episodes_to_demos(episodes, digit, n, soft=calibrated.soft)
         t0 = time.perf_counter()
         losses = _train_mixed(student, calibrated, digit, cfg, rng)
         train_s = time.perf_counter() - t0
@@ -432,6 +442,10 @@ def _train_mixed(student, calibrated, digit, cfg: DigitRoundsConfig, rng) -> lis
         raise ConfigError("no Digit samples collected")
     cw, cs, cl = calibrated.arrays()
     dw, ds, dl = digit.arrays()
+    # soft labels where the calibrated run learnt them (its expert is then the shield's,
+    # which gives them on Digit too)
+    soft = calibrated.soft and digit.soft
+    ct, dt = calibrated.target_array(), digit.target_array()
     n_digit = max(1, round(cfg.digit_fraction * cfg.batch_size))
     n_cal = cfg.batch_size - n_digit
     losses = []
@@ -442,8 +456,9 @@ def _train_mixed(student, calibrated, digit, cfg: DigitRoundsConfig, rng) -> lis
         stacks = np.concatenate([digit.store.frames[dw[i]], calibrated.store.frames[cw[j]]])
         states = np.concatenate([ds[i], cs[j]])
         labels = np.concatenate([dl[i], cl[j]])
+        targets = np.concatenate([dt[i], ct[j]]) if soft else None
         mirror = rng.random(len(labels)) < 0.5 if student.mirror_augment else None
-        loss = student.loss_on_stacks(stacks, states, labels, mirror)
+        loss = student.loss_on_stacks(stacks, states, labels, mirror, targets)
         student.optim.zero_grad(set_to_none=True)
         loss.backward()
         student.optim.step()

@@ -24,6 +24,7 @@ from emonav_drake.core.lgm_shield import (
     moving_points,
     path_gaps,
     shield_choice,
+    shield_distribution,
     to_world,
 )
 from emonav_drake.core.lip import LipState, lip_rollout
@@ -72,7 +73,8 @@ class ShieldedPolicy:
     `last_admissible` says whether the last command passed the shield (False: no command
     did, and the one keeping the largest gap was walked); it is a diagnostic written by
     every planning step and never read back, so the command stays a function of
-    (input, memory) alone.
+    (input, memory) alone. `last_distribution` (C,), written with it, is the shield as a
+    distribution over the commands (`shield_distribution`): a distilling route's soft label.
     """
 
     name = "policy_shield"
@@ -95,6 +97,7 @@ class ShieldedPolicy:
         self.params = params if params is not None else ShieldParams()
         self.plans = brake_plans(policy.commands, self.params.brake_steps)
         self.last_admissible = True
+        self.last_distribution: np.ndarray | None = None
         self._memory = self.initial_memory()
 
     # What the diagram's map builder must produce: the policy's observation.
@@ -196,7 +199,9 @@ class ShieldedPolicy:
         paths = self.predicted_paths(obs, memory)
         velocities, times = self.point_velocities(world, moving, pose, memory, paths.shape[1])
         gaps = path_gaps(paths, points, margins, velocities, times)
-        best, self.last_admissible = shield_choice(scores, gaps, self.config.robot.radius)
+        clearance = self.config.robot.radius
+        best, self.last_admissible = shield_choice(scores, gaps, clearance)
+        self.last_distribution = shield_distribution(scores, gaps, clearance)
         command = self.policy.commands[best].copy()
         sent = None if self.response is None else ResponseMemory.after(obs)
         return command, ShieldMemory(sent, world)
