@@ -18,14 +18,18 @@ planner name of `emonav sim|eval|benchmark` (`--planner NAME`, `--planners NAME,
 | `drlvo` | DRL-VO* | scan OGM + pedestrian velocity maps (1 image) |
 | `emobipednav_digit` | EmoBipedNav, Digit/Digit | 9 LGMs; trained with Digit's dynamics |
 | `emobipednav_digit_mpc` | EmoBipedNav, Digit/Digit | the same, the MPC as teacher (`policy`) |
+| `emobipednav_distilled` | (ours) | the same, its own LGM shield distilled in |
 | `emobipednav_guide` | (ours) | the same route; goal bearing of a guide sub-goal |
 | `emobipednav_dd02` | Table III, DD 0.2 m | the same route, trained with 0.2 m for every emotion |
 | `emobipednav_dd05` | Table III, DD 0.5 m | the same route, trained with 0.5 m for every emotion |
 
 `emobipednav_digit` and `emobipednav_digit_mpc` differ by their training world, not its
 observation: the LIP-trained policy fine-tuned in the Digit-calibrated reduced world
-(`core/step_response.py`, `learning/calibration.py`). `emobipednav_digit_mpc` is also the
-default `--planner policy`. `emobipednav_guide` is its route with `goal_input: guide`
+(`core/step_response.py`, `learning/calibration.py`). `emobipednav_distilled` continues
+`emobipednav_digit_mpc` with that policy behind its LGM shield as the teacher (soft labels;
+the same observation). `emobipednav_digit_mpc` is the default `--planner policy`.
+`emobipednav_guide` is the
+MPC route with `goal_input: guide`
 (`core/goal_input.py`): a deviation from the paper's observation, measured against it.
 `emobipednav_dd02` and `emobipednav_dd05` are its route trained in the constant settings
 `no_emotion` and `constant_0.5` (`DaggerConfig.setting`), Table III's first two rows.
@@ -100,6 +104,13 @@ VARIANTS: dict[str, PolicyVariant] = {
             "EmoBipedNav (Digit/Digit, MPC teacher)",
             "9 LiDAR grid maps; trained with Digit's step response, labelled by the MPC",
             "policies/emobipednav_digit_mpc.pt",
+            route="digit",
+        ),
+        PolicyVariant(
+            "emobipednav_distilled",
+            "EmoBipedNav (Digit/Digit), its LGM shield distilled in (not in the paper)",
+            "9 LiDAR grid maps; trained with Digit's step response, labelled by its shield",
+            "policies/emobipednav_distilled.pt",
             route="digit",
         ),
         PolicyVariant(
