@@ -69,6 +69,9 @@ def main() -> None:
         old, new = _successes(run, old_method), _successes(args.new, new_method)
         seeds = sorted(set(old) & set(new))
         n = len(seeds)
+        if not n:  # not in the old run (give --map NEW=OLD), or no seed in common
+            print(f"| {label} | none in common with {run}:{old_method} | | | | |")
+            continue
         k_old, k_new = sum(old[s] for s in seeds), sum(new[s] for s in seeds)
         b = sum(old[s] and not new[s] for s in seeds)
         c = sum(new[s] and not old[s] for s in seeds)
