@@ -13,6 +13,9 @@ interval — every DAgger round (`history.json` of `emonav train --algo dagger`)
 evaluation of the SAC fine-tuning (`history.json` of `emonav train --algo finetune`). A
 dashed line marks a reference measured on the same seeds (e.g. the teacher).
 
+`--dagger LABEL=HISTORY` again adds another route on the same seeds (e.g. the same route
+with hard and with soft labels), unlabelled, in the next colour.
+
 `--digit-rounds HISTORY=RUN` adds the Digit rounds that continue the kept round (`emonav
 digit-rounds`; HISTORY: a JSON with their `rounds`, as benchmarks/results/
 guide_digit_rounds/digit_rounds_history.json) measured on the full-order Digit: RUN is
@@ -89,7 +92,14 @@ def _digit_rounds(spec: str, start_method: str, start: float) -> tuple:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--dagger", type=Path, required=True)
+    ap.add_argument(
+        "--dagger",
+        action="append",
+        required=True,
+        metavar="[LABEL=]HISTORY",
+        help="a DAgger run's history.json; the first is the route the other stages continue, "
+        "more are routes compared with it on the same seeds (repeatable)",
+    )
     ap.add_argument(
         "--finetune",
         action="append",
@@ -109,9 +119,16 @@ def main() -> None:
     ap.add_argument("--png", type=Path, required=True)
     args = ap.parse_args()
 
-    fig, ax = plt.subplots(figsize=(7.5, 4.0), dpi=150)
+    compared = len(args.dagger) > 1  # routes side by side: references and names below
+    fig, ax = plt.subplots(figsize=(7.5, 4.8 if compared else 4.0), dpi=150)
     world = f", calibrated world ({args.n} seeds)" if args.digit_rounds else ""
-    stages = [(f"DAgger rounds (MPC teacher){world}", _dagger(args.dagger))]
+    stages = []
+    for spec in args.dagger:
+        label, sep, path = spec.rpartition("=")
+        name = label if sep else f"DAgger rounds (MPC teacher){world}"
+        xs, sr, labels = _dagger(Path(path))
+        stages.append((name, (xs, sr, labels if not stages else [""] * len(labels))))
+    n_dagger = len(stages)
     for i, spec in enumerate(args.finetune):
         label, sep, path = spec.rpartition("=")
         name = label if sep else "SAC fine-tuning from the kept round"
@@ -121,12 +138,15 @@ def main() -> None:
             labels = [""] * len(labels)  # one run's step labels are enough
         stages.append((name, (xs, sr, labels)))
     colours = [palette.METHOD_RGB["policy"], *palette.METHOD_CYCLE[1:]]
-    offsets = [7] + [-13] * len(args.finetune)  # labels above DAgger, below fine-tuning
+    # round labels above the first route's points, below fine-tuning's; the others unlabelled
+    offsets = [7] * n_dagger + [-13] * len(args.finetune)
     for (name, (xs, sr, labels)), colour, dy in zip(stages, colours, offsets, strict=False):
         lo_hi = [wilson_interval(round(s * args.n), args.n) for s in sr]
         err = [[s - lo for s, (lo, _) in zip(sr, lo_hi, strict=True)],
                [hi - s for s, (_, hi) in zip(sr, lo_hi, strict=True)]]  # fmt: skip
-        ax.errorbar(xs, sr, yerr=err, fmt="o-", color=colour, capsize=3, label=name)
+        # with routes compared, the first route's points over the others'
+        z = {"zorder": 3 if name == stages[0][0] else 2} if compared else {}
+        ax.errorbar(xs, sr, yerr=err, fmt="o-", color=colour, capsize=3, label=name, **z)
         for x, s, label in zip(xs, sr, labels, strict=True):
             ax.annotate(label, (x, s), textcoords="offset points", xytext=(0, dy), fontsize=7,
                         ha="center", color=palette.TEXT_RGB)  # fmt: skip
@@ -141,8 +161,12 @@ def main() -> None:
         for x, s, label in zip(xs, sr, labels, strict=True):
             ax.annotate(label, (x, s), textcoords="offset points", xytext=(12, -3), fontsize=7,
                         ha="left", color=palette.TEXT_RGB)  # fmt: skip
-    for spec in args.teacher:
+    for i, spec in enumerate(args.teacher):
         label, _, value = spec.partition("=")
+        if compared:  # in the legend: on the plot the names would cover the first points
+            ax.axhline(float(value), ls=("--", ":", "-.")[i % 3], color=palette.INK_RGB, lw=1,
+                       label=f"{label}: {float(value):.3f}")  # fmt: skip
+            continue
         ax.axhline(float(value), ls="--", color=palette.INK_RGB, lw=1)
         ax.annotate(f"{label}: {float(value):.3f}", (0.01, float(value)), xycoords=("axes fraction",
                     "data"), xytext=(0, 4), textcoords="offset points", fontsize=8)  # fmt: skip
@@ -157,7 +181,10 @@ def main() -> None:
     if args.digit_rounds:  # room under the points for a legend that hides none of them
         lo, hi = ax.get_ylim()
         ax.set_ylim(lo - 0.35 * (hi - lo), hi)
-    ax.legend(loc="lower right", fontsize=8)
+    if compared:
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, fontsize=7)
+    else:
+        ax.legend(loc="lower right", fontsize=8)
     fig.tight_layout()
     args.png.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(args.png)
