@@ -113,6 +113,9 @@ def main() -> None:
         help="the Digit rounds after the kept round, measured on Digit (see the docstring)",
     )
     ap.add_argument("--start", default="policy", help="RUN's method that is the kept round")
+    ap.add_argument(
+        "--start-label", default="kept", help="its label, e.g. 'kept = r1' if not the last round"
+    )
     ap.add_argument("--teacher", action="append", default=[], help="LABEL=SR on the same seeds")
     ap.add_argument("--n", type=int, default=200, help="selection episodes per point")
     ap.add_argument("--title", default="Digit/Digit route in the calibrated world")
@@ -152,6 +155,7 @@ def main() -> None:
                         ha="center", color=palette.TEXT_RGB)  # fmt: skip
     if args.digit_rounds:
         xs, sr, n, labels = _digit_rounds(args.digit_rounds, args.start, stages[0][1][0][-1])
+        labels[0] = args.start_label
         lo_hi = [wilson_interval(round(s * k), k) for s, k in zip(sr, n, strict=True)]
         err = [[s - lo for s, (lo, _) in zip(sr, lo_hi, strict=True)],
                [hi - s for s, (_, hi) in zip(sr, lo_hi, strict=True)]]  # fmt: skip
@@ -181,6 +185,8 @@ def main() -> None:
     if args.digit_rounds:  # room under the points for a legend that hides none of them
         lo, hi = ax.get_ylim()
         ax.set_ylim(lo - 0.35 * (hi - lo), hi)
+        left, right = ax.get_xlim()  # and right of the last round for its label
+        ax.set_xlim(left, right + 0.04 * (right - left))
     if compared:
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=2, fontsize=7)
     else:
