@@ -395,7 +395,9 @@ def test_methods_are_named_and_coloured_as_in_every_figure():
     assert palette.method_label("sac", lip_trained) == "emobipednav"
     assert palette.method_label("policy", lip_trained) == "emobipednav"  # the default then
     assert palette.method_label("sac", "runs/sac/actor.pt") == "sac"  # a SAC-trained actor
-    default = "/x/emonav_drake/data/policies/emobipednav_digit_mpc.pt"
+    former = "/x/emonav_drake/data/policies/emobipednav_digit_mpc.pt"
+    assert palette.method_label("policy", former) == "emobipednav_digit_mpc"  # the default then
+    default = "/x/emonav_drake/data/policies/emobipednav_distilled_digit.pt"
     assert palette.method_label("policy", default) == "policy"  # today's default
     assert palette.method_label("policy") == "policy"
     assert palette.method_label("dwa") == "dwa"

@@ -179,14 +179,16 @@ def test_shielded_planners_run_a_seeded_episode_on_both_plants(sim_on_both_plant
     assert (planner.initial_memory().response is None) == (not name.endswith("_digit"))
 
 
-def test_the_shield_turns_a_collision_of_the_default_policy_into_a_success():
-    """Tuning seed 700 075 in the LIP world (docs/shield.md): the default policy walks into
-    a pedestrian; behind the shield, with nothing else changed, it reaches the goal and
-    at least one of its steps was the shield's choice, not the policy's."""
+def test_the_shield_turns_a_collision_of_the_mpc_routes_policy_into_a_success():
+    """Tuning seed 700 075 in the LIP world (docs/shield.md): the MPC route's student (the
+    default policy when the shield was tuned; `policy_shield`'s default) walks into a
+    pedestrian; behind the shield, with nothing else changed, it reaches the goal and at
+    least one of its steps was the shield's choice, not the policy's."""
     cfg0 = EmoNavConfig()
     outcomes, overridden = {}, 0
+    student = shipped_checkpoint("emobipednav_digit_mpc")
     for name in ("policy", "policy_shield"):
-        planner = make_planner(name, cfg0)
+        planner = make_planner(name, cfg0, student)
         cfg, _ = configure_for(planner, cfg0)
         world = NavigationWorld(
             sample_scenario(700_075, cfg), cfg, goal_radius=EpisodeParams.eval_goal_radius

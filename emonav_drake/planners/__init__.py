@@ -109,7 +109,8 @@ def _shielded(name: str, response: str, config: EmoNavConfig, checkpoint, device
 # The LGM shield (`planners/shield.py`) in front of a policy: NAME predicts with the LIP,
 # NAME_digit with Digit's fitted step response (as dwa / dwa_digit).
 SHIELDED = {
-    "policy_shield": ("policy", "a categorical policy (default: the shipped one)"),
+    # measured and tuned on the MPC route's student (the default policy then)
+    "policy_shield": ("emobipednav_digit_mpc", "a categorical policy (default: the MPC route's)"),
     "guide_shield": ("emobipednav_guide", "the guide-sub-goal policy"),
     "emobipednav_shield": ("emobipednav", "the LIP-trained policy"),
 }

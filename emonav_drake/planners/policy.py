@@ -49,10 +49,10 @@ FORMAT = "emonav-policy/1"
 _DATA = Path(__file__).resolve().parent.parent / "data"
 # The LIP-trained student (LIP/·; variant `emobipednav`; "shipped" as a route's init_policy).
 LIP_POLICY = _DATA / "policy_lgm.pt"
-# What `--planner policy` runs without a --checkpoint: the best learned policy measured on
-# both plants, the MPC-teacher student of the Digit route (variant `emobipednav_digit_mpc`;
-# data/README.md says why and with which numbers).
-DEFAULT_POLICY = _DATA / "policies" / "emobipednav_digit_mpc.pt"
+# What `--planner policy` runs without a --checkpoint: the distilled route's Digit round 2
+# (the MPC route's student, `emobipednav_digit_mpc`, distilled with its LGM shield in the
+# calibrated world and then on Digit; data/README.md says why and with which numbers).
+DEFAULT_POLICY = _DATA / "policies" / "emobipednav_distilled_digit.pt"
 
 
 class PolicyError(ValueError):

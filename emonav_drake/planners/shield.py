@@ -1,7 +1,8 @@
 """A categorical policy behind the LGM safety shield (`core/lgm_shield.py`).
 
-`--planner policy_shield` runs a policy checkpoint (by default the shipped policy) and
-walks, of its 99 grid commands, the best-scored one after which the robot can still stop
+`--planner policy_shield` runs a policy checkpoint (by default the MPC route's student,
+`emobipednav_digit_mpc`, on which it was tuned and measured) and walks, of its 99 grid
+commands, the best-scored one after which the robot can still stop
 clear of every LiDAR hit of its newest LGM frame, predicting with the LIP of Eq. 1.
 `policy_shield_digit` predicts with the full-order Digit's fitted step response instead
 (it remembers u_{k−2} and the previous pose, as `dwa_digit` does). Neither is the paper's

@@ -17,7 +17,7 @@ planner name of `emonav sim|eval|benchmark` (`--planner NAME`, `--planners NAME,
 | `lndnl` | LNDNL | 9 raw scans, LSTM |
 | `drlvo` | DRL-VO* | scan OGM + pedestrian velocity maps (1 image) |
 | `emobipednav_digit` | EmoBipedNav, Digit/Digit | 9 LGMs; trained with Digit's dynamics |
-| `emobipednav_digit_mpc` | EmoBipedNav, Digit/Digit | the same, the MPC as teacher (`policy`) |
+| `emobipednav_digit_mpc` | EmoBipedNav, Digit/Digit | the same, the MPC as teacher |
 | `emobipednav_distilled` | (ours) | the same, its own LGM shield distilled in |
 | `emobipednav_guide` | (ours) | the same route; goal bearing of a guide sub-goal |
 | `emobipednav_dd02` | Table III, DD 0.2 m | the same route, trained with 0.2 m for every emotion |
@@ -27,7 +27,8 @@ planner name of `emonav sim|eval|benchmark` (`--planner NAME`, `--planners NAME,
 observation: the LIP-trained policy fine-tuned in the Digit-calibrated reduced world
 (`core/step_response.py`, `learning/calibration.py`). `emobipednav_distilled` continues
 `emobipednav_digit_mpc` with that policy behind its LGM shield as the teacher (soft labels;
-the same observation). `emobipednav_digit_mpc` is the default `--planner policy`.
+the same observation); its Digit rounds' round 2 (`emonav digit-rounds`, not a variant:
+`data/policies/emobipednav_distilled_digit.pt`) is the default `--planner policy`.
 `emobipednav_guide` is the
 MPC route with `goal_input: guide`
 (`core/goal_input.py`): a deviation from the paper's observation, measured against it.
