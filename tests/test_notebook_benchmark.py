@@ -9,7 +9,7 @@ def test_benchmark_notebook_runs_in_short_mode(monkeypatch):
     assert "6 trials of dwa, policy on lip" in outputs
     assert "## Table II" in outputs and "(n=3)" in outputs and "McNemar" in outputs
     # a success and a failure, re-simulated to the recorded outcome
-    assert "re-simulated policy seed 71: success, as recorded" in outputs
-    assert "re-simulated policy seed 72: collision, as recorded" in outputs
+    assert "re-simulated policy seed 12: success, as recorded" in outputs
+    assert "re-simulated policy seed 13: timeout, as recorded" in outputs
     images = [o for c in cells for o in c.get("outputs", []) if "image/png" in o.get("data", {})]
     assert len(images) == 2  # the bar charts and the trajectories
