@@ -264,8 +264,11 @@ def run_serial(
     spec: BenchmarkSpec,
     tasks: Sequence[tuple[str, int]],
     on_result: Callable[[dict], None],
+    episode: Callable[[TrialRunner, str, int], dict] | None = None,
 ) -> None:
-    """Every (method, seed) task in this process, in order, with a Ray worker's arithmetic."""
+    """Every (method, seed) task in this process, in order, with a Ray worker's arithmetic:
+    `episode(runner, method, seed)` (default `runner.run`, as `TrialWorker.run`; a worker
+    class of `run_trials` that runs something else passes the same function here)."""
     import torch
 
     threads = torch.get_num_threads()
@@ -273,7 +276,10 @@ def run_serial(
     try:
         runner = TrialRunner(spec)
         for method, seed in tasks:
-            on_result(runner.run(method, seed))
+            if episode is None:
+                on_result(runner.run(method, seed))
+            else:
+                on_result(episode(runner, method, seed))
     finally:
         torch.set_num_threads(threads)
 

@@ -89,17 +89,13 @@ class LabellingPlanner:
         return self.student.plan(obs), memory
 
 
-def _round_worker(
-    beta: float, expert_margin: float, expert: str, clearance: float, expert_policy: str
-) -> type:
+def _round_worker(beta: float, rounds: DigitRoundsConfig) -> type:
     """The Ray actor class of `collect_round`: one labelled Digit episode per task."""
     from emonav_drake.diagrams.trials import TrialWorker
 
     class RoundWorker(TrialWorker):
         def run(self, method: str, seed: int) -> dict:
-            return _labelled_episode(
-                self.runner, method, seed, beta, expert_margin, expert, clearance, expert_policy
-            )
+            return _labelled_episode(self.runner, method, seed, beta, rounds)
 
     return RoundWorker
 
@@ -109,20 +105,20 @@ def _labelled_episode(
     method: str,
     seed: int,
     beta: float,
-    margin: float,
-    expert_kind: str = "dwa",
-    clearance: float = 0.0,
-    expert_policy: str = "",
+    rounds: DigitRoundsConfig,
 ) -> dict:
-    """One Digit episode of the student (`runner`'s method) labelled by the expert
-    (`expert_kind`: "dwa", the model-aware DWA with `margin`, "mpc" with the extra
-    `clearance`, or "shield": `expert_policy` behind the LGM shield)."""
+    """One Digit episode of the student (`runner`'s method) labelled by the expert of
+    `rounds` (`expert`: "dwa", the model-aware DWA with `expert_margin`, "mpc" with the
+    extra `expert_clearance`, or "shield": `expert_policy` behind the LGM shield)."""
     from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
     from emonav_drake.planners.model_aware import route_expert
 
     student, cfg, grid_kind = runner.planner(method)
-    expert = route_expert(cfg, expert_kind, margin, "digit", clearance, expert_policy)
+    r = rounds
+    expert = route_expert(
+        cfg, r.expert, r.expert_margin, "digit", r.expert_clearance, r.expert_policy
+    )
     planner = LabellingPlanner(student, expert, beta, seed)
     t0 = time.perf_counter()
     record = run_digit_episode(
@@ -207,7 +203,7 @@ def collect_round(
     env_config=None,
 ) -> list[dict]:
     """The labelled Digit episodes of round `rnd`, sorted by seed (serial = parallel)."""
-    from emonav_drake.diagrams.trials import BenchmarkSpec, MethodSpec, TrialRunner, run_trials
+    from emonav_drake.diagrams.trials import BenchmarkSpec, MethodSpec, run_serial, run_trials
     from emonav_drake.params import EmoNavConfig, dump_config
     from emonav_drake.provenance import sha256_file
 
@@ -217,15 +213,17 @@ def collect_round(
         dump_config(env_config or EmoNavConfig()),
     )
     beta = cfg.beta * 0.5**rnd
-    teacher = (cfg.expert_margin, cfg.expert, cfg.expert_clearance, cfg.expert_policy)
-    worker_cls = _round_worker(beta, *teacher)
     first = cfg.first_seed + rnd * cfg.episodes
     tasks = [("student", first + i) for i in range(cfg.episodes)]
     results: list[dict] = []
-    if workers <= 1 and ray_address is None:
-        runner = TrialRunner(spec)
-        results = [_labelled_episode(runner, m, s, beta, *teacher) for m, s in tasks]
+    if workers <= 1 and ray_address is None:  # one torch thread, as in a Ray worker
+
+        def episode(runner, method: str, seed: int) -> dict:
+            return _labelled_episode(runner, method, seed, beta, cfg)
+
+        run_serial(spec, tasks, results.append, episode)
     else:
+        worker_cls = _round_worker(beta, cfg)
         run_trials(spec, tasks, results.append, workers, ray_address, worker_cls=worker_cls)
     return sorted(results, key=lambda r: r["seed"])
 
