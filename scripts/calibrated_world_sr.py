@@ -10,8 +10,9 @@ Digit/Digit routes train in, `docs/learning.md`) on the seeds first-seed … fir
 episodes − 1, from the default configuration, the evaluation goal radius. `--grid` rounds
 every command to the nearest of the DAgger student's command grid (what a student that
 imitated the planner perfectly would do). Learned planners run their default checkpoint
-on the observation it reads; `--shield-margin`, `--brake-steps`, `--static-margin`,
-`--uniform` and `--predict-motion` set the LGM shield's parameters of the shielded ones
+(`--checkpoint NAME=PATH`: another policy file) on the observation it reads;
+`--shield-margin`, `--brake-steps`, `--static-margin`, `--uniform`, `--predict-motion`
+and `--comfort-weight` set the LGM shield's parameters of the shielded ones
 (`core/lgm_shield.py`), whose line also counts the steps where no command passed the
 shield. Prints SR, collision and timeout counts, NT and DT per planner, and the failing
 seeds. Use tuning seeds (e.g. 700 000+), never the evaluation seeds 0–499.
@@ -46,14 +47,25 @@ def main() -> None:
         "--uniform", action="store_true", help="shielded planners: --shield-margin for all points"
     )
     ap.add_argument(
+        "--comfort-weight", type=float, help="shielded planners: score off per m into still zones"
+    )
+    ap.add_argument(
+        "--checkpoint",
+        action="append",
+        default=[],
+        metavar="NAME=PATH",
+        help="a learned planner's policy file (repeatable)",
+    )
+    ap.add_argument(
         "--predict-motion", action="store_true", help="shielded planners: bodies at their velocity"
     )
     args = ap.parse_args()
     cfg0 = EmoNavConfig()
     response = load_response(args.response)
     grid = DwaPlanner(cfg0).candidates
+    checkpoints = dict(c.split("=", 1) for c in args.checkpoint)
     for name in args.planners.split(","):
-        planner, records, blocked = make_planner(name, cfg0), [], 0
+        planner, records, blocked = make_planner(name, cfg0, checkpoints.get(name)), [], 0
         cfg = configure_for(planner, cfg0)[0]
         shielded = hasattr(planner, "last_admissible")
         if shielded:
@@ -61,6 +73,7 @@ def main() -> None:
                 "margin": args.shield_margin,
                 "brake_steps": args.brake_steps,
                 "static_margin": args.static_margin,
+                "comfort_weight": args.comfort_weight,
             }
             params = dc.replace(
                 planner.params, **{k: v for k, v in changes.items() if v is not None}
@@ -94,7 +107,8 @@ def main() -> None:
         ]
         print(
             f"{name}: SR {s['SR']:.3f} (n={s['episodes']})  collision {s['collision_rate']:.3f}  "
-            f"timeout {s['timeout_rate']:.3f}  NT {s['NT_mean']:.2f} s  DT {s['DT']}"
+            f"timeout {s['timeout_rate']:.3f}  NT {s['NT_mean']:.2f} s  DT {s['DT']}  "
+            f"IDT [static; happy, neutral, negative] {s['IDT']}"
             + (f"  steps with no admissible command {blocked}" if shielded else "")
             + f"  failures {failed}"
         )

@@ -1,6 +1,7 @@
 """The LGM safety shield (`core/lgm_shield.py`, `planners/shield.py`) with the real
 shipped policy, the real LIP step map and the real fitted Digit response."""
 
+import dataclasses as dc
 import math
 
 import numpy as np
@@ -17,6 +18,7 @@ from emonav_drake.core.lgm_shield import (
     path_gaps,
     shield_choice,
     to_world,
+    zone_intrusion,
 )
 from emonav_drake.core.lip import LipState, held_plans, lip_in_step, lip_rollout, lip_step
 from emonav_drake.core.navigation import NavigationWorld
@@ -228,3 +230,45 @@ def test_a_body_moves_at_its_measured_velocity():
     points, vel = np.array([[1.0, 0.0]]), np.array([[-1.0, 0.0]])
     assert path_gaps(still_path, points)[0] == 1.0
     assert path_gaps(still_path, points, None, vel, np.array([0.2, 0.4]))[0] == pytest.approx(0.6)
+
+
+def test_zone_intrusion_is_the_depth_into_the_nearest_zone():
+    paths = np.array([[[0.0, 0.0], [0.5, 0.0]], [[0.0, 0.0], [0.0, 0.5]]])
+    points = np.array([[1.0, 0.0]])
+    np.testing.assert_allclose(zone_intrusion(paths, points, 0.6), [0.1, 0.0])
+    assert zone_intrusion(paths, np.zeros((0, 2)), 0.6).tolist() == [0.0, 0.0]
+    with pytest.raises(ValueError, match="comfort_weight needs static_margin"):
+        ShieldParams(comfort_weight=10.0, static_margin=None)
+    with pytest.raises(ValueError, match="1/m"):
+        ShieldParams(comfort_weight=-1.0)
+
+
+def test_the_comfort_weight_steers_the_shield_out_of_a_still_discs_zone():
+    """A disc just right of the robot's line, seen in two frames (so its points are
+    still): with `comfort_weight` the shield's command reaches less deep into the disc's
+    discomfort zone than the policy's admissible best, which enters it."""
+    cfg0 = EmoNavConfig()
+    policy = PolicyPlanner(shipped_checkpoint("emobipednav"), robot_radius=cfg0.robot.radius)
+    cfg, _ = configure_for(policy, cfg0)
+    scenario = Scenario(
+        obstacles=[StaticDiscSpec(center=[-3.55, -0.5], radius=0.3)],
+        robot_start=[-4.0, 0.0],
+        robot_goal=[4.0, 0.0],
+    )
+    world = NavigationWorld(scenario, cfg, goal_radius=EpisodeParams.eval_goal_radius)
+    world.robot = LipState(-4.0, 0.0, 0.0, 0.3)
+    first = world.planner_input()
+    chosen, depth = {}, {}
+    for weight in (0.0, 200.0):
+        shield = ShieldedPolicy(policy, cfg, params=ShieldParams(comfort_weight=weight))
+        _, memory = shield.plan_with_memory(first, shield.initial_memory())
+        obs = dc.replace(first, step=first.step + 1)  # the same frame again: every point still
+        u, _ = shield.plan_with_memory(obs, memory)
+        i = int(np.flatnonzero((policy.commands == u).all(axis=1))[0])
+        paths = shield.predicted_paths(obs, memory)
+        pts = lgm_hit_points(obs.lgm_stack[-1], cfg.lidar.num_beams, cfg.lidar.max_range)
+        intrusion = shield.static_intrusion(paths, pts, np.zeros(len(pts), bool))
+        chosen[weight], depth[weight] = i, intrusion
+        assert shield.last_admissible
+    assert depth[0.0][chosen[0.0]] > 0.0  # the policy's own choice enters the zone
+    assert depth[200.0][chosen[200.0]] < depth[0.0][chosen[0.0]]

@@ -21,6 +21,11 @@ counts as still and keeps only `static_margin`; the rest, and every point of the
 body (a chain of points closer than `body`), keep `margin` (`moving_points`). The
 robot's pose at the foot switch places both frames in the world.
 
+With `comfort_weight` > 0 the shield also prefers, among the admissible commands, those
+whose path stays out of the still points' discomfort zones (d_static beyond the robot's
+radius, as for a static disc): each command's score loses `comfort_weight` per metre the
+path reaches into them (`zone_intrusion`).
+
 A stop is the safe end of every prediction because a pedestrian who walks faster than
 the robot sees it and steers round it (the crowd's visibility rule): a standing robot is
 seen by every moving pedestrian. The shield never sees the crowd state, the emotions or
@@ -36,11 +41,12 @@ import numpy as np
 
 from emonav_drake.core.grid_maps import COLLISION_VALUE, check_beams_per_sector
 from emonav_drake.core.lidar import beam_table
+from emonav_drake.core.nearby_labels import restricted_softmax
 
 
 @dc.dataclass(frozen=True)
 class ShieldParams:
-    """The shield's two numbers.
+    """The shield's settings.
 
     Attributes:
         margin: clearance kept beyond the robot's radius from every seen LiDAR hit along
@@ -56,6 +62,9 @@ class ShieldParams:
             body's measured velocity (`body_velocities`) instead of holding them still.
         max_body_speed: the fastest a body may have moved between two frames [m/s] to be
             matched with one of the previous frame.
+        comfort_weight: score penalty [1/m] per metre the predicted path reaches into the
+            discomfort zone of still points (radius r_robot + d_static around each); 0: off.
+            Needs `static_margin` (the still/moving split).
     """
 
     margin: float = 0.2
@@ -65,14 +74,18 @@ class ShieldParams:
     body: float = 0.25
     predict_motion: bool = False
     max_body_speed: float = 1.5
+    comfort_weight: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("margin", "static_match", "body", "max_body_speed") + (
+        if self.comfort_weight and self.static_margin is None:
+            raise ValueError("comfort_weight needs static_margin (which points are still)")
+        for name in ("margin", "static_match", "body", "max_body_speed", "comfort_weight") + (
             ("static_margin",) if self.static_margin is not None else ()
         ):
             v = getattr(self, name)
             if not (np.isfinite(v) and v >= 0.0):
-                raise ValueError(f"shield {name} must be a finite number >= 0 m, got {v}")
+                unit = "1/m" if name == "comfort_weight" else "m"
+                raise ValueError(f"shield {name} must be a finite number >= 0 {unit}, got {v}")
         if not isinstance(self.brake_steps, int) or self.brake_steps < 0:
             raise ValueError(f"brake_steps must be an int >= 0, got {self.brake_steps!r}")
 
@@ -128,6 +141,13 @@ def path_gaps(
     if margins is not None:
         d = d - np.asarray(margins, float)[None, None]
     return d.min(axis=(1, 2))
+
+
+def zone_intrusion(paths: np.ndarray, points: np.ndarray, reach: float) -> np.ndarray:
+    """How deep (C,) [m] each predicted CoM path (C, S, 2) reaches into the zones of radius
+    `reach` [m] around the points (n, 2): max(0, reach − the path's smallest distance to a
+    point); 0 where there are no points."""
+    return np.maximum(0.0, reach - path_gaps(paths, points))
 
 
 def to_world(points: np.ndarray, pose: np.ndarray) -> np.ndarray:
@@ -210,9 +230,7 @@ def shield_distribution(scores: np.ndarray, gaps: np.ndarray, clearance: float) 
         out = np.zeros(len(s))
         out[shield_choice(s, g, clearance)[0]] = 1.0
         return out
-    z = np.where(ok, s - s[ok].max(), -np.inf)
-    p = np.exp(z)
-    return p / p.sum()
+    return restricted_softmax(s, ok)
 
 
 def shield_choice(scores: np.ndarray, gaps: np.ndarray, clearance: float) -> tuple[int, bool]:

@@ -66,7 +66,9 @@ class DaggerConfig:
     # The expert that labels the states: "dwa" (DWA with `expert_margin`, planning with
     # `response`), "mpc" (the OSQP MPC of core/mpc.py, planning with the LIP model; its
     # continuous commands are labelled as the nearest command of the student's grid) or
-    # "shield" (`expert_policy` behind the LGM shield).
+    # "shield" (`expert_policy` behind the LGM shield) or "mpc_nearby" (`expert_policy`
+    # choosing within `expert_cells` grid steps of the MPC's command, the MPC planning with
+    # `response` and widened by `expert_clearance`; `planners/mpc_nearby.py`).
     expert: str = "dwa"
     expert_margin: float = 0.05  # the DWA expert's collision margin (`dwa.safety_margin`) [m]
     # The MPC expert's extra clearance [m], added to its collision and discomfort margins
@@ -77,9 +79,12 @@ class DaggerConfig:
     # reads what this route's student reads, behind the LGM shield (`planners/shield.py`,
     # predicting with `response`). Its labels are a function of the student's observation.
     expert_policy: str = ""
-    # Soft labels (expert "shield" only): the student learns the shield's distribution over
-    # the grid (the policy's softmax on the admissible commands) by cross-entropy, not its
-    # argmax alone, so near-ties and the admissible set are both in the label.
+    # The "mpc_nearby" expert's reach: grid steps around the MPC's command in u_v and u_Δθ.
+    expert_cells: int = 1
+    # Soft labels (experts "shield" and "mpc_nearby"): the student learns the expert's
+    # distribution over the grid (the policy's softmax on the commands the shield admits, or
+    # on those next to the MPC's) by cross-entropy, not its argmax alone, so near-ties and
+    # the allowed set are both in the label.
     soft_labels: bool = False
     heading_noise_prob: float = 0.5  # fraction of training episodes starting off course
     heading_noise: float = 1.5  # their initial heading error, uniform in ± this [rad]
@@ -92,13 +97,17 @@ class DaggerConfig:
         _check_observation(self.grid_kind, self.encoder, self.num_frames)
         _choice("goal_input", self.goal_input, GOAL_INPUTS)
         _choice("setting", self.setting, SETTINGS)
-        _choice("expert", self.expert, ("dwa", "mpc", "shield"))
-        if self.expert == "shield" and not (self.expert_policy or self.init_policy):
-            raise ConfigError("expert = shield needs expert_policy (or init_policy) to shield")
-        if self.soft_labels and self.expert != "shield":
+        from emonav_drake.planners.model_aware import EXPERTS, SOFT_EXPERTS
+
+        _choice("expert", self.expert, EXPERTS)
+        if self.expert in SOFT_EXPERTS and not (self.expert_policy or self.init_policy):
             raise ConfigError(
-                f"soft_labels needs expert = shield (a distribution over the grid), not "
-                f"{self.expert!r}"
+                f"expert = {self.expert} needs expert_policy (or init_policy) to wrap"
+            )
+        if self.soft_labels and self.expert not in SOFT_EXPERTS:
+            raise ConfigError(
+                f"soft_labels needs expert = {' or '.join(SOFT_EXPERTS)} (a distribution over "
+                f"the grid), not {self.expert!r}"
             )
         return self
 
@@ -255,6 +264,7 @@ _DAGGER_RANGES = {
     "num_frames": (1, 64),
     "expert_margin": (0.0, 2.0),
     "expert_clearance": (0.0, 1.0),
+    "expert_cells": (0, 10),
 }
 
 _SAC_RANGES = {

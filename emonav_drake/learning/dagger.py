@@ -213,6 +213,7 @@ def _start(
         cfg.response,
         cfg.expert_clearance,
         cfg.expert_policy or cfg.init_policy,
+        cfg.expert_cells,
     )
     response = load_response(cfg.response)
     commands = DwaPlanner(env_cfg).candidates.copy()  # the student's grid: the DWA's

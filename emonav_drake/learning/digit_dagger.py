@@ -109,7 +109,8 @@ def _labelled_episode(
 ) -> dict:
     """One Digit episode of the student (`runner`'s method) labelled by the expert of
     `rounds` (`expert`: "dwa", the model-aware DWA with `expert_margin`, "mpc" with the
-    extra `expert_clearance`, or "shield": `expert_policy` behind the LGM shield)."""
+    extra `expert_clearance`, "shield": `expert_policy` behind the LGM shield, or
+    "mpc_nearby": `expert_policy` within `expert_cells` grid steps of the MPC's command)."""
     from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
     from emonav_drake.planners.model_aware import route_expert
@@ -117,7 +118,7 @@ def _labelled_episode(
     student, cfg, grid_kind = runner.planner(method)
     r = rounds
     expert = route_expert(
-        cfg, r.expert, r.expert_margin, "digit", r.expert_clearance, r.expert_policy
+        cfg, r.expert, r.expert_margin, "digit", r.expert_clearance, r.expert_policy, r.expert_cells
     )
     planner = LabellingPlanner(student, expert, beta, seed)
     t0 = time.perf_counter()
@@ -151,13 +152,15 @@ class DigitRoundsConfig:
     digit_fraction: float = 0.5  # of every batch from Digit samples
     expert_margin: float = 0.1
     seed: int = 0
-    # The labelling expert: "dwa", "mpc" or "shield", the MPC's extra clearance [m] and the
-    # policy the shield wraps; `run_digit_rounds` sets them to the calibrated run's
-    # (`DaggerConfig.expert`, `expert_clearance`, `expert_policy`), so both kinds of
-    # demonstrations have one teacher.
+    # The labelling expert: "dwa", "mpc", "shield" or "mpc_nearby", the MPC's extra
+    # clearance [m], the policy the shield (or the MPC) steers and the MPC's reach in grid
+    # cells; `run_digit_rounds` sets them to the calibrated run's (`DaggerConfig.expert`,
+    # `expert_clearance`, `expert_policy`, `expert_cells`), so both kinds of demonstrations
+    # have one teacher.
     expert: str = "dwa"
     expert_clearance: float = 0.0
     expert_policy: str = ""
+    expert_cells: int = 1
 
     def validate(self) -> DigitRoundsConfig:
         """Raise `ConfigError` naming the flag (or field) of a value out of range."""
@@ -272,6 +275,7 @@ def run_digit_rounds(
         expert=dcfg.expert,
         expert_clearance=dcfg.expert_clearance,
         expert_policy=dcfg.expert_policy or dcfg.init_policy,
+        expert_cells=dcfg.expert_cells,
     )
     if env_config is None:  # the calibrated run's setting (var_dd unless it trained in another)
         from emonav_drake.configs import load_setting

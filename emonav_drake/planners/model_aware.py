@@ -20,6 +20,11 @@ from pathlib import Path
 from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.params import ConfigError, EmoNavConfig
 
+# The DAgger routes' experts (`DaggerConfig.expert`, `route_expert`); the last two label
+# with a distribution over the student's grid (`last_distribution`: soft labels).
+EXPERTS = ("dwa", "mpc", "shield", "mpc_nearby")
+SOFT_EXPERTS = ("shield", "mpc_nearby")
+
 DIGIT_RESPONSE = Path(__file__).resolve().parent.parent / "data" / "digit_response.json"
 
 
@@ -59,6 +64,7 @@ def route_expert(
     response: str = "",
     clearance: float = 0.0,
     policy: str = "",
+    cells: int = 1,
 ):
     """The expert of a DAgger route (`DaggerConfig.expert`): "dwa" = `model_aware_expert`
     (collision margin `margin` [m], planning with `response`); "mpc" = the OSQP MPC of
@@ -66,7 +72,22 @@ def route_expert(
     (`DaggerConfig.expert_clearance`; 0 = the MPC as benchmarked; `margin` and `response`
     unused); "shield" = the categorical `policy` ("shipped", a shipped variant's name or a
     path) behind the LGM shield, predicting with `response` (the registered shielded
-    planners' settings, `planners.shield.default_shield_params`)."""
+    planners' settings, `planners.shield.default_shield_params`); "mpc_nearby" = that
+    `policy` choosing within `cells` grid steps of the MPC's command (the MPC planning with
+    `response`, its margins widened by `clearance`; `planners/mpc_nearby.py`)."""
+    if kind == "mpc_nearby":
+        from emonav_drake.core.mpc import MpcPlanner
+        from emonav_drake.planners.mpc_nearby import MpcNearbyPolicy
+        from emonav_drake.planners.policy import PolicyPlanner
+        from emonav_drake.planners.variants import resolve_policy_file
+
+        if not policy:
+            raise ConfigError("expert = 'mpc_nearby' needs the policy it steers (expert_policy)")
+        wrapped = PolicyPlanner(
+            resolve_policy_file(policy, "expert_policy"), robot_radius=config.robot.radius
+        )
+        mpc = MpcPlanner(_widened(config, clearance), load_response(response))
+        return MpcNearbyPolicy(wrapped, mpc, cells)
     if kind == "shield":
         from emonav_drake.planners.policy import PolicyPlanner
         from emonav_drake.planners.shield import ShieldedPolicy, default_shield_params
@@ -82,15 +103,21 @@ def route_expert(
     if kind == "mpc":
         from emonav_drake.core.mpc import MpcPlanner
 
-        if not clearance:
-            return MpcPlanner(config)
-        expert_cfg = copy.deepcopy(config)
-        expert_cfg.mpc.collision_margin += clearance
-        expert_cfg.mpc.discomfort_margin += clearance
-        return MpcPlanner(expert_cfg)
+        return MpcPlanner(_widened(config, clearance))
     if kind != "dwa":
-        raise ConfigError(f"expert = {kind!r} is invalid: must be one of ['dwa', 'mpc', 'shield']")
+        raise ConfigError(f"expert = {kind!r} is invalid: must be one of {list(EXPERTS)}")
     return model_aware_expert(config, margin, response)
+
+
+def _widened(config: EmoNavConfig, clearance: float) -> EmoNavConfig:
+    """`config` with the MPC's collision and discomfort margins widened by `clearance` [m]
+    (the same object when it is 0)."""
+    if not clearance:
+        return config
+    expert_cfg = copy.deepcopy(config)
+    expert_cfg.mpc.collision_margin += clearance
+    expert_cfg.mpc.discomfort_margin += clearance
+    return expert_cfg
 
 
 def dwa_digit(config: EmoNavConfig):

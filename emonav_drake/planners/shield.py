@@ -27,6 +27,7 @@ from emonav_drake.core.lgm_shield import (
     shield_choice,
     shield_distribution,
     to_world,
+    zone_intrusion,
 )
 from emonav_drake.core.lip import LipState, lip_rollout
 from emonav_drake.core.navigation import PlannerInput
@@ -128,9 +129,14 @@ class ShieldedPolicy:
             else f"margin {p.margin:g} m from moving hits, {p.static_margin:g} m from still ones"
         )
         motion = ", moving hits at their velocity" if p.predict_motion else ""
+        comfort = (
+            f", {p.comfort_weight:g}/m off the score per metre into still discs' zones"
+            if p.comfort_weight
+            else ""
+        )
         return (
             f"{self.policy.describe()} behind the LGM shield ({model} prediction, {margins}"
-            f"{motion}, {p.brake_steps} braking step(s))"
+            f"{motion}{comfort}, {p.brake_steps} braking step(s))"
         )
 
     def initial_memory(self) -> ShieldMemory:
@@ -186,6 +192,14 @@ class ShieldedPolicy:
         v_robot = np.stack([c * v[:, 0] + s * v[:, 1], -s * v[:, 0] + c * v[:, 1]], axis=1)
         return v_robot, step_time * (np.arange(samples) + 1) / 2
 
+    def static_intrusion(
+        self, paths: np.ndarray, points: np.ndarray, moving: np.ndarray
+    ) -> np.ndarray:
+        """How deep (C,) [m] each path (robot frame) reaches into the discomfort zones of the
+        still points among `points` (n, 2) (r_robot + d_static around each; `zone_intrusion`)."""
+        reach = self.config.robot.radius + self.config.reward.static_discomfort
+        return zone_intrusion(paths, points[~moving], reach)
+
     def plan_with_memory(
         self, obs: PlannerInput, memory: ShieldMemory | None
     ) -> tuple[np.ndarray, ShieldMemory]:
@@ -201,6 +215,9 @@ class ShieldedPolicy:
         velocities, times = self.point_velocities(world, moving, pose, memory, paths.shape[1])
         gaps = path_gaps(paths, points, margins, velocities, times)
         clearance = self.config.robot.radius
+        if self.params.comfort_weight:
+            intrusion = self.static_intrusion(paths, points, moving)
+            scores = scores - self.params.comfort_weight * intrusion
         best, self.last_admissible = shield_choice(scores, gaps, clearance)
         self.last_distribution = shield_distribution(scores, gaps, clearance)
         command = self.policy.commands[best].copy()

@@ -1,0 +1,99 @@
+"""A categorical policy steered by the MPC: the "mpc_nearby" DAgger expert.
+
+At every walking step the OSQP MPC (`core/mpc.py`, with the privileged crowd state and,
+on Digit, its fitted step response) plans its command; the policy scores its 99 grid
+commands from its own LGM; the planner walks the best-scored command within `cells` grid
+steps of the MPC's (`core/nearby_labels.py`). `last_distribution` is the policy's softmax
+over those commands — the soft label a distilling route learns (`DaggerConfig.expert`
+"mpc_nearby"). Not the paper's method: a teacher that keeps the student's own ranking and
+takes from the MPC only where to go.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from emonav_drake.core.mpc import MpcMemory, MpcPlanner
+from emonav_drake.core.navigation import PlannerInput
+from emonav_drake.core.nearby_labels import nearby_distribution
+from emonav_drake.planners.policy import PolicyError, PolicyPlanner, describe_policy
+
+
+class MpcNearbyPolicy:
+    """A categorical `PolicyPlanner` choosing among the commands next to the MPC's.
+
+    Args:
+        policy: the policy (categorical, reading an "lgm" observation).
+        mpc: the MPC whose command sets where to go (its memory is this planner's).
+        cells: grid steps around the MPC's command, in u_v and in u_Δθ, the choice may take.
+
+    The planner input's `lgm_stack` is the policy's observation (uint8 (N, M, M), oldest
+    first, robot frame at the foot switch), its `crowd` the MPC's (world frame); the
+    command is (u_v [m/s], u_Δθ [rad]). `last_mpc_command` and `last_distribution` (C,)
+    are written by every planning step and never read back.
+    """
+
+    name = "policy_mpc_nearby"
+
+    def __init__(self, policy: PolicyPlanner, mpc: MpcPlanner, cells: int = 1) -> None:
+        if policy.meta["kind"] != "categorical":
+            raise PolicyError(
+                f"mpc_nearby needs a categorical policy; {policy.path.name} is a "
+                f"{describe_policy(policy.meta)}"
+            )
+        if not isinstance(cells, int) or cells < 0:
+            raise ValueError(f"cells must be an int >= 0, got {cells!r}")
+        self.policy, self.mpc, self.cells = policy, mpc, cells
+        self.last_mpc_command: np.ndarray | None = None
+        self.last_distribution: np.ndarray | None = None
+        self._memory = self.initial_memory()
+
+    @property
+    def grid_kind(self) -> str:
+        return self.policy.grid_kind
+
+    @property
+    def expected_shape(self) -> tuple[int, ...]:
+        return self.policy.expected_shape
+
+    @property
+    def expected_dtype(self) -> np.dtype:
+        return self.policy.expected_dtype
+
+    @property
+    def path(self) -> Path:
+        return self.policy.path
+
+    def describe(self) -> str:
+        """The policy and how far from the MPC's command it may choose."""
+        return (
+            f"{self.policy.describe()} choosing within {self.cells} grid step(s) of the "
+            "MPC's command"
+        )
+
+    def initial_memory(self) -> MpcMemory:
+        """The MPC's memory at the start of an episode."""
+        return self.mpc.initial_memory()
+
+    def reset(self) -> None:
+        """Back to `initial_memory()` (a new episode)."""
+        self._memory = self.initial_memory()
+
+    def plan_with_memory(
+        self, obs: PlannerInput, memory: MpcMemory | None
+    ) -> tuple[np.ndarray, MpcMemory]:
+        """The command next to the MPC's that the policy scores best, and the MPC's memory."""
+        target, memory = self.mpc.plan_with_memory(obs, memory)
+        stack = self.policy.check_observation(obs.lgm_stack)
+        scores = self.policy.command_scores(stack, self.policy.goal_state(obs), obs.last_command)
+        dist = nearby_distribution(scores, self.policy.commands, target, self.cells)
+        self.last_mpc_command = np.asarray(target, float).copy()
+        self.last_distribution = dist
+        return self.policy.commands[int(np.argmax(dist))].copy(), memory
+
+    def plan(self, obs: PlannerInput) -> np.ndarray:
+        """The command (u_v [m/s], u_Δθ [rad]) for this walking step."""
+        command, self._memory = self.plan_with_memory(obs, self._memory)
+        return command
