@@ -1,5 +1,6 @@
 """Digit Table II before and after a change of the walking stack: per method, an old run
-against a new one on the seeds both ran (Wilson intervals, McNemar exact).
+against a new one on the seeds both ran (Wilson intervals, McNemar exact on success; DT
+per trial with the Wilcoxon signed-rank test on the per-seed differences).
 
     python scripts/compare_digit_tables.py                       # old timing vs the default
     python scripts/compare_digit_tables.py --old digit_table2_v2 # every method vs that run
@@ -30,9 +31,28 @@ PAIRS = (
 )
 
 
-def _successes(run: str, method: str) -> dict[int, bool]:
+def _records(run: str, method: str) -> dict[int, dict]:
+    """Seed → the trial record of `method` in run directory `run`."""
     trials = read_trials(RESULTS / run / "trials.jsonl")
-    return {t["seed"]: t["record"]["outcome"] == "success" for t in trials if t["method"] == method}
+    return {t["seed"]: t["record"] for t in trials if t["method"] == method}
+
+
+def _p(p: float) -> str:
+    """ "= 0.29" or "< 1e-4"."""
+    text = format_p(p)
+    return text if text.startswith("<") else f"= {text}"
+
+
+def dt_signed_rank(old: list[int], new: list[int]) -> float:
+    """Two-sided Wilcoxon signed-rank p-value of the paired per-trial DT (walking steps in a
+    discomfort zone) differences new − old; 1.0 when every pair is equal (seeds with equal
+    DT are dropped, the test's "wilcox" rule)."""
+    from scipy.stats import wilcoxon
+
+    d = [b - a for a, b in zip(old, new, strict=True)]
+    if not any(d):
+        return 1.0
+    return float(wilcoxon(d, zero_method="wilcox", alternative="two-sided").pvalue)
 
 
 def _sr(k: int, n: int) -> str:
@@ -62,22 +82,29 @@ def main() -> None:
         renamed = dict(m.split("=", 1) for m in args.map)
         pairs = tuple((m, args.old, renamed.get(m, m), m) for m in methods)
     print(
-        "| method | seeds (n) | old SR [95 % CI] (run) | new SR [95 % CI] | old only | new only |"
+        "| method | seeds (n) | old SR [95 % CI] (run) | new SR [95 % CI] | old only | new only "
+        "| DT / trial old → new (signed-rank p) |"
     )
-    print("|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|")
     for label, run, old_method, new_method in pairs:
-        old, new = _successes(run, old_method), _successes(args.new, new_method)
-        seeds = sorted(set(old) & set(new))
+        old_r, new_r = _records(run, old_method), _records(args.new, new_method)
+        seeds = sorted(set(old_r) & set(new_r))
         n = len(seeds)
         if not n:  # not in the old run (give --map NEW=OLD), or no seed in common
-            print(f"| {label} | none in common with {run}:{old_method} | | | | |")
+            print(f"| {label} | none in common with {run}:{old_method} | | | | | |")
             continue
-        k_old, k_new = sum(old[s] for s in seeds), sum(new[s] for s in seeds)
+        old = {s: old_r[s]["outcome"] == "success" for s in seeds}
+        new = {s: new_r[s]["outcome"] == "success" for s in seeds}
+        k_old, k_new = sum(old.values()), sum(new.values())
         b = sum(old[s] and not new[s] for s in seeds)
         c = sum(new[s] and not old[s] for s in seeds)
+        dt_old = [old_r[s]["discomfort_steps"] for s in seeds]
+        dt_new = [new_r[s]["discomfort_steps"] for s in seeds]
+        p_dt = _p(dt_signed_rank(dt_old, dt_new))
         print(
             f"| {label} | {seeds[0]}–{seeds[-1]} ({n}) | {_sr(k_old, n)} ({run}) | "
-            f"{_sr(k_new, n)} | {b} | {c} (McNemar p = {format_p(mcnemar_exact(b, c))}) |"
+            f"{_sr(k_new, n)} | {b} | {c} (McNemar p {_p(mcnemar_exact(b, c))}) | "
+            f"{sum(dt_old) / n:.2f} → {sum(dt_new) / n:.2f} (p {p_dt}) |"
         )
 
 

@@ -420,3 +420,62 @@ def test_soft_labels_of_one_hot_targets_are_the_hard_loss_mirrored_or_not():
     assert soft.item() == pytest.approx(hard.item(), rel=1e-6)
     assert spread.item() != pytest.approx(hard.item(), rel=1e-3)
     assert (labels == one_hot.argmax(axis=1)).all()  # the inputs were not changed in place
+
+
+def test_an_mpc_nearby_expert_walks_the_policys_best_command_next_to_the_mpcs():
+    """`DaggerConfig.expert = "mpc_nearby"` in the calibrated world, real MPC (Digit's
+    response) and real default policy: at every step the walked command lies within one
+    grid step of the MPC's in both components, it is the policy's best-scored such command,
+    and the soft label is the policy's softmax renormalised on exactly those commands; with
+    a reach wider than the grid the expert is the bare policy."""
+    from emonav_drake.core.nearby_labels import nearby_mask
+
+    env_cfg = EmoNavConfig()
+    response = load_response("digit")
+    world = NavigationWorld(
+        sample_scenario(10**6 + 34, env_cfg), env_cfg, goal_radius=0.2, response=response
+    )
+    expert = route_expert(env_cfg, "mpc_nearby", 0.0, "digit", policy="shipped", cells=1)
+    wide = route_expert(env_cfg, "mpc_nearby", 0.0, "digit", policy="shipped", cells=10)
+    policy, grid = expert.policy, expert.policy.commands
+    steps, moved_off = 0, 0
+    for _ in range(15):
+        obs = world.planner_input()
+        u = expert.plan(obs)
+        near = nearby_mask(grid, expert.last_mpc_command, 1)
+        assert (np.abs(u - expert.last_mpc_command) <= [0.05 + 1e-9, 0.04 + 1e-9]).all()
+        scores = policy.command_scores(obs.lgm_stack, policy.goal_state(obs), obs.last_command)
+        i = command_index(grid, u)
+        assert near[i] and scores[i] == scores[near].max()
+        p = expert.last_distribution
+        np.testing.assert_allclose(p.sum(), 1.0)
+        assert (p[~near] == 0).all() and int(np.argmax(p)) == i
+        np.testing.assert_array_equal(wide.plan(obs), policy.plan(obs))
+        moved_off += not np.array_equal(u, policy.plan(obs))
+        steps += 1
+        if world.step(u)[1] is not None:
+            break
+    assert steps >= 10 and moved_off > 0  # the MPC moved the policy off its own choice
+
+
+def test_nearby_labels_reject_what_they_cannot_use():
+    from emonav_drake.core.nearby_labels import grid_steps, nearby_mask, restricted_softmax
+    from emonav_drake.params import ConfigError
+
+    grid = np.array([[0.0, -0.1], [0.0, 0.0], [0.2, 0.0], [0.4, 0.1]])
+    np.testing.assert_allclose(grid_steps(grid), [0.2, 0.1])
+    assert nearby_mask(grid, [0.2, 0.0], 0).tolist() == [False, False, True, False]
+    assert nearby_mask(grid, [0.4, 0.1], 1).tolist() == [False, False, True, True]
+    assert nearby_mask(grid, [5.0, 5.0], 1).tolist() == [False, False, False, True]  # nearest
+    with pytest.raises(ValueError, match="cells"):
+        nearby_mask(grid, [0.0, 0.0], -1)
+    with pytest.raises(ValueError, match="one value"):
+        grid_steps(np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="at least one"):
+        restricted_softmax(np.zeros(4), np.zeros(4, bool))
+    with pytest.raises(ConfigError, match="expert = mpc_nearby needs expert_policy"):
+        DaggerConfig(expert="mpc_nearby").validate()
+    with pytest.raises(ConfigError, match="soft_labels needs expert = shield or mpc_nearby"):
+        DaggerConfig(expert="mpc", soft_labels=True).validate()
+    with pytest.raises(ConfigError, match="needs the policy it steers"):
+        route_expert(EmoNavConfig(), "mpc_nearby", 0.0, "digit")

@@ -422,12 +422,14 @@ def test_dagger_ctrl_c_at_a_random_point_then_resume_is_bit_exact(
     [
         dict(expert="mpc"),
         dict(expert="shield", expert_policy="emobipednav_digit_mpc", soft_labels=True),
+        dict(expert="mpc_nearby", expert_policy="emobipednav_digit_mpc", soft_labels=True),
     ],
-    ids=["mpc", "shield_soft"],
+    ids=["mpc", "shield_soft", "mpc_nearby_soft"],
 )
 def test_an_expert_route_stopped_in_its_rollouts_resumes_bit_exact(tmp_path, monkeypatch, expert):
-    """The routes of the shipped Digit policy (MPC expert) and of its distilled successor
-    (the shield's soft labels), calibrated world, at tiny scale: one expert round and one
+    """The routes of the MPC route's policy (MPC expert), of its distilled successor (the
+    shield's soft labels) and of the MPC-steered policy's soft labels, calibrated world, at
+    tiny scale: one expert round and one
     DAgger round write a loadable policy; Ctrl-C inside a rollout, then resume, gives the
     same weights, optimiser, history and demonstrations (soft labels included)."""
     cfg = _dagger_cfg(response="digit", **expert)
