@@ -79,8 +79,11 @@ class DaggerConfig:
     # reads what this route's student reads, behind the LGM shield (`planners/shield.py`,
     # predicting with `response`). Its labels are a function of the student's observation.
     expert_policy: str = ""
-    # The "mpc_nearby" expert's reach: grid steps around the MPC's command in u_v and u_Δθ.
+    # The "mpc_nearby" expert's reach: grid steps around the MPC's command in u_v and u_Δθ;
+    # with `expert_shield`, only the commands `expert_policy`'s LGM shield admits (predicting
+    # with `response`) may be chosen.
     expert_cells: int = 1
+    expert_shield: bool = False
     # Soft labels (experts "shield" and "mpc_nearby"): the student learns the expert's
     # distribution over the grid (the policy's softmax on the commands the shield admits, or
     # on those next to the MPC's) by cross-entropy, not its argmax alone, so near-ties and
@@ -104,6 +107,8 @@ class DaggerConfig:
             raise ConfigError(
                 f"expert = {self.expert} needs expert_policy (or init_policy) to wrap"
             )
+        if self.expert_shield and self.expert != "mpc_nearby":
+            raise ConfigError(f"expert_shield needs expert = mpc_nearby, not {self.expert!r}")
         if self.soft_labels and self.expert not in SOFT_EXPERTS:
             raise ConfigError(
                 f"soft_labels needs expert = {' or '.join(SOFT_EXPERTS)} (a distribution over "

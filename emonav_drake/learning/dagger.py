@@ -214,6 +214,7 @@ def _start(
         cfg.expert_clearance,
         cfg.expert_policy or cfg.init_policy,
         cfg.expert_cells,
+        cfg.expert_shield,
     )
     response = load_response(cfg.response)
     commands = DwaPlanner(env_cfg).candidates.copy()  # the student's grid: the DWA's

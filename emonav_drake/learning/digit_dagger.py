@@ -118,7 +118,14 @@ def _labelled_episode(
     student, cfg, grid_kind = runner.planner(method)
     r = rounds
     expert = route_expert(
-        cfg, r.expert, r.expert_margin, "digit", r.expert_clearance, r.expert_policy, r.expert_cells
+        cfg,
+        r.expert,
+        r.expert_margin,
+        "digit",
+        r.expert_clearance,
+        r.expert_policy,
+        r.expert_cells,
+        r.expert_shield,
     )
     planner = LabellingPlanner(student, expert, beta, seed)
     t0 = time.perf_counter()
@@ -153,14 +160,15 @@ class DigitRoundsConfig:
     expert_margin: float = 0.1
     seed: int = 0
     # The labelling expert: "dwa", "mpc", "shield" or "mpc_nearby", the MPC's extra
-    # clearance [m], the policy the shield (or the MPC) steers and the MPC's reach in grid
-    # cells; `run_digit_rounds` sets them to the calibrated run's (`DaggerConfig.expert`,
-    # `expert_clearance`, `expert_policy`, `expert_cells`), so both kinds of demonstrations
-    # have one teacher.
+    # clearance [m], the policy the shield (or the MPC) steers, the MPC's reach in grid
+    # cells and whether a shield bounds it; `run_digit_rounds` sets them to the calibrated
+    # run's (`DaggerConfig.expert`, `expert_clearance`, `expert_policy`, `expert_cells`,
+    # `expert_shield`), so both kinds of demonstrations have one teacher.
     expert: str = "dwa"
     expert_clearance: float = 0.0
     expert_policy: str = ""
     expert_cells: int = 1
+    expert_shield: bool = False
 
     def validate(self) -> DigitRoundsConfig:
         """Raise `ConfigError` naming the flag (or field) of a value out of range."""
@@ -276,6 +284,7 @@ def run_digit_rounds(
         expert_clearance=dcfg.expert_clearance,
         expert_policy=dcfg.expert_policy or dcfg.init_policy,
         expert_cells=dcfg.expert_cells,
+        expert_shield=dcfg.expert_shield,
     )
     if env_config is None:  # the calibrated run's setting (var_dd unless it trained in another)
         from emonav_drake.configs import load_setting

@@ -65,6 +65,7 @@ def route_expert(
     clearance: float = 0.0,
     policy: str = "",
     cells: int = 1,
+    shielded: bool = False,
 ):
     """The expert of a DAgger route (`DaggerConfig.expert`): "dwa" = `model_aware_expert`
     (collision margin `margin` [m], planning with `response`); "mpc" = the OSQP MPC of
@@ -74,7 +75,8 @@ def route_expert(
     path) behind the LGM shield, predicting with `response` (the registered shielded
     planners' settings, `planners.shield.default_shield_params`); "mpc_nearby" = that
     `policy` choosing within `cells` grid steps of the MPC's command (the MPC planning with
-    `response`, its margins widened by `clearance`; `planners/mpc_nearby.py`)."""
+    `response`, its margins widened by `clearance`; with `shielded`, only among the
+    commands the policy's LGM shield admits; `planners/mpc_nearby.py`)."""
     if kind == "mpc_nearby":
         from emonav_drake.core.mpc import MpcPlanner
         from emonav_drake.planners.mpc_nearby import MpcNearbyPolicy
@@ -86,8 +88,14 @@ def route_expert(
         wrapped = PolicyPlanner(
             resolve_policy_file(policy, "expert_policy"), robot_radius=config.robot.radius
         )
-        mpc = MpcPlanner(_widened(config, clearance), load_response(response))
-        return MpcNearbyPolicy(wrapped, mpc, cells)
+        model = load_response(response)
+        mpc = MpcPlanner(_widened(config, clearance), model)
+        guard = None
+        if shielded:
+            from emonav_drake.planners.shield import ShieldedPolicy, default_shield_params
+
+            guard = ShieldedPolicy(wrapped, config, model, default_shield_params(model))
+        return MpcNearbyPolicy(wrapped, mpc, cells, guard)
     if kind == "shield":
         from emonav_drake.planners.policy import PolicyPlanner
         from emonav_drake.planners.shield import ShieldedPolicy, default_shield_params

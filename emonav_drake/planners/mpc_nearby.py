@@ -6,19 +6,33 @@ commands from its own LGM; the planner walks the best-scored command within `cel
 steps of the MPC's (`core/nearby_labels.py`). `last_distribution` is the policy's softmax
 over those commands — the soft label a distilling route learns (`DaggerConfig.expert`
 "mpc_nearby"). Not the paper's method: a teacher that keeps the student's own ranking and
-takes from the MPC only where to go.
+takes from the MPC only where to go. With a `shield` (an LGM shield around the same
+policy) only the commands it admits may be chosen: the MPC's guidance, restricted to what
+is safe as the policy's own LGM shows it; where none of the nearby commands is admitted,
+the shield's own distribution (safety first).
 """
 
 from __future__ import annotations
 
+import dataclasses as dc
 from pathlib import Path
 
 import numpy as np
 
+from emonav_drake.core.lgm_shield import shield_distribution
 from emonav_drake.core.mpc import MpcMemory, MpcPlanner
 from emonav_drake.core.navigation import PlannerInput
-from emonav_drake.core.nearby_labels import nearby_distribution
+from emonav_drake.core.nearby_labels import nearby_mask, restricted_softmax
 from emonav_drake.planners.policy import PolicyError, PolicyPlanner, describe_policy
+from emonav_drake.planners.shield import ShieldedPolicy, ShieldMemory
+
+
+@dc.dataclass(frozen=True)
+class NearbyMemory:
+    """The MPC's memory and, with a shield, the shield's."""
+
+    mpc: MpcMemory
+    shield: ShieldMemory | None = None
 
 
 class MpcNearbyPolicy:
@@ -28,6 +42,8 @@ class MpcNearbyPolicy:
         policy: the policy (categorical, reading an "lgm" observation).
         mpc: the MPC whose command sets where to go (its memory is this planner's).
         cells: grid steps around the MPC's command, in u_v and in u_Δθ, the choice may take.
+        shield: None, or the LGM shield around `policy` whose admissible commands bound
+            the choice.
 
     The planner input's `lgm_stack` is the policy's observation (uint8 (N, M, M), oldest
     first, robot frame at the foot switch), its `crowd` the MPC's (world frame); the
@@ -37,7 +53,13 @@ class MpcNearbyPolicy:
 
     name = "policy_mpc_nearby"
 
-    def __init__(self, policy: PolicyPlanner, mpc: MpcPlanner, cells: int = 1) -> None:
+    def __init__(
+        self,
+        policy: PolicyPlanner,
+        mpc: MpcPlanner,
+        cells: int = 1,
+        shield: ShieldedPolicy | None = None,
+    ) -> None:
         if policy.meta["kind"] != "categorical":
             raise PolicyError(
                 f"mpc_nearby needs a categorical policy; {policy.path.name} is a "
@@ -45,7 +67,9 @@ class MpcNearbyPolicy:
             )
         if not isinstance(cells, int) or cells < 0:
             raise ValueError(f"cells must be an int >= 0, got {cells!r}")
-        self.policy, self.mpc, self.cells = policy, mpc, cells
+        if shield is not None and shield.policy is not policy:
+            raise ValueError("the shield must wrap the same policy object")
+        self.policy, self.mpc, self.cells, self.shield = policy, mpc, cells, shield
         self.last_mpc_command: np.ndarray | None = None
         self.last_distribution: np.ndarray | None = None
         self._memory = self.initial_memory()
@@ -68,30 +92,47 @@ class MpcNearbyPolicy:
 
     def describe(self) -> str:
         """The policy and how far from the MPC's command it may choose."""
+        within = " among the LGM shield's admissible commands" if self.shield else ""
         return (
             f"{self.policy.describe()} choosing within {self.cells} grid step(s) of the "
-            "MPC's command"
+            f"MPC's command{within}"
         )
 
-    def initial_memory(self) -> MpcMemory:
-        """The MPC's memory at the start of an episode."""
-        return self.mpc.initial_memory()
+    def initial_memory(self) -> NearbyMemory:
+        """The MPC's (and the shield's) memory at the start of an episode."""
+        shield = self.shield.initial_memory() if self.shield is not None else None
+        return NearbyMemory(self.mpc.initial_memory(), shield)
 
     def reset(self) -> None:
         """Back to `initial_memory()` (a new episode)."""
         self._memory = self.initial_memory()
 
     def plan_with_memory(
-        self, obs: PlannerInput, memory: MpcMemory | None
-    ) -> tuple[np.ndarray, MpcMemory]:
-        """The command next to the MPC's that the policy scores best, and the MPC's memory."""
-        target, memory = self.mpc.plan_with_memory(obs, memory)
+        self, obs: PlannerInput, memory: NearbyMemory | None
+    ) -> tuple[np.ndarray, NearbyMemory]:
+        """The command next to the MPC's that the policy scores best (and the shield
+        admits), and the next memory."""
+        memory = memory if memory is not None else self.initial_memory()
+        target, mpc_memory = self.mpc.plan_with_memory(obs, memory.mpc)
         stack = self.policy.check_observation(obs.lgm_stack)
         scores = self.policy.command_scores(stack, self.policy.goal_state(obs), obs.last_command)
-        dist = nearby_distribution(scores, self.policy.commands, target, self.cells)
+        allowed = nearby_mask(self.policy.commands, target, self.cells)
+        shield_memory = None
+        if self.shield is None:
+            dist = restricted_softmax(scores, allowed)
+        else:
+            gaps, scores, shield_memory = self.shield.gaps(obs, stack, scores, memory.shield)
+            clearance = self.shield.config.robot.radius
+            safe = allowed & (gaps >= clearance)
+            dist = (
+                restricted_softmax(scores, safe)
+                if safe.any()
+                else shield_distribution(scores, gaps, clearance)
+            )
         self.last_mpc_command = np.asarray(target, float).copy()
         self.last_distribution = dist
-        return self.policy.commands[int(np.argmax(dist))].copy(), memory
+        command = self.policy.commands[int(np.argmax(dist))].copy()
+        return command, NearbyMemory(mpc_memory, shield_memory)
 
     def plan(self, obs: PlannerInput) -> np.ndarray:
         """The command (u_v [m/s], u_Δθ [rad]) for this walking step."""

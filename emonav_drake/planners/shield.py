@@ -206,6 +206,22 @@ class ShieldedPolicy:
         """The shielded command and the next memory (the planner interface of the diagram)."""
         stack = self.policy.check_observation(obs.lgm_stack)
         scores = self.policy.command_scores(stack, self.policy.goal_state(obs), obs.last_command)
+        gaps, scores, next_memory = self.gaps(obs, stack, scores, memory)
+        clearance = self.config.robot.radius
+        best, self.last_admissible = shield_choice(scores, gaps, clearance)
+        self.last_distribution = shield_distribution(scores, gaps, clearance)
+        return self.policy.commands[best].copy(), next_memory
+
+    def gaps(
+        self,
+        obs: PlannerInput,
+        stack: np.ndarray,
+        scores: np.ndarray,
+        memory: ShieldMemory | None,
+    ) -> tuple[np.ndarray, np.ndarray, ShieldMemory]:
+        """(each command's gap (C,) [m] — admissible where ≥ the robot's radius —, the
+        scores less the comfort penalty (`comfort_weight`), the next memory) for the
+        checked observation `stack` and the policy's `scores` (C,)."""
         li = self.config.lidar
         points = lgm_hit_points(stack[-1], li.num_beams, li.max_range)
         rb = obs.robot
@@ -214,15 +230,11 @@ class ShieldedPolicy:
         paths = self.predicted_paths(obs, memory)
         velocities, times = self.point_velocities(world, moving, pose, memory, paths.shape[1])
         gaps = path_gaps(paths, points, margins, velocities, times)
-        clearance = self.config.robot.radius
         if self.params.comfort_weight:
             intrusion = self.static_intrusion(paths, points, moving)
             scores = scores - self.params.comfort_weight * intrusion
-        best, self.last_admissible = shield_choice(scores, gaps, clearance)
-        self.last_distribution = shield_distribution(scores, gaps, clearance)
-        command = self.policy.commands[best].copy()
         sent = None if self.response is None else ResponseMemory.after(obs)
-        return command, ShieldMemory(sent, world)
+        return gaps, scores, ShieldMemory(sent, world)
 
     def plan(self, obs: PlannerInput) -> np.ndarray:
         """The command (u_v [m/s], u_Δθ [rad]) for this walking step."""
