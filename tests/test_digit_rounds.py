@@ -93,21 +93,26 @@ def test_resuming_the_rounds_from_a_damaged_state_names_it_and_the_changed_setti
     assert "settings that differ from the saved ones: episodes: 7 → 2" in caplog.text
 
 
-def test_a_digit_round_collected_on_ray_equals_the_serial_one():
-    """The shield's soft labels on Digit, on two Ray workers and serially: the same
-    frames, states, labels and distributions, bit for bit (both on one torch thread)."""
+@pytest.mark.parametrize(
+    "expert",
+    [dict(expert="shield"), dict(expert="mpc_nearby", expert_shield=True)],
+    ids=["shield", "mpc_nearby_shield"],
+)
+def test_a_digit_round_collected_on_ray_equals_the_serial_one(expert):
+    """The soft labels on Digit (the shield's; the MPC-steered policy's within its shield),
+    on two Ray workers and serially: the same frames, states, labels and distributions, bit
+    for bit (both on one torch thread); each label is its distribution's argmax."""
     from emonav_drake.learning.digit_dagger import collect_round
     from emonav_drake.planners.policy import DEFAULT_POLICY
 
     short = EmoNavConfig()
     short.episode.max_steps = 3
-    cfg = DigitRoundsConfig(
-        episodes=2, beta=0.5, expert="shield", expert_policy="emobipednav_digit_mpc"
-    )
+    cfg = DigitRoundsConfig(episodes=2, beta=0.5, expert_policy="emobipednav_digit_mpc", **expert)
     serial = collect_round(DEFAULT_POLICY, cfg, 0, 1, None, short)
     ray = collect_round(DEFAULT_POLICY, cfg, 0, 2, None, short)
     assert [e["seed"] for e in ray] == [e["seed"] for e in serial] == [4_000_000, 4_000_001]
     for a, b in zip(serial, ray, strict=True):
         assert a["targets"].shape == (len(a["labels"]), 99)
+        assert (a["targets"].argmax(axis=1) == a["labels"]).all()
         for key in ("frames", "states", "labels", "targets"):
             assert np.array_equal(a[key], b[key]), key

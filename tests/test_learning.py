@@ -479,3 +479,44 @@ def test_nearby_labels_reject_what_they_cannot_use():
         DaggerConfig(expert="mpc", soft_labels=True).validate()
     with pytest.raises(ConfigError, match="needs the policy it steers"):
         route_expert(EmoNavConfig(), "mpc_nearby", 0.0, "digit")
+
+
+def test_a_shielded_mpc_nearby_expert_chooses_only_what_the_shield_admits():
+    """`expert_shield`: the MPC's neighbourhood is cut to the commands the policy's own LGM
+    shield admits; the label is the policy's softmax on what is left (or, where nothing is,
+    the shield's distribution), and on seed 10⁶ + 34 the shield removes nearby commands."""
+    from emonav_drake.core.lgm_shield import shield_distribution
+    from emonav_drake.core.nearby_labels import nearby_mask
+
+    env_cfg = EmoNavConfig()
+    response = load_response("digit")
+    world = NavigationWorld(
+        sample_scenario(10**6 + 34, env_cfg), env_cfg, goal_radius=0.2, response=response
+    )
+    expert = route_expert(
+        env_cfg, "mpc_nearby", 0.0, "digit", policy="emobipednav_digit_mpc", shielded=True
+    )
+    policy, grid, r = expert.policy, expert.policy.commands, env_cfg.robot.radius
+    memory, cut = expert.initial_memory(), 0
+    for _ in range(20):
+        obs = world.planner_input()
+        scores = policy.command_scores(obs.lgm_stack, policy.goal_state(obs), obs.last_command)
+        gaps, _, _ = expert.shield.gaps(obs, obs.lgm_stack, scores, memory.shield)
+        u, memory = expert.plan_with_memory(obs, memory)
+        near = nearby_mask(grid, expert.last_mpc_command, 1)
+        safe = near & (gaps >= r)
+        i = command_index(grid, u)
+        if safe.any():
+            assert safe[i] and scores[i] == scores[safe].max()
+        else:
+            np.testing.assert_allclose(
+                expert.last_distribution, shield_distribution(scores, gaps, r)
+            )
+        cut += bool((near & ~safe).any())
+        if world.step(u)[1] is not None:
+            break
+    assert cut > 0
+    from emonav_drake.params import ConfigError
+
+    with pytest.raises(ConfigError, match="expert_shield needs expert = mpc_nearby"):
+        DaggerConfig(expert="shield", init_policy="shipped", expert_shield=True).validate()

@@ -423,8 +423,14 @@ def test_dagger_ctrl_c_at_a_random_point_then_resume_is_bit_exact(
         dict(expert="mpc"),
         dict(expert="shield", expert_policy="emobipednav_digit_mpc", soft_labels=True),
         dict(expert="mpc_nearby", expert_policy="emobipednav_digit_mpc", soft_labels=True),
+        dict(
+            expert="mpc_nearby",
+            expert_policy="emobipednav_digit_mpc",
+            soft_labels=True,
+            expert_shield=True,
+        ),
     ],
-    ids=["mpc", "shield_soft", "mpc_nearby_soft"],
+    ids=["mpc", "shield_soft", "mpc_nearby_soft", "mpc_nearby_shield_soft"],
 )
 def test_an_expert_route_stopped_in_its_rollouts_resumes_bit_exact(tmp_path, monkeypatch, expert):
     """The routes of the MPC route's policy (MPC expert), of its distilled successor (the

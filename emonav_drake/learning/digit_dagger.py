@@ -187,8 +187,10 @@ class DigitRoundsConfig:
             raise ConfigError(f"digit_fraction = {self.digit_fraction}: must be in (0, 1]")
         if not 0.0 <= self.expert_margin <= 2.0:
             raise ConfigError(f"expert_margin = {self.expert_margin}: must be in [0, 2] m")
-        if self.expert not in ("dwa", "mpc"):
-            raise ConfigError(f"expert = {self.expert!r}: must be 'dwa' or 'mpc'")
+        from emonav_drake.planners.model_aware import EXPERTS
+
+        if self.expert not in EXPERTS:
+            raise ConfigError(f"expert = {self.expert!r}: must be one of {list(EXPERTS)}")
         if not 0 <= self.seed <= MAX_SEED:
             raise ConfigError(f"seed = {self.seed}: must be in [0, 2**64 - 1]")
         last = self.first_seed + self.rounds * self.episodes - 1
