@@ -520,3 +520,12 @@ def test_a_shielded_mpc_nearby_expert_chooses_only_what_the_shield_admits():
 
     with pytest.raises(ConfigError, match="expert_shield needs expert = mpc_nearby"):
         DaggerConfig(expert="shield", init_policy="shipped", expert_shield=True).validate()
+
+
+@pytest.mark.parametrize("name", ["policy_mpc_digit", "policy_mpc_shield_digit"])
+def test_the_mpc_steered_planners_run_a_seeded_episode_on_both_plants(sim_on_both_plants, name):
+    """By name through `emonav sim`: a whole LIP episode and 6 Digit steps, twice each to
+    the same record (the MPC's warm start and the shield's memory are per episode)."""
+    records = sim_on_both_plants(["--planner", name], 11)
+    assert records["lip"]["outcome"] in ("success", "collision", "timeout")
+    assert records["digit"]["steps"] == 6 and records["digit"]["path_length"] > 0.3

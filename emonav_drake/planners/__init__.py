@@ -106,6 +106,26 @@ def _shielded(name: str, response: str, config: EmoNavConfig, checkpoint, device
     return planner
 
 
+def _mpc_nearby(name: str, shielded: bool, config: EmoNavConfig, checkpoint, device: str):
+    from emonav_drake.planners.model_aware import mpc_nearby_expert
+    from emonav_drake.planners.policy import PolicyPlanner
+
+    policy = PolicyPlanner(checkpoint, device=device, robot_radius=config.robot.radius)
+    planner = mpc_nearby_expert(config, policy, "digit", shielded=shielded)
+    planner.name = name
+    return planner
+
+
+# A policy steered by the MPC (`planners/mpc_nearby.py`, the "mpc_nearby" DAgger expert):
+# NAME: (behind its LGM shield too, what it says).
+MPC_STEERED = {
+    "policy_mpc_digit": (False, "within one grid step of the Digit MPC's command"),
+    "policy_mpc_shield_digit": (
+        True,
+        "within one grid step of the Digit MPC's command, among its shield's admissible ones",
+    ),
+}
+
 # The LGM shield (`planners/shield.py`) in front of a policy: NAME predicts with the LIP,
 # NAME_digit with Digit's fitted step response (as dwa / dwa_digit).
 SHIELDED = {
@@ -174,6 +194,17 @@ for _name, (_default, _what) in SHIELDED.items():
                 runs_as=_name + _suffix,
             )
         )
+for _name, (_shielded_too, _what) in MPC_STEERED.items():
+    register(
+        PlannerKind(
+            _name,
+            functools.partial(_mpc_nearby, _name, _shielded_too),
+            True,
+            _default_policy,
+            f"a categorical policy (default: shipped) choosing {_what} (privileged teacher)",
+            runs_as=_name,
+        )
+    )
 register(PlannerKind("sac", _sac, True, _no_sac_checkpoint, "a SAC-trained actor"))
 register(
     PlannerKind(

@@ -78,8 +78,6 @@ def route_expert(
     `response`, its margins widened by `clearance`; with `shielded`, only among the
     commands the policy's LGM shield admits; `planners/mpc_nearby.py`)."""
     if kind == "mpc_nearby":
-        from emonav_drake.core.mpc import MpcPlanner
-        from emonav_drake.planners.mpc_nearby import MpcNearbyPolicy
         from emonav_drake.planners.policy import PolicyPlanner
         from emonav_drake.planners.variants import resolve_policy_file
 
@@ -88,14 +86,7 @@ def route_expert(
         wrapped = PolicyPlanner(
             resolve_policy_file(policy, "expert_policy"), robot_radius=config.robot.radius
         )
-        model = load_response(response)
-        mpc = MpcPlanner(_widened(config, clearance), model)
-        guard = None
-        if shielded:
-            from emonav_drake.planners.shield import ShieldedPolicy, default_shield_params
-
-            guard = ShieldedPolicy(wrapped, config, model, default_shield_params(model))
-        return MpcNearbyPolicy(wrapped, mpc, cells, guard)
+        return mpc_nearby_expert(config, wrapped, response, clearance, cells, shielded)
     if kind == "shield":
         from emonav_drake.planners.policy import PolicyPlanner
         from emonav_drake.planners.shield import ShieldedPolicy, default_shield_params
@@ -115,6 +106,30 @@ def route_expert(
     if kind != "dwa":
         raise ConfigError(f"expert = {kind!r} is invalid: must be one of {list(EXPERTS)}")
     return model_aware_expert(config, margin, response)
+
+
+def mpc_nearby_expert(
+    config: EmoNavConfig,
+    policy,
+    response: str = "digit",
+    clearance: float = 0.0,
+    cells: int = 1,
+    shielded: bool = False,
+):
+    """The categorical `policy` (a `PolicyPlanner`) choosing within `cells` grid steps of the
+    OSQP MPC's command, the MPC planning with `response` ("" = the LIP) and its margins
+    widened by `clearance` [m]; with `shielded`, only among the commands the policy's LGM
+    shield admits (the registered shields' settings for `response`). `planners/mpc_nearby.py`."""
+    from emonav_drake.core.mpc import MpcPlanner
+    from emonav_drake.planners.mpc_nearby import MpcNearbyPolicy
+    from emonav_drake.planners.shield import ShieldedPolicy, default_shield_params
+
+    model = load_response(response)
+    mpc = MpcPlanner(_widened(config, clearance), model)
+    guard = None
+    if shielded:
+        guard = ShieldedPolicy(policy, config, model, default_shield_params(model))
+    return MpcNearbyPolicy(policy, mpc, cells, guard)
 
 
 def _widened(config: EmoNavConfig, clearance: float) -> EmoNavConfig:
