@@ -15,7 +15,6 @@ the shield's own distribution (safety first).
 from __future__ import annotations
 
 import dataclasses as dc
-from pathlib import Path
 
 import numpy as np
 
@@ -23,7 +22,12 @@ from emonav_drake.core.lgm_shield import shield_distribution
 from emonav_drake.core.mpc import MpcMemory, MpcPlanner
 from emonav_drake.core.navigation import PlannerInput
 from emonav_drake.core.nearby_labels import nearby_mask, restricted_softmax
-from emonav_drake.planners.policy import PolicyError, PolicyPlanner, describe_policy
+from emonav_drake.planners.policy import (
+    PolicyError,
+    PolicyPlanner,
+    WrappedPolicy,
+    describe_policy,
+)
 from emonav_drake.planners.shield import ShieldedPolicy, ShieldMemory
 
 
@@ -35,7 +39,7 @@ class NearbyMemory:
     shield: ShieldMemory | None = None
 
 
-class MpcNearbyPolicy:
+class MpcNearbyPolicy(WrappedPolicy):
     """A categorical `PolicyPlanner` choosing among the commands next to the MPC's.
 
     Args:
@@ -73,22 +77,6 @@ class MpcNearbyPolicy:
         self.last_mpc_command: np.ndarray | None = None
         self.last_distribution: np.ndarray | None = None
         self._memory = self.initial_memory()
-
-    @property
-    def grid_kind(self) -> str:
-        return self.policy.grid_kind
-
-    @property
-    def expected_shape(self) -> tuple[int, ...]:
-        return self.policy.expected_shape
-
-    @property
-    def expected_dtype(self) -> np.dtype:
-        return self.policy.expected_dtype
-
-    @property
-    def path(self) -> Path:
-        return self.policy.path
 
     def describe(self) -> str:
         """The policy and how far from the MPC's command it may choose."""

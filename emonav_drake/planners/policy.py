@@ -460,6 +460,29 @@ def export_torchscript(path: str | Path, out: str | Path) -> Path:
     return out
 
 
+class WrappedPolicy:
+    """A planner around a `PolicyPlanner` (`self.policy`) that reads the policy's
+    observation: the diagram's map builder produces what these properties say."""
+
+    policy: PolicyPlanner
+
+    @property
+    def grid_kind(self) -> str:
+        return self.policy.grid_kind
+
+    @property
+    def expected_shape(self) -> tuple[int, ...]:
+        return self.policy.expected_shape
+
+    @property
+    def expected_dtype(self) -> np.dtype:
+        return self.policy.expected_dtype
+
+    @property
+    def path(self) -> Path:
+        return self.policy.path
+
+
 class _ActorMean(torch.nn.Module):
     def __init__(self, actor: Actor) -> None:
         super().__init__()

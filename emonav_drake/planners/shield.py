@@ -12,7 +12,6 @@ method: both are the paper's policy plus a layer that reads nothing the policy d
 from __future__ import annotations
 
 import dataclasses as dc
-from pathlib import Path
 
 import numpy as np
 
@@ -33,7 +32,12 @@ from emonav_drake.core.lip import LipState, lip_rollout
 from emonav_drake.core.navigation import PlannerInput
 from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.params import EmoNavConfig
-from emonav_drake.planners.policy import PolicyError, PolicyPlanner, describe_policy
+from emonav_drake.planners.policy import (
+    PolicyError,
+    PolicyPlanner,
+    WrappedPolicy,
+    describe_policy,
+)
 
 
 def default_shield_params(response: StepResponseModel | str | None) -> ShieldParams:
@@ -60,7 +64,7 @@ class ShieldMemory:
     seen: np.ndarray | None = None
 
 
-class ShieldedPolicy:
+class ShieldedPolicy(WrappedPolicy):
     """A categorical `PolicyPlanner` whose command passes the LGM shield.
 
     Args:
@@ -101,23 +105,6 @@ class ShieldedPolicy:
         self.last_admissible = True
         self.last_distribution: np.ndarray | None = None
         self._memory = self.initial_memory()
-
-    # What the diagram's map builder must produce: the policy's observation.
-    @property
-    def grid_kind(self) -> str:
-        return self.policy.grid_kind
-
-    @property
-    def expected_shape(self) -> tuple[int, ...]:
-        return self.policy.expected_shape
-
-    @property
-    def expected_dtype(self) -> np.dtype:
-        return self.policy.expected_dtype
-
-    @property
-    def path(self) -> Path:
-        return self.policy.path
 
     def describe(self) -> str:
         """The policy, and the shield's prediction, margins and braking steps."""
