@@ -43,16 +43,16 @@ class MpcNearbyPolicy(WrappedPolicy):
     """A categorical `PolicyPlanner` choosing among the commands next to the MPC's.
 
     Args:
-        policy: the policy (categorical, reading an "lgm" observation).
+        policy: the policy (categorical; with a shield, reading an "lgm" observation).
         mpc: the MPC whose command sets where to go (its memory is this planner's).
         cells: grid steps around the MPC's command, in u_v and in u_Δθ, the choice may take.
         shield: None, or the LGM shield around `policy` whose admissible commands bound
             the choice.
 
-    The planner input's `lgm_stack` is the policy's observation (uint8 (N, M, M), oldest
-    first, robot frame at the foot switch), its `crowd` the MPC's (world frame); the
-    command is (u_v [m/s], u_Δθ [rad]). `last_mpc_command` and `last_distribution` (C,)
-    are written by every planning step and never read back.
+    The planner input's `lgm_stack` is the policy's observation (for an LGM policy uint8
+    (N, M, M), oldest first, robot frame at the foot switch), its `crowd` the MPC's (world
+    frame); the command is (u_v [m/s], u_Δθ [rad]). `last_mpc_command` and
+    `last_distribution` (C,) are written by every planning step and never read back.
     """
 
     name = "policy_mpc_nearby"
