@@ -17,7 +17,12 @@ from __future__ import annotations
 from pathlib import Path
 
 from emonav_drake.evaluation.run_directory import read_trials
-from emonav_drake.evaluation.tables import format_p, mcnemar_exact, wilson_interval
+from emonav_drake.evaluation.tables import (
+    format_p,
+    mcnemar_exact,
+    signed_rank_p,
+    wilson_interval,
+)
 
 RESULTS = Path(__file__).resolve().parent.parent / "benchmarks" / "results"
 NEW = "digit_table2_v3"
@@ -41,18 +46,6 @@ def _p(p: float) -> str:
     """ "= 0.29" or "< 1e-4"."""
     text = format_p(p)
     return text if text.startswith("<") else f"= {text}"
-
-
-def dt_signed_rank(old: list[int], new: list[int]) -> float:
-    """Two-sided Wilcoxon signed-rank p-value of the paired per-trial DT (walking steps in a
-    discomfort zone) differences new − old; 1.0 when every pair is equal (seeds with equal
-    DT are dropped, the test's "wilcox" rule)."""
-    from scipy.stats import wilcoxon
-
-    d = [b - a for a, b in zip(old, new, strict=True)]
-    if not any(d):
-        return 1.0
-    return float(wilcoxon(d, zero_method="wilcox", alternative="two-sided").pvalue)
 
 
 def _sr(k: int, n: int) -> str:
@@ -100,7 +93,7 @@ def main() -> None:
         c = sum(new[s] and not old[s] for s in seeds)
         dt_old = [old_r[s]["discomfort_steps"] for s in seeds]
         dt_new = [new_r[s]["discomfort_steps"] for s in seeds]
-        p_dt = _p(dt_signed_rank(dt_old, dt_new))
+        p_dt = _p(signed_rank_p(dt_old, dt_new))
         print(
             f"| {label} | {seeds[0]}–{seeds[-1]} ({n}) | {_sr(k_old, n)} ({run}) | "
             f"{_sr(k_new, n)} | {b} | {c} (McNemar p {_p(mcnemar_exact(b, c))}) | "

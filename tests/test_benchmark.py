@@ -99,6 +99,9 @@ def test_wilson_and_mcnemar_values():
     assert tables.mcnemar_exact(0, 6) == pytest.approx(0.03125)
     assert tables.mcnemar_exact(3, 3) == 1.0 and tables.mcnemar_exact(0, 0) == 1.0
     assert tables.mcnemar_exact(1, 9) == pytest.approx(0.021484375)
+    # signed ranks: six pairs all worse, no ties → exact two-sided p = 2 / 2**6
+    assert tables.signed_rank_p([0] * 6, [1, 2, 3, 4, 5, 6]) == pytest.approx(0.03125)
+    assert tables.signed_rank_p([2, 0, 5], [2, 0, 5]) == 1.0
 
 
 def test_ray_equals_serial_and_a_ray_run_survives_ctrl_c(reference, tmp_path):

@@ -55,6 +55,18 @@ def mcnemar_exact(b: int, c: int) -> float:
     return min(1.0, 2.0 * tail)
 
 
+def signed_rank_p(old: Sequence[float], new: Sequence[float]) -> float:
+    """Two-sided Wilcoxon signed-rank p-value of paired differences new − old (e.g. each
+    seed's DT under two methods); pairs with no difference are dropped (the "wilcox" rule),
+    and 1.0 when every pair is equal."""
+    from scipy.stats import wilcoxon
+
+    d = [b - a for a, b in zip(old, new, strict=True)]
+    if not any(d):
+        return 1.0
+    return float(wilcoxon(d, zero_method="wilcox", alternative="two-sided").pvalue)
+
+
 def method_order(trials: Iterable[dict], methods: Sequence[str] | None = None) -> list[str]:
     """`methods` (those with trials), then any other method of `trials` in sorted order."""
     present = {t["method"] for t in trials}
