@@ -30,6 +30,7 @@ LAYERS: list[tuple[str, frozenset[str]]] = [
                 "param_ranges",
                 "atomic_io",
                 "torch_load",
+                "run_lock",
                 "provenance",
                 "registry",
                 "parallel",

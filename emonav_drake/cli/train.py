@@ -23,6 +23,7 @@ from emonav_drake.cli.common import SeedArg
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.params import ConfigError
 from emonav_drake.planners.variants import VARIANTS, variant
+from emonav_drake.run_lock import claim_new_run, locked_directory
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -82,19 +83,65 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         help="--algo sac with num_envs > 1: step the environments on this Ray cluster "
         "(e.g. auto or HOST:6379; default: a local Ray)",
     )
-    t.add_argument("--seed", action=SeedArg, default=0, help="seed of the run, in [0, 2**64 - 1]")
-    t.add_argument("--device", default="cpu", help="cpu or cuda (cuda:N)")
     t.add_argument(
-        "--out", type=Path, help="run directory (default: runs/train, or runs/NAME with --variant)"
+        "--seed",
+        action=SeedArg,
+        help="seed of the run, in [0, 2**64 - 1] (default 0; with --resume: the run's own)",
     )
-    t.add_argument("--resume", type=Path, help="continue the run in this directory")
+    t.add_argument(
+        "--device", help="cpu or cuda (cuda:N) (default cpu; with --resume: the run's own)"
+    )
+    t.add_argument(
+        "--out",
+        type=Path,
+        help="run directory, new or empty (default: runs/train, or runs/NAME with --variant); "
+        "a directory that holds files is refused unless --overwrite",
+    )
+    t.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="start a new run in --out although it holds one: the previous run's files "
+        "(states, policies, history, learning curve) are removed, other files kept",
+    )
+    t.add_argument(
+        "--resume",
+        type=Path,
+        help="continue the run in this directory, with its own configuration (route and "
+        "--config are read from the run; flags given override them)",
+    )
     t.set_defaults(func=cmd_train)
     return t
 
 
+# The state file each route keeps in its run directory: what `--resume` reads.
+STATE_FILES = {
+    "sac": "checkpoint.pt",
+    "dagger": "dagger_state.pt",
+    "finetune": "finetune_state.pt",
+    "sarl": "sarl_state.pt",
+}
+
+
+def _resumed_algo(resume: Path) -> str:
+    """The route of the run in `resume`, from the state file it holds."""
+    if not resume.is_dir():
+        raise ConfigError(f"--resume {resume}: no such run directory")
+    found = [algo for algo, name in STATE_FILES.items() if (resume / name).is_file()]
+    if len(found) != 1:
+        names = ", ".join(STATE_FILES.values())
+        what = "none of" if not found else "more than one of"
+        raise ConfigError(
+            f"--resume {resume}: holds {what} the training states ({names}); give --algo"
+        )
+    return found[0]
+
+
 def _apply_variant(args: argparse.Namespace) -> None:
-    """--variant NAME → --algo dagger --config <the variant's YAML>, --out runs/NAME."""
+    """--variant NAME → --algo dagger --config <the variant's YAML>, --out runs/NAME; a
+    --resume without --algo takes the route of the run it continues."""
     if args.variant is None:
+        if args.algo is None and args.resume is not None:
+            args.algo = _resumed_algo(args.resume)
         args.algo = args.algo or "sac"
         if args.out is None:
             args.out = Path("runs/train")
@@ -148,10 +195,18 @@ def _training_config(args: argparse.Namespace):
     else:
         from emonav_drake.learning.config import SacConfig as schema
     _check_init(args)
-    cfg = load_typed_yaml(schema, path=args.config) if args.config else schema()
+    if args.config is not None:
+        cfg = load_typed_yaml(schema, path=args.config)
+    elif args.resume is not None and args.variant is None:
+        cfg = _saved_config(args.resume, args.algo, schema)
+    else:
+        cfg = schema()
     if args.steps is not None and args.steps < 1:
         raise ConfigError(f"--steps {args.steps}: must be >= 1")
-    cfg.seed, cfg.device = args.seed, args.device
+    if args.seed is not None or args.resume is None:
+        cfg.seed = args.seed or 0
+    if args.device is not None or args.resume is None:
+        cfg.device = args.device or "cpu"
     if args.steps is not None:
         cfg.total_steps = args.steps
     if args.plant is not None:
@@ -169,6 +224,34 @@ def _training_config(args: argparse.Namespace):
     except ConfigError as e:
         raise ConfigError(f"{where}{e}") from None
     return cfg
+
+
+def _saved_config(run: Path, algo: str, schema: type):
+    """The configuration the run in `run` was started with (its state file's `config`),
+    checked as a --config file would be; `RunStateError` if the state cannot be read."""
+    import json
+
+    from emonav_drake.config_yaml import load_typed_yaml
+    from emonav_drake.learning.run_state import RunStateError, read_state_config
+
+    name = STATE_FILES[algo]
+    if not (run / name).is_file():
+        return schema()  # the trainer says there is nothing to resume
+    if algo == "dagger":  # the routes with a reader of their own: the same checks
+        from emonav_drake.learning.dagger_state import read_dagger_state
+
+        return read_dagger_state(run / name)[0]
+    if algo == "finetune":
+        from emonav_drake.learning.finetune_state import read_finetune_state
+
+        return read_finetune_state(run / name)[0]
+    saved = read_state_config(run / name)
+    try:
+        return load_typed_yaml(schema, data=json.dumps(saved))
+    except ConfigError as e:
+        raise RunStateError(
+            f"{name} in {run}: its configuration does not load ({e}); give --config"
+        ) from None
 
 
 def _refuse_sac_flags(args: argparse.Namespace, flags: tuple[str, ...], why: str) -> None:
@@ -215,7 +298,7 @@ def resume_command(args: argparse.Namespace, out: Path) -> str:
         ("--envs", args.envs),
         ("--ray-address", args.ray_address),
         ("--seed", args.seed or None),
-        ("--device", None if args.device == "cpu" else args.device),
+        ("--device", None if args.device in (None, "cpu") else args.device),
     ):
         if value is not None:
             words += [flag, str(value)]
@@ -227,14 +310,31 @@ def cmd_train(args: argparse.Namespace) -> int:
     from emonav_drake.planners.policy import resolve_device
 
     _apply_variant(args)
-    cfg = _training_config(args)
-    resolve_device(args.device)
     if args.resume is not None:
+        if args.overwrite:
+            raise ConfigError("--overwrite starts a new run: it cannot be combined with --resume")
         if not args.resume.is_dir():
             raise ConfigError(f"--resume {args.resume}: no such run directory")
+    cfg = _training_config(args)
+    resolve_device(cfg.device)
+    if args.resume is not None:
         out = args.resume
     else:
         out = check_output_dir(args.out, "--out")
+    created = not out.exists()
+    try:
+        with locked_directory(out, "--resume" if args.resume else "--out", "training run"):
+            if args.resume is None:
+                for p in claim_new_run(out, args.overwrite):
+                    print(f"--overwrite: removed {p}", file=sys.stderr)
+            return _run_training(args, cfg, out)
+    finally:
+        if created and out.is_dir() and not any(out.iterdir()):
+            out.rmdir()  # refused before any work: leave no empty folder behind
+
+
+def _run_training(args: argparse.Namespace, cfg, out: Path) -> int:
+    """The chosen trainer, into the locked run directory `out`."""
     command = "emonav " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     if args.algo == "finetune":
         from emonav_drake.learning.finetune import train_finetune
@@ -242,7 +342,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         from emonav_drake.params import EmoNavConfig
 
         if args.resume is None:
-            load_init(args.init, EmoNavConfig(), args.device, "--init")  # before --out exists
+            load_init(args.init, EmoNavConfig(), cfg.device, "--init")  # before --out exists
         path = train_finetune(
             out,
             cfg,

@@ -20,8 +20,10 @@ a file of another format is refused with a `RunStateError` naming the file.
 
 Saves are atomic and durable (`atomic_io.atomic_write`): the file is written to a
 temporary sibling `STEM.tmp-<pid>-<random>SUFFIX`, fsynced, then renamed over `NAME`,
-and the directory is fsynced. A save killed half-way (SIGKILL, power loss) leaves only
-such a temp file; `clean_stale_temp_files` removes those of dead processes when the next
+and the directory is fsynced. A full disk during a save is an `OSError` naming the file
+("No space left on device: …/checkpoint.pt not written"), the temp file removed and the
+previous state kept. A save killed half-way (SIGKILL, power loss) leaves only such a temp
+file; `clean_stale_temp_files` removes those of dead processes when the next
 run starts (and those of the earlier writers: `NAME.emonav-<pid>.tmp`, pickle-era names).
 
 `InterruptGuard` turns Ctrl-C (and SIGTERM) into a request that the trainer polls at
@@ -46,7 +48,7 @@ import numpy as np
 import torch
 
 from emonav_drake.atomic_io import atomic_write, process_alive
-from emonav_drake.torch_load import load_failure, refused_global
+from emonav_drake.torch_load import CheckpointReadError, load_checked
 
 SAC_FORMAT = "emonav-sac-checkpoint/2"
 DAGGER_FORMAT = "emonav-dagger-state/2"
@@ -170,7 +172,7 @@ def write_run_state(path: str | Path, fmt: str, state: Any, tensors: dict[str, A
     atomic_write(path, lambda f: torch.save(blob, f))
 
 
-def read_run_state(path: str | Path, fmt: str) -> tuple[Any, dict[str, Any]]:
+def read_run_state(path: str | Path, fmt: str | None) -> tuple[Any, dict[str, Any]]:
     """Load what `write_run_state` wrote, without running code; `RunStateError` if the
     file is missing, damaged, of another format or not ours."""
     path = Path(path)
@@ -179,22 +181,18 @@ def read_run_state(path: str | Path, fmt: str) -> tuple[Any, dict[str, Any]]:
     if not path.is_file():
         raise RunStateError(f"{where} does not exist: nothing to resume")
     try:
-        blob = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as e:  # noqa: BLE001 — every failure is reported the same way
-        refused = refused_global(e)
-        if refused is not None and refused.startswith("numpy"):
+        blob = load_checked(path)
+    except CheckpointReadError as e:
+        if e.kind == "code" and (e.refused or "").startswith("numpy"):
             raise RunStateError(
                 f"{where} was written by an older emonav (format 1, pickle-based) and "
                 f"cannot be resumed safely; start a new run"
             ) from None
-        if refused is not None:
-            raise RunStateError(
-                f"{where} is not an emonav run state: loading it would run code "
-                f"({refused}); refused — {fresh}"
-            ) from None
-        raise RunStateError(
-            f"{where} is damaged or truncated ({load_failure(e)}); {fresh}"
-        ) from None
+        if e.kind == "code":
+            raise RunStateError(f"{where} is not an emonav run state: {e} — {fresh}") from None
+        if e.kind == "damaged":
+            raise RunStateError(f"{where} is damaged or truncated ({e}); {fresh}") from None
+        raise RunStateError(f"{where}: {e}; {fresh}") from None
     if not isinstance(blob, dict):
         raise RunStateError(f"{where} is not an emonav run state; {fresh}")
     found = blob.get("format")
@@ -203,7 +201,7 @@ def read_run_state(path: str | Path, fmt: str) -> tuple[Any, dict[str, Any]]:
             f"{where} was written by an older emonav (format 1) and cannot be resumed "
             f"safely; start a new run"
         )
-    if found != fmt:
+    if fmt is not None and found != fmt:
         raise RunStateError(f"{where} has format {found!r}, this emonav reads {fmt!r}; {fresh}")
     try:
         state = unpack(blob["state"], blob["arrays"])
@@ -213,6 +211,17 @@ def read_run_state(path: str | Path, fmt: str) -> tuple[Any, dict[str, Any]]:
     except (KeyError, TypeError, ValueError, AttributeError, RecursionError) as e:
         raise RunStateError(f"{where} is damaged ({e}); {fresh}") from None
     return state, tensors
+
+
+def read_state_config(path: str | Path) -> dict[str, Any]:
+    """The configuration a run state of any route records (its `config`), read as
+    `read_run_state` reads the whole state; `RunStateError` if it has none."""
+    state, _ = read_run_state(path, None)
+    config = state.get("config")
+    if not isinstance(config, dict):
+        path = Path(path)
+        raise RunStateError(f"{path.name} in {path.parent} records no configuration")
+    return config
 
 
 def check_state(where: str, fn: Callable[[], Any], changes: list[str] | None = None) -> Any:

@@ -23,7 +23,6 @@ goal's (`core/goal_input.py`): the discs are then known map obstacles.
 
 from __future__ import annotations
 
-import io
 import math
 from pathlib import Path
 from typing import Any
@@ -43,7 +42,7 @@ from emonav_drake.planners.networks import (
     ScanEncoder,
     ScanLstmEncoder,
 )
-from emonav_drake.torch_load import load_failure, refused_global
+from emonav_drake.torch_load import CheckpointReadError, load_checked
 
 FORMAT = "emonav-policy/1"
 _DATA = Path(__file__).resolve().parent.parent / "data"
@@ -290,6 +289,22 @@ def probe_input(meta: dict[str, Any]) -> tuple[torch.Tensor, torch.Tensor]:
     return torch.zeros(1, frames, size, size, dtype=torch.uint8), torch.zeros(1, 4)
 
 
+# A trained network's weights are of order 1 (the shipped policies' largest is 6.2); a
+# weight this large is a damaged or tampered file, whose policy would saturate.
+MAX_WEIGHT = 1e6
+
+
+def _check_weight_magnitude(path: Path, state_dict: dict[str, torch.Tensor]) -> None:
+    """`PolicyError` if a weight's magnitude reaches `MAX_WEIGHT`."""
+    for name, w in state_dict.items():
+        if w.is_floating_point() and w.numel() and float(w.abs().max()) >= MAX_WEIGHT:
+            raise PolicyError(
+                f"policy checkpoint {path}: weight {name} reaches {float(w.abs().max()):.3g} "
+                f"(a trained policy's are of order 1; >= {MAX_WEIGHT:g} is refused): a damaged "
+                "or altered file"
+            )
+
+
 def load_policy(path: str | Path, device: str = "cpu") -> tuple[torch.nn.Module, dict]:
     """Load a checkpoint; `PolicyError` names what is wrong (file, format, fields, shapes).
 
@@ -304,17 +319,13 @@ def load_policy(path: str | Path, device: str = "cpu") -> tuple[torch.nn.Module,
     if not path.is_file():
         raise PolicyError(f"policy checkpoint {path} does not exist")
     try:
-        blob = torch.load(io.BytesIO(path.read_bytes()), map_location=dev, weights_only=True)
-    except Exception as e:  # noqa: BLE001 — every failure is reported the same way
-        refused = refused_global(e)
-        if refused is not None:
-            raise PolicyError(
-                f"{path} is not an emonav policy checkpoint: loading it would run code "
-                f"({refused}); refused"
-            ) from None
-        raise PolicyError(
-            f"{path} is not a readable policy checkpoint ({load_failure(e)})"
-        ) from None
+        blob = load_checked(path, map_location=dev)
+    except CheckpointReadError as e:
+        if e.kind == "code":
+            raise PolicyError(f"{path} is not an emonav policy checkpoint: {e}") from None
+        if e.kind == "damaged":
+            raise PolicyError(f"{path} is not a readable policy checkpoint ({e})") from None
+        raise PolicyError(f"policy checkpoint {path}: {e}") from None
     if not isinstance(blob, dict) or blob.get("format") != FORMAT:
         raise PolicyError(f"{path} is not an {FORMAT} checkpoint")
     _check_meta(path, blob)
@@ -325,6 +336,7 @@ def load_policy(path: str | Path, device: str = "cpu") -> tuple[torch.nn.Module,
         raise PolicyError(f"{path}: {e}") from None
     except (KeyError, RuntimeError, TypeError, ValueError) as e:
         raise PolicyError(f"{path}: weights do not match the described network: {e}") from None
+    _check_weight_magnitude(path, blob["state_dict"])
     model.to(dev).eval()
     obs, state = probe_input(blob)
     try:
@@ -445,9 +457,11 @@ class PolicyPlanner:
 def export_torchscript(path: str | Path, out: str | Path) -> Path:
     """Export a checkpoint's network to TorchScript (inputs: uint8 stack, vector state).
 
-    The file is written atomically (a temporary sibling renamed when complete).
+    The file is written atomically (a temporary sibling renamed when complete), through a
+    file object: a full disk is an `OSError` naming `out` (torch's own file writer would
+    abort the process).
     """
-    from emonav_drake.atomic_io import atomic_output, check_output_file
+    from emonav_drake.atomic_io import check_output_file
 
     out = check_output_file(out)
     model, meta = load_policy(path)
@@ -455,8 +469,7 @@ def export_torchscript(path: str | Path, out: str | Path) -> Path:
     scripted = torch.jit.trace(
         model if meta["kind"] == "categorical" else _ActorMean(model), example
     )
-    with atomic_output(out) as tmp:
-        scripted.save(str(tmp))
+    atomic_write(out, lambda f: torch.jit.save(scripted, f), durable=False)
     return out
 
 

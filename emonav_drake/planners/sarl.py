@@ -43,7 +43,7 @@ from emonav_drake.core.sarl_state import (
     step_discount,
 )
 from emonav_drake.params import ConfigError, EmoNavConfig
-from emonav_drake.torch_load import load_failure
+from emonav_drake.torch_load import CheckpointReadError, load_checked
 
 SARL_FORMAT = "emonav-sarl/1"
 
@@ -234,9 +234,9 @@ def load_sarl(path: str | Path, device: torch.device | str = "cpu") -> tuple[nn.
     if not path.is_file():
         raise ConfigError(f"SARL checkpoint {path} does not exist")
     try:
-        blob: Any = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as e:  # noqa: BLE001 — reported the same way
-        raise ConfigError(f"SARL checkpoint {path} cannot be read ({load_failure(e)})") from None
+        blob: Any = load_checked(path)
+    except CheckpointReadError as e:
+        raise ConfigError(f"SARL checkpoint {path}: {e}") from None
     if not isinstance(blob, dict) or blob.get("format") != SARL_FORMAT:
         found = blob.get("format") if isinstance(blob, dict) else type(blob).__name__
         raise ConfigError(f"{path} is not a SARL checkpoint (format {found!r})")
