@@ -17,7 +17,8 @@ JSON is strict: `write_json` turns NaN and ±inf into `null` and serialises with
 `allow_nan=False`, so every file written is valid JSON for any parser.
 
 A full disk (ENOSPC, a quota or a file size limit) while writing is an `OSError` naming
-the target file (the OS names none), and the target keeps its previous content.
+the target file (the OS names none), and the target keeps its previous content — also
+for torch files (`atomic_write`: the file's own `OSError`, not the error torch makes of it).
 """
 
 from __future__ import annotations
@@ -251,8 +252,48 @@ def write_json(path: str | Path, data: Any) -> None:
     write_text_atomic(path, text)
 
 
-def atomic_write(path: str | Path, write: Callable[[BinaryIO], None]) -> None:
-    """Durable atomic write for state files: `write(file)` into a temporary sibling
-    (`atomic_output(durable=True)`), renamed over `path` when complete."""
-    with atomic_output(path, durable=True) as tmp, open(tmp, "wb") as f:
-        write(f)
+class _WriteErrorKeeper:
+    """A binary file that remembers the first `OSError` its `write`/`flush` raised.
+
+    Serialisers written in C++ (`torch.save`'s zip writer) call `write` and, when it
+    raises, throw an error of their own ("[enforce fail at inline_container.cc …] unexpected
+    pos") with the `OSError` only as its context; the kept error is the true cause.
+    """
+
+    def __init__(self, file: BinaryIO) -> None:
+        self._file = file
+        self.error: OSError | None = None
+
+    def write(self, data: Any) -> int:
+        try:
+            return self._file.write(data)
+        except OSError as e:
+            self.error = self.error or e
+            raise
+
+    def flush(self) -> None:
+        try:
+            self._file.flush()
+        except OSError as e:
+            self.error = self.error or e
+            raise
+
+
+def atomic_write(path: str | Path, write: Callable[[BinaryIO], None], durable: bool = True) -> None:
+    """Atomic write through a file object: `write(file)` into a temporary sibling, renamed
+    over `path` when complete (`atomic_output`; `durable` by default: state files).
+
+    Every `torch.save` / `torch.jit.save` of the package goes through here with a file
+    object, never a file name: torch's own file writer aborts the whole process (C++
+    `terminate`) when the disk fills. When the disk fills during `write`, the `OSError`
+    raised by the file is re-raised (naming `path`, `naming_full_disk`) whatever error the
+    serialiser made of it; the temporary is removed and `path` keeps its previous content.
+    """
+    with atomic_output(path, durable=durable) as tmp, open(tmp, "wb") as f:
+        kept = _WriteErrorKeeper(f)
+        try:
+            write(kept)  # type: ignore[arg-type]  # a file object with write and flush
+        except Exception as e:
+            if kept.error is None or e is kept.error:
+                raise
+            raise kept.error from e

@@ -188,13 +188,31 @@ def emotion_estimate_of(args: argparse.Namespace) -> Any:
 
 
 def load_emotion_estimate(path: Path | None) -> Any:
-    """The validated `EmotionEstimateParams` of `--emotion-estimate`, or None without it."""
+    """The validated `EmotionEstimateParams` of `--emotion-estimate`, or None without it.
+
+    Every error names the flag and the file. Mode "classifier" is refused: it reads the
+    estimates of a classifier that a Python program wires into the diagram, and the
+    command line wires none (mode "camera" is the CLI's face classifier).
+    """
     if not path:
         return None
     from emonav_drake.config_yaml import load_typed_yaml
     from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 
-    return load_typed_yaml(EmotionEstimateParams, path=path).validate()
+    params = load_typed_yaml(EmotionEstimateParams, path=path)  # its errors name the file
+    where = f"--emotion-estimate {path}"
+    try:
+        params.validate()
+    except ConfigError as e:
+        raise ConfigError(f"{where}: {e}") from None
+    if params.mode == "classifier":
+        raise ConfigError(
+            f"{where}: mode: classifier reads the emotions of a face classifier that a Python "
+            "program connects to the diagram (EmotionEstimateSource's estimated_emotions "
+            "input); the command line connects none: use mode: camera (the head camera and "
+            "the face classifier, as --emotion-source camera), confusion or ground_truth"
+        )
+    return params
 
 
 def write_steps_csv(path: str | Path, table: np.ndarray) -> int:

@@ -86,11 +86,13 @@ def cmd_plot(args: argparse.Namespace) -> int:
     from emonav_drake.evaluation.trajectory import load_trajectory
     from emonav_drake.evaluation.trajectory_plot import (
         animation_writer,
+        check_drawable,
         render_trajectory_animation,
         render_trajectory_figure,
     )
 
     traj = load_trajectory(args.run)
+    check_drawable(traj, str(args.run))  # a null/NaN/Infinity: named, nothing drawn
     if times is not None:
         for t in times:
             try:
