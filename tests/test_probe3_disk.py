@@ -297,3 +297,50 @@ def test_other_emotion_estimate_errors_name_the_flag_and_the_file(tmp_path, caps
         *run(capsys, "sim", "--emotion-estimate", est),
         f"--emotion-estimate {est}: emotion_estimate.period = -1.0",
     )
+
+
+CURVE_SCRIPT = """
+import resource, signal, sys, types
+from pathlib import Path
+import torch
+from emonav_drake.learning.sac_curve import append_curve_row
+
+path = Path(sys.argv[1])
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit: EFBIG, not a kill
+limit = path.stat().st_size + 10  # room for 10 bytes of the next row: a torn row before
+resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+stats = {"SR": 0.5, "collision_rate": 0.25, "timeout_rate": 0.25, "NT_mean": 21.0, "DT": 3.0,
+         "return_mean": 1.5}
+try:
+    append_curve_row(path, 20, 4, stats, types.SimpleNamespace(alpha=torch.tensor(0.2)))
+except OSError as e:
+    print(e)
+"""
+
+
+def test_a_learning_curve_row_that_does_not_fit_is_not_torn(tmp_path):
+    """The SAC learning curve's append on a disk that fills mid-row (a file size limit)."""
+    import types
+
+    import torch
+
+    from emonav_drake.learning.sac_curve import append_curve_row
+
+    curve = tmp_path / "learning_curve.csv"
+    stats = {"SR": 1.0, "collision_rate": 0.0, "timeout_rate": 0.0, "NT_mean": 20.0, "DT": 1.0}
+    append_curve_row(
+        curve, 10, 2, stats | {"return_mean": 2.0}, types.SimpleNamespace(alpha=torch.tensor(0.3))
+    )
+    before = curve.read_bytes()
+    script = tmp_path / "curve.py"
+    script.write_text(CURVE_SCRIPT)
+    p = subprocess.run(
+        [sys.executable, str(script), str(curve)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=Path(__file__).resolve().parent.parent,
+    )
+    assert p.returncode == 0, p.stderr
+    assert f"{curve} could not be appended to (its earlier rows are kept)" in p.stdout, p.stdout
+    assert curve.read_bytes() == before  # no torn row

@@ -9,10 +9,12 @@ header first), `open_tensorboard` opens the run's event writer (None without ten
 from __future__ import annotations
 
 import csv
+import io
 import logging
+import os
 from pathlib import Path
 
-from emonav_drake.atomic_io import write_text_atomic
+from emonav_drake.atomic_io import naming_full_disk, write_text_atomic
 from emonav_drake.learning.run_state import RunStateError
 from emonav_drake.learning.sac import SacAgent
 
@@ -73,24 +75,39 @@ def truncate_curve(path: Path, rows: int) -> None:
 
 
 def append_curve_row(path: Path, step: int, episodes: int, s: dict, agent: SacAgent) -> None:
-    new = not path.exists()
-    with path.open("a", newline="") as f:
-        w = csv.writer(f)
-        if new:
-            w.writerow(_CURVE_HEADER)
-        w.writerow(
-            [
-                step,
-                episodes,
-                s["SR"],
-                s["collision_rate"],
-                s["timeout_rate"],
-                s["NT_mean"],
-                s["DT"],
-                s["return_mean"],
-                agent.alpha.item(),
-            ]
-        )
+    """Append one evaluation row (and the header, for a new file) in one write; on a full
+    disk the file is cut back to its previous rows and the error names it."""
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    if not path.exists():
+        w.writerow(_CURVE_HEADER)
+    w.writerow(
+        [
+            step,
+            episodes,
+            s["SR"],
+            s["collision_rate"],
+            s["timeout_rate"],
+            s["NT_mean"],
+            s["DT"],
+            s["return_mean"],
+            agent.alpha.item(),
+        ]
+    )
+    data = buf.getvalue().encode()
+    with naming_full_disk(path, "could not be appended to (its earlier rows are kept)"):
+        fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
+        try:
+            size = os.fstat(fd).st_size
+            try:
+                done = 0
+                while done < len(data):
+                    done += os.write(fd, data[done:])
+            except OSError:
+                os.ftruncate(fd, size)  # no torn row
+                raise
+        finally:
+            os.close(fd)
 
 
 def open_tensorboard(out: Path):
