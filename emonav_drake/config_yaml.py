@@ -8,23 +8,53 @@ and the check of a dataclass's values against a table of allowed ranges. It know
 particular configuration: `params.py` holds the project's (`EmoNavConfig`, its ranges,
 `load_config`, `dump_config`), `learning/config.py` the training ones, `core/scenario.py`
 the scenarios; all of them load and check through here.
+
+Every YAML text is checked before any loader builds it (`check_yaml_text`): at most
+`MAX_YAML_BYTES`, at most `MAX_YAML_VALUES` values once its aliases are expanded (an
+"alias bomb" of a few hundred bytes would otherwise expand to billions), and no key twice
+in one mapping (YAML lets the last one win silently). Lists hold at most `MAX_LIST_ITEMS`
+items unless the dataclass says otherwise (class attribute `_MAX_ITEMS`), checked on the
+raw data before the typed load. Values quoted in messages are cut (`short_repr`).
 """
 
 import dataclasses as dc
 import math
+import reprlib
 import typing
 from pathlib import Path
 from typing import Any
+
+# A configuration, scenario or training configuration is a few kB; these bound what a
+# hostile file can cost (parsing 100 000 values with Drake's pure-Python loader and its
+# typed loader takes ~4 s).
+MAX_YAML_BYTES = 1_000_000  # 1 MB
+MAX_YAML_VALUES = 100_000  # scalars, lists and mappings, aliases expanded
+MAX_LIST_ITEMS = 100  # items of a list field, unless its dataclass's `_MAX_ITEMS` says
 
 
 class ConfigError(ValueError):
     """A configuration or scenario value is invalid; the message names the field."""
 
 
+_SHORT = reprlib.Repr()
+_SHORT.maxlevel = 3
+_SHORT.maxlist = _SHORT.maxtuple = _SHORT.maxset = 12
+_SHORT.maxdict = 8
+_SHORT.maxstring = 80
+_SHORT.maxlong = 40
+_SHORT.maxother = 80
+
+
+def short_repr(value: Any) -> str:
+    """`repr(value)` for a message, cut to about 100 characters; bounded in time too
+    (nested lists are not walked beyond a few levels and a dozen items)."""
+    return _SHORT.repr(value)
+
+
 def require(ok: bool, field: str, value: Any, allowed: str) -> None:
     """Raise `ConfigError` "`field` = `value` is invalid: must be `allowed`" unless `ok`."""
     if not ok:
-        raise ConfigError(f"{field} = {value!r} is invalid: must be {allowed}")
+        raise ConfigError(f"{field} = {short_repr(value)} is invalid: must be {allowed}")
 
 
 def _describe_range(lo: Any, hi: Any) -> str:
@@ -35,43 +65,60 @@ def _describe_range(lo: Any, hi: Any) -> str:
     return f"in [{lo}, {hi}]"
 
 
-def _validate_ranges(obj: Any, prefix: str, ranges: dict[str, Any]) -> None:
+def _validate_ranges(obj: Any, ranges: dict[str, Any], prefix: str, key: str = "") -> None:
     """Check `obj`'s fields (recursively) against `ranges`.
 
-    `ranges` maps a dotted field name to (low, high) inclusive — either bound may be None
-    for "no bound" — or, for a list field, (length, low, high) for each element.
+    `ranges` maps a dotted field name (relative to `obj`) to (low, high) inclusive —
+    either bound may be None for "no bound" — or, for a list field, (length, low, high)
+    for each element (of each row, for a list of lists). `prefix` goes before the field's
+    name in the messages.
     """
     for f in dc.fields(obj):
-        name = f"{prefix}{f.name}"
+        name, dotted = f"{prefix}{f.name}", f"{key}{f.name}"
         value = getattr(obj, f.name)
         if dc.is_dataclass(value):
-            _validate_ranges(value, name + ".", ranges)
+            _validate_ranges(value, ranges, name + ".", dotted + ".")
             continue
         if isinstance(value, float) and not math.isfinite(value):
             raise ConfigError(f"{name} = {value!r} is invalid: must be a finite number")
-        spec = ranges.get(name)
+        spec = ranges.get(dotted)
         if spec is None:
             continue
         if len(spec) == 3:
             length, lo, hi = spec
             if len(value) != length:
-                raise ConfigError(f"{name} = {value!r} is invalid: must have {length} elements")
-            for v in value:
+                raise ConfigError(
+                    f"{name} = {short_repr(value)} is invalid: must have {length} elements"
+                )
+            for v in _flat(value):
                 if not (math.isfinite(v) and lo <= v <= hi):
                     raise ConfigError(
-                        f"{name} = {value!r} is out of range: each element in [{lo}, {hi}]"
+                        f"{name} = {short_repr(value)} is out of range: each element in "
+                        f"[{lo}, {hi}]"
                     )
         else:
             lo, hi = spec
             if (lo is not None and not lo <= value) or (hi is not None and not value <= hi):
                 raise ConfigError(
-                    f"{name} = {value!r} is out of range: allowed {_describe_range(lo, hi)}"
+                    f"{name} = {short_repr(value)} is out of range: allowed "
+                    f"{_describe_range(lo, hi)}"
                 )
 
 
+def _flat(values: list) -> list:
+    """The numbers of a list, or of a list of lists (a matrix's rows)."""
+    return [x for v in values for x in (_flat(v) if isinstance(v, list) else [v])]
+
+
 def validate_ranges(obj: Any, ranges: dict[str, Any], prefix: str = "") -> None:
-    """Public form of the range check (used by the training configurations)."""
-    _validate_ranges(obj, prefix, ranges)
+    """Check every field of dataclass `obj` (nested ones included) that `ranges` names;
+    raise `ConfigError` "`prefix``field` = value is out of range: …" for the first outside.
+
+    `ranges`: dotted field name relative to `obj` → (low, high) inclusive (None: no bound),
+    or (length, low, high) for a list field's elements. A non-finite float is refused in
+    any field.
+    """
+    _validate_ranges(obj, ranges, prefix)
 
 
 def required_fields(schema: type) -> tuple[str, ...]:
@@ -101,17 +148,19 @@ def _check_scalar(name: str, value: Any, kind: type) -> None:
             except ValueError:
                 ok = False
     if not ok:
-        raise ConfigError(f"{name} = {value!r} is invalid: expected {_TYPE_NAMES[kind]}")
+        raise ConfigError(f"{name} = {short_repr(value)} is invalid: expected {_TYPE_NAMES[kind]}")
 
 
-def _check_yaml_value(name: str, value: Any, kind: Any) -> None:
+def _check_yaml_value(name: str, value: Any, kind: Any, max_items: int = MAX_LIST_ITEMS) -> None:
     origin = typing.get_origin(kind)
     if dc.is_dataclass(kind):
         _check_yaml_mapping(kind, value, name)
     elif origin is list:
         (item,) = typing.get_args(kind)
         if not isinstance(value, list):
-            raise ConfigError(f"{name} = {value!r} is invalid: expected a list")
+            raise ConfigError(f"{name} = {short_repr(value)} is invalid: expected a list")
+        if len(value) > max_items:
+            raise ConfigError(f"{name}: {len(value)} given, at most {max_items} allowed")
         for i, v in enumerate(value):
             _check_yaml_value(f"{name}[{i}]", v, item)
     elif kind in _TYPE_NAMES:
@@ -123,16 +172,20 @@ def _check_yaml_mapping(schema: type, data: Any, prefix: str) -> None:
     what = prefix or schema.__name__
     if not isinstance(data, dict):
         raise ConfigError(
-            f"{what} = {data!r} is invalid: expected a mapping of {schema.__name__} fields"
+            f"{what} = {short_repr(data)} is invalid: expected a mapping of "
+            f"{schema.__name__} fields"
         )
     fields = {f.name: f for f in dc.fields(schema)}
+    max_items = getattr(schema, "_MAX_ITEMS", {})
     dot = f"{prefix}." if prefix else ""
     for key, value in data.items():
         if key not in fields:
+            name = key if isinstance(key, str) and len(key) <= 80 else short_repr(key)
             raise ConfigError(
-                f"{dot}{key}: unknown field; {schema.__name__} has {', '.join(fields)}"
+                f"{dot}{name}: unknown field; {schema.__name__} has {', '.join(fields)}"
             )
-        _check_yaml_value(f"{dot}{key}", value, fields[key].type)
+        limit = max_items.get(key, MAX_LIST_ITEMS)
+        _check_yaml_value(f"{dot}{key}", value, fields[key].type, limit)
     missing = [k for k in required_fields(schema) if k not in data]
     if missing:
         raise ConfigError(
@@ -149,6 +202,126 @@ def _yaml_error_line(e: Exception) -> str:
     return f"invalid YAML: {problem}"
 
 
+def _yaml_events(text: str) -> Any:
+    """The parser's events of `text` (libyaml's parser when PyYAML has it): nothing built."""
+    import yaml
+
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    return yaml.parse(text, Loader=loader)
+
+
+class _Collection:
+    """A mapping or sequence being read by `check_yaml_text`."""
+
+    def __init__(self, path: str, is_mapping: bool, anchor: str | None, start: int) -> None:
+        self.path = path
+        self.is_mapping = is_mapping
+        self.anchor = anchor
+        self.start = start  # values counted before it
+        self.keys: dict[str, int] = {}  # mapping: key → its line
+        self.at_key = True  # mapping: the next node is a key
+        self.key: str | None = None  # mapping: the key whose value comes next
+        self.index = 0  # sequence: the next item's index
+
+    def child_path(self) -> str:
+        if not self.is_mapping:
+            return f"{self.path}[{self.index}]"
+        key = self.key if self.key is not None else "?"
+        return f"{self.path}.{key}" if self.path else key
+
+
+def check_yaml_text(where: str, text: str) -> None:
+    """Refuse (`ConfigError` naming `where`) a YAML text that is too large, expands to too
+    many values through its aliases, or gives a key twice in one mapping.
+
+    Reads the parser's events only, so nothing is expanded or built: an alias adds the
+    size of the node it names, and the count stops at `MAX_YAML_VALUES`. A syntax error is
+    left to the loader, which reports it with its position. Merge keys (`<<`) are not
+    duplicates (the mapping's own keys override the merged ones).
+    """
+    import yaml
+
+    if len(text) > MAX_YAML_BYTES:
+        raise ConfigError(_too_large(where, len(text.encode())))
+    count = 0  # values so far, aliases expanded
+    aliased = False
+    sizes: dict[str, int] = {}  # anchor → values of its node
+    stack: list[_Collection] = []
+    try:
+        for ev in _yaml_events(text):
+            if isinstance(ev, yaml.CollectionEndEvent):
+                done = stack.pop()
+                if done.anchor is not None:
+                    sizes[done.anchor] = count - done.start
+                continue
+            if not isinstance(ev, yaml.NodeEvent):
+                continue
+            parent = stack[-1] if stack else None
+            path = parent.child_path() if parent is not None else ""
+            if parent is not None and parent.is_mapping:
+                if parent.at_key:
+                    path = _check_key(where, parent, ev)
+                parent.at_key = not parent.at_key
+            elif parent is not None:
+                parent.index += 1
+            if isinstance(ev, yaml.AliasEvent):
+                if ev.anchor not in sizes:  # undefined, or inside its own node
+                    if any(c.anchor == ev.anchor for c in stack):
+                        raise ConfigError(
+                            f"{where}: line {ev.start_mark.line + 1}: alias *{ev.anchor} "
+                            "refers to a node that contains it (a recursive alias)"
+                        )
+                    return  # undefined: the loader says so
+                count += sizes[ev.anchor]
+                aliased = True
+            else:
+                count += 1
+                if isinstance(ev, yaml.CollectionStartEvent):
+                    is_mapping = isinstance(ev, yaml.MappingStartEvent)
+                    stack.append(_Collection(path, is_mapping, ev.anchor, count - 1))
+                elif ev.anchor is not None:
+                    sizes[ev.anchor] = 1
+            if count > MAX_YAML_VALUES:
+                raise ConfigError(_too_many(where, aliased))
+    except yaml.YAMLError:
+        return  # the loader reports it, with its line and column
+
+
+def _check_key(where: str, mapping: _Collection, ev: Any) -> str:
+    """Record a key of `mapping` (a scalar event); refuse it if given before."""
+    import yaml
+
+    if not isinstance(ev, yaml.ScalarEvent) or (ev.value == "<<" and not ev.style):
+        mapping.key = None
+        return mapping.child_path()
+    line = ev.start_mark.line + 1
+    first = mapping.keys.get(ev.value)
+    if first is not None:
+        inside = f" in {mapping.path}" if mapping.path else ""
+        raise ConfigError(
+            f"{where}: line {line}: key {short_repr(ev.value)}{inside} is given twice (first "
+            f"at line {first}): YAML would silently keep the last one; remove one"
+        )
+    mapping.keys[ev.value] = line
+    mapping.key = ev.value
+    return mapping.child_path()
+
+
+def _too_large(where: str, size: int) -> str:
+    return (
+        f"{where}: {size} bytes; a configuration, scenario or training file is at most "
+        f"1 MB ({MAX_YAML_BYTES} bytes) here"
+    )
+
+
+def _too_many(where: str, aliased: bool) -> str:
+    how = " once its aliases are expanded (an alias bomb?)" if aliased else ""
+    return (
+        f"{where}: more than {MAX_YAML_VALUES} values{how}; a configuration, scenario or "
+        "training file holds far fewer: refused before loading"
+    )
+
+
 def load_typed_yaml_raw(
     schema: type, path: str | Path | None = None, data: str | None = None, defaults: Any = None
 ) -> tuple[Any, dict]:
@@ -163,11 +336,15 @@ def load_typed_yaml_raw(
             raise ConfigError(f"{path}: is a directory, expected a YAML file")
         if not path.is_file():
             raise ConfigError(f"{path}: no such file")
+        size = path.stat().st_size
+        if size > MAX_YAML_BYTES:  # refused before it is read
+            raise ConfigError(_too_large(str(path), size))
         try:
             data = path.read_text()
         except UnicodeDecodeError:
             raise ConfigError(f"{path}: not a text (YAML) file") from None
     where = str(path) if path is not None else "<yaml>"
+    check_yaml_text(where, data)
     try:
         raw = yaml_load_data(data)
     except Exception as e:  # yaml syntax errors come from the yaml parser

@@ -1,14 +1,27 @@
-"""The allowed range of every numeric field of `EmoNavConfig` (`params.py`).
+"""The allowed range of every numeric field of the configurations and scenarios.
 
-A table of data, read by `EmoNavConfig.validate` through `config_yaml.validate_ranges`:
-the dotted field name → its bounds. Kept apart from the dataclasses so that `params.py`
-reads as the fields and their defaults; a new numeric field gets its line here. The
-cross-field rules (a minimum below its maximum, rates that are multiples of the time
-step, …) are code and stay in `EmoNavConfig.validate`.
+Tables of data, read through `config_yaml.validate_ranges`: the dotted field name → its
+bounds, both ends finite. `RANGES` is `EmoNavConfig`'s (`params.py`); `SCENARIO_RANGES`,
+`PEDESTRIAN_RANGES` and `OBSTACLE_RANGES` are a scenario file's (`core/scenario.py`),
+taken from `RANGES` wherever a scenario holds what a configuration holds (the robot's
+start and goal, the emotion change period), so that a file and a configuration are held
+to one range; `ESTIMATE_RANGES` is an emotion estimate's (`perception/noisy_emotions.py`).
+Kept apart from the dataclasses so that those read as the fields and their defaults; a
+new numeric field gets its line here (`tests/test_probe3_resources.py` fails otherwise).
+The cross-field rules (a minimum below its maximum, rates that are multiples of the time
+step, …) are code and stay in the dataclasses' `validate`.
+
+The rewards are bounded so that an episode's total stays finite and printable: at most
+|collision| + |discomfort| + goal + progress_gain × (the longest step) per step, over at
+most `episode.max_steps` steps: 7 × 10^7 at the bounds.
 """
 
 import math
 from typing import Any
+
+# Seeds are 64-bit unsigned integers (numpy's generators take them; a larger one would
+# alias a smaller one).
+SEED_RANGE = (0, 2**64 - 1)
 
 # (low, high) inclusive; list fields: (length, low, high) for each element.
 RANGES: dict[str, Any] = {
@@ -46,6 +59,10 @@ RANGES: dict[str, Any] = {
     "crowd.safety_space": (0.0, 1.0),
     "crowd.emotion_probs": (3, 0.0, 1.0),
     "crowd.emotion_change_period": (0.1, 100.0),
+    "reward.collision": (-100.0, 0.0),  # a penalty
+    "reward.discomfort": (-100.0, 0.0),  # a penalty, once per step in a zone
+    "reward.goal": (0.0, 100.0),
+    "reward.progress_gain": (0.0, 100.0),  # [1/m]
     "reward.static_discomfort": (0.0, 3.0),
     "reward.happy_discomfort": (0.0, 3.0),
     "reward.neutral_discomfort": (0.0, 3.0),
@@ -57,6 +74,10 @@ RANGES: dict[str, Any] = {
     "dwa.speed_samples": (2, 101),
     "dwa.heading_samples": (2, 101),
     "dwa.horizon_steps": (1, 50),
+    "dwa.goal_weight": (0.0, 1e4),  # weights as the MPC's: >= 0, bounded
+    "dwa.clearance_weight": (0.0, 1e4),
+    "dwa.discomfort_weight": (0.0, 1e4),
+    "dwa.speed_weight": (0.0, 1e4),
     "dwa.clearance_cap": (0.01, 10.0),
     "dwa.safety_margin": (0.0, 2.0),
     "dwa.hard_steps": (1, 50),
@@ -119,4 +140,41 @@ RANGES: dict[str, Any] = {
     "mpc.osqp_eps": (1e-8, 1e-1),
     "mpc.osqp_max_iter": (10, 100000),
     "mpc.time_limit": (1e-4, 10.0),
+}
+
+
+# A scenario file (`core.scenario.Scenario`): the same ranges as the configuration's robot
+# start and goal and emotion change period. Seed −1: written by hand.
+SCENARIO_RANGES: dict[str, Any] = {
+    "robot_start": RANGES["robot.start"],
+    "robot_goal": RANGES["robot.goal"],
+    "robot_heading": (-2 * math.pi, 2 * math.pi),
+    "emotion_change_period": RANGES["crowd.emotion_change_period"],
+    "seed": (-1, SEED_RANGE[1]),
+}
+# Its pedestrians (`PedestrianSpec`) and obstacles (`StaticDiscSpec`): in the robot's world.
+PEDESTRIAN_RANGES: dict[str, Any] = {
+    "start": RANGES["robot.start"],
+    "goal": RANGES["robot.start"],
+}
+OBSTACLE_RANGES: dict[str, Any] = {
+    "center": RANGES["robot.start"],
+    "radius": (0.01, 5.0),  # a hand-placed disc may be larger than the sampler's
+}
+
+# An emotion estimate (`perception.noisy_emotions.EmotionEstimateParams`) and its head
+# camera; the confusion matrix's rows must also sum to 1 (`validate_confusion`).
+ESTIMATE_RANGES: dict[str, Any] = {
+    "confusion": (3, 0.0, 1.0),
+    "seed": SEED_RANGE,
+    "period": (0.01, 100.0),  # [s]
+    "camera.width": (16, 4096),  # [px]
+    "camera.height": (16, 4096),  # [px]
+    "camera.fov_y_deg": (1.0, 170.0),  # [deg]
+    "camera.lip_height": (0.1, 3.0),  # [m]
+    "camera.digit_offset": (3, -2.0, 2.0),  # [m]
+    "camera.near": (0.001, 100.0),  # [m]
+    "camera.far": (0.01, 1000.0),  # [m]
+    "camera.min_face_size": (8, 4096),  # [px]
+    "camera.max_range": (0.1, 100.0),  # [m]
 }

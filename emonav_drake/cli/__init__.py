@@ -100,10 +100,21 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+# The longest message printed: a value echoed back (a huge list, a long path) is cut.
+MAX_MESSAGE = 500
+
+
 def _one_line(e: BaseException) -> str:
-    """The exception's message on one line (YAML and torch messages can span several)."""
+    """The exception's message on one line (YAML and torch messages can span several), at
+    most about `MAX_MESSAGE` characters: a longer one keeps its start and its end (which
+    often says what is allowed) and says how much was cut in between."""
     lines = [line.strip() for line in str(e).splitlines() if line.strip()]
-    return "; ".join(lines) or type(e).__name__
+    text = "; ".join(lines) or type(e).__name__
+    if len(text) <= MAX_MESSAGE:
+        return text
+    head, tail = MAX_MESSAGE * 3 // 4, MAX_MESSAGE // 5
+    cut = len(text) - head - tail
+    return f"{text[:head]} … [{cut} characters cut] … {text[-tail:]}"
 
 
 @contextlib.contextmanager

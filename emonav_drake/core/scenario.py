@@ -9,7 +9,10 @@ robot's start and goal. `sample_scenario(seed, config)` draws one as the paper d
 and goal must be clear of every obstacle, its start clear of every pedestrian's and its
 goal farther than the goal radius from its start; pedestrians must not start overlapping
 each other nor start or head for a spot inside an obstacle; at most `MAX_PEDESTRIANS`
-pedestrians and `MAX_OBSTACLES` obstacles.
+pedestrians and `MAX_OBSTACLES` obstacles, and a file's emotion schedules at most
+`MAX_SCHEDULE` entries (refused before the typed load). Every number has its range in
+`param_ranges.py` (`SCENARIO_RANGES`, `PEDESTRIAN_RANGES`, `OBSTACLE_RANGES`), the
+configuration's where a scenario holds the same quantity.
 
 World frame: x towards the robot's goal, y left, metres.
 """
@@ -21,7 +24,19 @@ from pathlib import Path
 
 import numpy as np
 
-from emonav_drake.config_yaml import ConfigError, dump_typed_yaml, load_typed_yaml_raw
+from emonav_drake.config_yaml import (
+    ConfigError,
+    dump_typed_yaml,
+    load_typed_yaml_raw,
+    short_repr,
+    validate_ranges,
+)
+from emonav_drake.param_ranges import (
+    OBSTACLE_RANGES,
+    PEDESTRIAN_RANGES,
+    SCENARIO_RANGES,
+    SEED_RANGE,
+)
 from emonav_drake.params import EMOTION_NAMES, CrowdParams, EmoNavConfig
 
 PLACEMENT_TRIES = 1000  # rejection-sampling draws per object
@@ -29,9 +44,14 @@ PLACEMENT_TRIES = 1000  # rejection-sampling draws per object
 # (crowd.max_pedestrians, crowd.max_static <= 20); the crowd's ORCA step is quadratic in it.
 MAX_PEDESTRIANS = 20
 MAX_OBSTACLES = 20
+# The most entries an emotion schedule in a file may hold, checked before the typed load
+# (parsing a million took 63 s): at the default period of 2 s an episode of 20 000 s, at
+# the shortest (crowd.emotion_change_period >= 0.1 s) 1000 s; the paper's 50 s episodes
+# need 26. The crowd holds the last entry beyond the schedule.
+MAX_SCHEDULE = 10_000
 # Seeds are 64-bit unsigned integers: a larger one would alias a smaller one (the episode's
 # step-response generator takes `seed % 2**64`).
-MAX_SEED = 2**64 - 1
+MAX_SEED = SEED_RANGE[1]
 
 
 class ScenarioSamplingError(ConfigError):
@@ -50,6 +70,7 @@ class PedestrianSpec:
     emotion_schedule: list[str] = dc.field(default_factory=list)
 
     _REQUIRED = ("start", "goal", "emotion")  # in YAML (no annotation: not a field)
+    _MAX_ITEMS = {"emotion_schedule": MAX_SCHEDULE}  # in YAML, before the typed load
 
 
 @dc.dataclass
@@ -74,6 +95,8 @@ class Scenario:
     emotion_change_period: float = 2.0  # [s], used when a schedule is present
     seed: int = -1  # the seed it was sampled with, −1 when written by hand
 
+    _MAX_ITEMS = {"pedestrians": MAX_PEDESTRIANS, "obstacles": MAX_OBSTACLES}  # in YAML
+
     def validate(
         self, robot_radius: float = 0.3, pedestrian_radius: float = 0.3, goal_radius: float = 0.2
     ) -> "Scenario":
@@ -97,7 +120,8 @@ class Scenario:
         return self
 
     def _check_own_values(self) -> None:
-        """The counts, the seed, the robot's start, goal and heading, the emotion period."""
+        """The counts, the seed, the robot's start, goal and heading, the emotion period
+        (`SCENARIO_RANGES`)."""
         if len(self.pedestrians) > MAX_PEDESTRIANS:
             raise ConfigError(
                 f"pedestrians: {len(self.pedestrians)} given, at most {MAX_PEDESTRIANS} allowed"
@@ -111,31 +135,22 @@ class Scenario:
                 f"seed = {self.seed!r} is invalid: must be -1 (written by hand) or in "
                 "[0, 2**64 - 1]"
             )
-        for name in ("robot_start", "robot_goal"):
-            _check_point(getattr(self, name), name)
-        if not math.isfinite(self.robot_heading):
-            raise ConfigError(f"robot_heading = {self.robot_heading!r} must be finite")
-        if not (math.isfinite(self.emotion_change_period) and self.emotion_change_period > 0):
-            raise ConfigError(f"emotion_change_period = {self.emotion_change_period!r} must be > 0")
+        validate_ranges(self, SCENARIO_RANGES)
 
     def _check_item_values(self) -> None:
-        """Each pedestrian's start, goal and emotions; each obstacle's centre and radius."""
+        """Each pedestrian's start, goal and emotions; each obstacle's centre and radius
+        (`PEDESTRIAN_RANGES`, `OBSTACLE_RANGES`)."""
         for i, p in enumerate(self.pedestrians):
-            _check_point(p.start, f"pedestrians[{i}].start")
-            _check_point(p.goal, f"pedestrians[{i}].goal")
+            validate_ranges(p, PEDESTRIAN_RANGES, prefix=f"pedestrians[{i}].")
             for j, e in enumerate([p.emotion, *p.emotion_schedule]):
                 if e not in EMOTION_NAMES:
                     where = "emotion" if j == 0 else f"emotion_schedule[{j - 1}]"
                     raise ConfigError(
-                        f"pedestrians[{i}].{where} = {e!r} is invalid: "
+                        f"pedestrians[{i}].{where} = {short_repr(e)} is invalid: "
                         f"must be one of {list(EMOTION_NAMES)}"
                     )
         for i, o in enumerate(self.obstacles):
-            _check_point(o.center, f"obstacles[{i}].center")
-            if not (math.isfinite(o.radius) and 0.01 <= o.radius <= 5.0):
-                raise ConfigError(
-                    f"obstacles[{i}].radius = {o.radius!r} is out of range: allowed [0.01, 5.0]"
-                )
+            validate_ranges(o, OBSTACLE_RANGES, prefix=f"obstacles[{i}].")
 
     def _check_robot_placement(self, robot_radius: float, goal_radius: float) -> None:
         """The robot's start and goal clear of every obstacle, its goal not within
@@ -182,11 +197,6 @@ class Scenario:
                             f"(center {o.center!r}, radius {o.radius}): the pedestrian (radius "
                             f"{pedestrian_radius} m) must stand clear of it"
                         )
-
-
-def _check_point(p: list[float], name: str) -> None:
-    if len(p) != 2 or not all(math.isfinite(v) and abs(v) <= 100.0 for v in p):
-        raise ConfigError(f"{name} = {p!r} is invalid: must be 2 finite numbers in [-100, 100]")
 
 
 def load_scenario(path: str | Path, config: EmoNavConfig | None = None) -> Scenario:

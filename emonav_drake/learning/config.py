@@ -15,6 +15,7 @@ from emonav_drake.core.goal_input import GOAL_INPUTS
 from emonav_drake.core.observations import observation_kind, observation_kinds
 from emonav_drake.core.sarl_state import VALUE_NETWORKS
 from emonav_drake.diagrams.plants import PLANTS
+from emonav_drake.param_ranges import SEED_RANGE
 from emonav_drake.params import NUM_BEAMS, EpisodeParams
 
 # The 4-conv encoder (3 x 3, strides 2-1-1-1) needs an input of at least this many cells.
@@ -245,23 +246,27 @@ def _choice(name: str, value: str, allowed: tuple[str, ...]) -> None:
         raise ConfigError(f"{name} = {value!r} is invalid: must be one of {list(allowed)}")
 
 
-# Allowed ranges, inclusive; None = unbounded. Sizes and counts are >= 1, seeds >= 0.
+# Allowed ranges, inclusive, every one bounded: seeds in [0, 2**64 - 1], seed offsets so
+# that offset + i stays a seed, counts and sizes up to MAX_COUNT (a run that long would
+# never end on any machine; a typo such as 1e12 is refused instead of started).
+MAX_COUNT = 10**9
+MAX_SEED_OFFSET = 2**63
 _DAGGER_RANGES = {
-    "seed": (0, None),
-    "expert_episodes": (1, None),
-    "rounds": (1, None),
-    "episodes_per_round": (1, None),
+    "seed": SEED_RANGE,
+    "expert_episodes": (1, MAX_COUNT),
+    "rounds": (1, MAX_COUNT),
+    "episodes_per_round": (1, MAX_COUNT),
     "beta": (0.0, 1.0),
-    "grad_steps_first": (1, None),
-    "grad_steps_per_round": (1, None),
-    "batch_size": (1, None),
+    "grad_steps_first": (1, MAX_COUNT),
+    "grad_steps_per_round": (1, MAX_COUNT),
+    "batch_size": (1, MAX_COUNT),
     "lr": (1e-8, 1.0),
     "weight_decay": (0.0, 1.0),
     "hidden": (1, 65536),
     "pool": (1, 6),
-    "eval_episodes": (1, None),
-    "train_seed_offset": (0, None),
-    "eval_seed_offset": (0, None),
+    "eval_episodes": (1, MAX_COUNT),
+    "train_seed_offset": (0, MAX_SEED_OFFSET),
+    "eval_seed_offset": (0, MAX_SEED_OFFSET),
     "goal_radius": (0.01, 2.0),
     "heading_noise_prob": (0.0, 1.0),
     "heading_noise": (0.0, 3.1416),
@@ -273,12 +278,12 @@ _DAGGER_RANGES = {
 }
 
 _SAC_RANGES = {
-    "seed": (0, None),
+    "seed": SEED_RANGE,
     "threads": (1, 1024),
-    "total_steps": (1, None),
-    "random_steps": (0, None),
-    "replay_size": (1, None),
-    "batch_size": (1, None),
+    "total_steps": (1, MAX_COUNT),
+    "random_steps": (0, MAX_COUNT),
+    "replay_size": (1, MAX_COUNT),
+    "batch_size": (1, MAX_COUNT),
     "hidden": (1, 65536),
     "features": (1, 65536),
     "filters": (1, 4096),
@@ -291,13 +296,13 @@ _SAC_RANGES = {
     "discount": (0.0, 1.0),
     "critic_tau": (1e-6, 1.0),
     "encoder_tau": (1e-6, 1.0),
-    "actor_update_freq": (1, None),
-    "target_update_freq": (1, None),
+    "actor_update_freq": (1, MAX_COUNT),
+    "target_update_freq": (1, MAX_COUNT),
     "updates_per_step": (1, 1000),
-    "eval_every": (1, None),
-    "eval_episodes": (1, None),
-    "eval_seed_offset": (0, None),
-    "checkpoint_every": (1, None),
+    "eval_every": (1, MAX_COUNT),
+    "eval_episodes": (1, MAX_COUNT),
+    "eval_seed_offset": (0, MAX_SEED_OFFSET),
+    "checkpoint_every": (1, MAX_COUNT),
     "num_envs": (1, 4096),
     "num_frames": (1, 64),
     "grid_size": (2, 1000),
@@ -382,14 +387,14 @@ class FinetuneConfig:
 
 
 _FINETUNE_RANGES = {
-    "seed": (0, None),
+    "seed": SEED_RANGE,
     "threads": (1, 1024),
     "goal_radius": (0.01, 2.0),
-    "total_steps": (1, None),
-    "replay_size": (1, None),
-    "learning_starts": (0, None),
+    "total_steps": (1, MAX_COUNT),
+    "replay_size": (1, MAX_COUNT),
+    "learning_starts": (0, MAX_COUNT),
     "updates_per_step": (0.0, 1000.0),
-    "batch_size": (1, None),
+    "batch_size": (1, MAX_COUNT),
     "hidden": (1, 65536),
     "state_features": (1, 65536),
     "critic_lr": (1e-8, 1.0),
@@ -397,36 +402,36 @@ _FINETUNE_RANGES = {
     "alpha_lr": (1e-8, 1.0),
     "discount": (0.0, 1.0),
     "tau": (1e-6, 1.0),
-    "critic_warmup": (0, None),
+    "critic_warmup": (0, MAX_COUNT),
     "init_alpha": (1e-8, 1e3),
     "target_entropy": (0.0, 1.0),
     "bc_weight": (0.0, 1e3),
     "temperature": (1e-3, 1e3),
-    "eval_every": (1, None),
-    "eval_episodes": (1, None),
-    "eval_seed_offset": (0, None),
-    "train_seed_offset": (0, None),
+    "eval_every": (1, MAX_COUNT),
+    "eval_episodes": (1, MAX_COUNT),
+    "eval_seed_offset": (0, MAX_SEED_OFFSET),
+    "train_seed_offset": (0, MAX_SEED_OFFSET),
 }
 
 _SARL_RANGES = {
-    "seed": (0, None),
-    "il_episodes": (0, None),
-    "il_epochs": (0, None),
+    "seed": SEED_RANGE,
+    "il_episodes": (0, MAX_COUNT),
+    "il_epochs": (0, MAX_COUNT),
     "il_lr": (1e-8, 1.0),
-    "rl_episodes": (0, None),
+    "rl_episodes": (0, MAX_COUNT),
     "rl_lr": (1e-8, 1.0),
-    "batch_size": (1, None),
-    "train_batches": (0, None),
-    "target_update": (1, None),
-    "capacity": (1, None),
+    "batch_size": (1, MAX_COUNT),
+    "train_batches": (0, MAX_COUNT),
+    "target_update": (1, MAX_COUNT),
+    "capacity": (1, MAX_COUNT),
     "epsilon_start": (0.0, 1.0),
     "epsilon_end": (0.0, 1.0),
-    "epsilon_decay": (1, None),
+    "epsilon_decay": (1, MAX_COUNT),
     "gamma": (0.0, 1.0),
-    "eval_every": (1, None),
-    "eval_episodes": (1, None),
-    "eval_seed_offset": (0, None),
-    "train_seed_offset": (0, None),
+    "eval_every": (1, MAX_COUNT),
+    "eval_episodes": (1, MAX_COUNT),
+    "eval_seed_offset": (0, MAX_SEED_OFFSET),
+    "train_seed_offset": (0, MAX_SEED_OFFSET),
     "goal_radius": (0.01, 2.0),
     "threads": (1, 1024),
 }

@@ -18,11 +18,12 @@ numpy only (no drake, no torch).
 
 # No `from __future__ import annotations`: Drake's typed YAML loader needs real types.
 import dataclasses as dc
-import math
 
 import numpy as np
 
+from emonav_drake.config_yaml import validate_ranges
 from emonav_drake.core.crowd import CrowdSnapshot
+from emonav_drake.param_ranges import ESTIMATE_RANGES
 from emonav_drake.params import EMOTION_NAMES, ConfigError
 
 NUM_EMOTIONS = len(EMOTION_NAMES)
@@ -138,24 +139,23 @@ class HeadCameraParams:
     max_range: float = 6.0
 
     def validate(self) -> "HeadCameraParams":
-        """Raise `ConfigError` naming the field if a value is invalid."""
+        """Raise `ConfigError` naming the field if a value is invalid: the ranges of
+        `param_ranges.ESTIMATE_RANGES` ("camera.*"), near < far, a face fits the image."""
         pre = "emotion_estimate.camera"
-        if not (16 <= self.width <= 4096 and 16 <= self.height <= 4096):
-            raise ConfigError(f"{pre}: image {self.width} × {self.height} px: each in [16, 4096]")
-        if not (math.isfinite(self.fov_y_deg) and 1.0 <= self.fov_y_deg <= 170.0):
-            raise ConfigError(f"{pre}.fov_y_deg = {self.fov_y_deg!r}: must be in [1, 170]")
-        if not (math.isfinite(self.lip_height) and 0.1 <= self.lip_height <= 3.0):
-            raise ConfigError(f"{pre}.lip_height = {self.lip_height!r}: must be in [0.1, 3] m")
-        off = np.asarray(self.digit_offset, dtype=float)
-        if off.shape != (3,) or not np.all(np.isfinite(off)) or np.any(np.abs(off) > 2.0):
-            raise ConfigError(f"{pre}.digit_offset = {self.digit_offset!r}: three values in m")
-        if not (0 < self.near < self.far and math.isfinite(self.far)):
+        validate_ranges(self, _CAMERA_RANGES, prefix=f"{pre}.")
+        if not self.near < self.far:
             raise ConfigError(f"{pre}: near {self.near!r}, far {self.far!r}: 0 < near < far")
-        if not 8 <= self.min_face_size <= min(self.width, self.height):
-            raise ConfigError(f"{pre}.min_face_size = {self.min_face_size}: at least 8 px")
-        if not (math.isfinite(self.max_range) and self.max_range > 0):
-            raise ConfigError(f"{pre}.max_range = {self.max_range!r}: must be > 0")
+        if not self.min_face_size <= min(self.width, self.height):
+            raise ConfigError(
+                f"{pre}.min_face_size = {self.min_face_size}: at most the image's "
+                f"{min(self.width, self.height)} px"
+            )
         return self
+
+
+_CAMERA_RANGES = {
+    k.removeprefix("camera."): v for k, v in ESTIMATE_RANGES.items() if k.startswith("camera.")
+}
 
 
 @dc.dataclass
@@ -181,13 +181,11 @@ class EmotionEstimateParams:
     camera: HeadCameraParams = dc.field(default_factory=HeadCameraParams)
 
     def validate(self) -> "EmotionEstimateParams":
-        """Raise `ConfigError` naming the field if a value is invalid."""
+        """Raise `ConfigError` naming the field if a value is invalid (the ranges are
+        `param_ranges.ESTIMATE_RANGES`; seeds in [0, 2**64 - 1])."""
         if self.mode not in ESTIMATE_MODES:
             raise ConfigError(f"emotion_estimate.mode = {self.mode!r}: one of {ESTIMATE_MODES}")
         validate_confusion(self.confusion, "emotion_estimate.confusion")
-        if not (math.isfinite(self.period) and self.period > 0):
-            raise ConfigError(f"emotion_estimate.period = {self.period!r}: must be > 0")
-        if self.seed < 0:
-            raise ConfigError(f"emotion_estimate.seed = {self.seed}: must be >= 0")
+        validate_ranges(self, ESTIMATE_RANGES, prefix="emotion_estimate.")
         self.camera.validate()
         return self
