@@ -29,6 +29,7 @@ LAYERS: list[tuple[str, frozenset[str]]] = [
                 "config_notes",
                 "param_ranges",
                 "atomic_io",
+                "json_input",
                 "torch_load",
                 "run_lock",
                 "provenance",

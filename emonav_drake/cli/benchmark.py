@@ -74,7 +74,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         help="parallel workers (default: the CPU count, or the cluster's CPUs with "
         "--ray-address); 1 runs serially in this process without Ray",
     )
-    b.add_argument("--ray-address", help="run on this Ray cluster (e.g. auto or HOST:6379)")
+    b.add_argument(
+        "--ray-address",
+        help="run on this Ray cluster: HOST:PORT (the GCS port of `ray start --head`, 6379 by "
+        "default) or auto (the cluster started on this machine); checked before the run "
+        "starts (nothing is written if no cluster answers)",
+    )
     add_config_choice(b)
     b.add_argument("--time-varying", action="store_true", help=TIME_VARYING_HELP)
     add_emotion_flags(b)
@@ -114,7 +119,7 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
     # every flag checked before the first trial (planners are built in run_benchmark)
     check_output_dir(args.out, "--out")
     if args.workers is not None:
-        check_workers(args.workers)
+        check_workers(args.workers, args.ray_address)
     estimate_yaml = _emotion_estimate_yaml(args)
     if estimate_yaml is not None and not PLANTS[args.plant].emotion_estimates:
         raise ConfigError(f"--plant {args.plant} takes no --emotion-estimate / --emotion-source")

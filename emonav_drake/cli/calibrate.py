@@ -70,7 +70,7 @@ def cmd_collect(args: argparse.Namespace) -> int:
     """Run traced, exploring Digit episodes into --out; print the summary as JSON."""
     from emonav_drake.learning.calibration import collect_traces
 
-    check_workers(args.workers)
+    check_workers(args.workers, args.ray_address)
     summary = collect_traces(
         args.out,
         args.planners,

@@ -80,8 +80,9 @@ def add_meshcat_host(p: argparse.ArgumentParser) -> None:
 
 
 def meshcat_host(args: argparse.Namespace) -> str:
-    """The Meshcat host of `--meshcat-host` (checked: only with `--meshcat`, not empty)."""
-    from emonav_drake.diagrams.meshcat_viewing import LOOPBACK_HOST
+    """The Meshcat host of `--meshcat-host` (checked: only with `--meshcat`, not empty, an
+    interface of this machine — `check_meshcat_host` — so a bad one fails before work)."""
+    from emonav_drake.diagrams.meshcat_viewing import LOOPBACK_HOST, check_meshcat_host
 
     if args.meshcat_host is None:
         return LOOPBACK_HOST
@@ -89,7 +90,7 @@ def meshcat_host(args: argparse.Namespace) -> str:
         raise ConfigError("--meshcat-host is used with --meshcat only")
     if not args.meshcat_host.strip():
         raise ConfigError("--meshcat-host '': give a host name or address, or '*'")
-    return args.meshcat_host.strip()
+    return check_meshcat_host(args.meshcat_host.strip())
 
 
 def check_outputs(args: argparse.Namespace, *flags: str) -> None:
@@ -102,10 +103,12 @@ def check_outputs(args: argparse.Namespace, *flags: str) -> None:
     check_distinct(outputs)
 
 
-def check_workers(workers: int) -> None:
-    """`--workers` must be >= 1."""
-    if workers < 1:
-        raise ConfigError(f"--workers {workers}: must be >= 1")
+def check_workers(workers: int, address: str | None = None) -> None:
+    """`--workers` must be >= 1 and, without `--ray-address`, at most 4 per CPU core
+    (`parallel.check_workers`)."""
+    from emonav_drake.parallel import check_workers as check
+
+    check(workers, address)
 
 
 def add_episode_flags(p: argparse.ArgumentParser) -> None:

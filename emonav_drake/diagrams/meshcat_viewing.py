@@ -2,8 +2,10 @@
 
 * `make_meshcat(live, host)`: a Meshcat server, listening on loopback (`localhost`) unless
   another host is asked for (then with a warning: Meshcat has no authentication and
-  accepts a websocket from any origin); a record-only one (live False) does not log
-  Drake's "Meshcat listening for connections at http://..." line.
+  accepts a websocket from any origin). Drake's "Meshcat listening for connections at
+  http://..." line is not logged (it writes an IPv6 address without brackets); a live
+  view prints `meshcat_url` instead. `check_meshcat_host` refuses, before any work, a
+  host that is not this machine's (Drake's own failure names neither host nor flag).
 * `wait_for_browser(meshcat, timeout)`: block until a browser (any websocket client) is
   connected.
 * `serve_until_interrupted(meshcat)`: keep the server (and so the scene) alive until
@@ -20,12 +22,14 @@ import dataclasses as dc
 import html
 import ipaddress
 import logging
+import socket
 import time
 from pathlib import Path
 
 from pydrake.geometry import Meshcat, MeshcatParams
 
 from emonav_drake.core import palette
+from emonav_drake.params import ConfigError
 from emonav_drake.systems import navigation_meshcat as nm
 
 log = logging.getLogger(__name__)
@@ -70,18 +74,73 @@ def is_loopback_host(host: str) -> bool:
         return False
 
 
+def _bare(host: str) -> str:
+    """An IPv6 address without the brackets of a URL: "[::1]" → "::1"."""
+    return host[1:-1] if host.startswith("[") and host.endswith("]") else host
+
+
+def check_meshcat_host(host: str, flag: str = "--meshcat-host") -> str:
+    """`host` as Meshcat is given it (brackets of an IPv6 address removed), if Meshcat can
+    listen there: "*" (every interface), or a name or address that resolves to an
+    address of this machine (a socket can be bound to it). `ConfigError` naming `flag`
+    otherwise (an unknown name, another machine's address)."""
+    if host == "*":
+        return host
+    bare = _bare(host)
+    choices = "give localhost (this machine only), '*' (every interface) or an address of "
+    choices += "this machine"
+    try:
+        infos = socket.getaddrinfo(bare, 0, type=socket.SOCK_STREAM)
+    except (socket.gaierror, UnicodeError) as e:
+        why = getattr(e, "strerror", None) or str(e)
+        raise ConfigError(
+            f"{flag} {host!r}: not a host name or address this machine can resolve ({why}); "
+            f"{choices}"
+        ) from None
+    problem: OSError | None = None
+    for family, kind, proto, _, address in infos:
+        with socket.socket(family, kind, proto) as sock:
+            try:
+                sock.bind(address)  # port 0: any free one; fails for another machine's address
+                return bare
+            except OSError as e:
+                problem = problem or e
+    why = problem.strerror if problem is not None and problem.strerror else "cannot bind"
+    raise ConfigError(
+        f"{flag} {host!r}: not an address of this machine ({why}), so Meshcat cannot listen "
+        f"there; {choices}"
+    )
+
+
+def meshcat_url(meshcat: Meshcat) -> str:
+    """The address to open in a browser: Drake's `web_url()`, with an IPv6 host in
+    brackets (`http://[::1]:7000`, not `http://::1:7000`)."""
+    url = meshcat.web_url()
+    scheme, sep, rest = url.partition("://")
+    host, colon, port = rest.rpartition(":")
+    if sep and colon and ":" in host and not host.startswith("["):
+        return f"{scheme}://[{host}]:{port}"
+    return url
+
+
 def make_meshcat(live: bool, host: str = LOOPBACK_HOST, port: int | None = None) -> Meshcat:
     """A Meshcat server listening on `host` (default loopback only).
 
     Args:
-        live: False (recording only): Drake's log line announcing the URL is suppressed,
-            since nobody is meant to connect.
+        live: True for a server someone watches (`start_live_view` prints its URL), False
+            for recording only. Either way Drake's own log line announcing the URL is
+            suppressed (it writes an IPv6 host without brackets).
         host: the interface to listen on: "localhost" (default), an address of this
-            machine, or "*" for every interface. Anything but loopback logs a warning:
-            Meshcat has no authentication and accepts a websocket from any origin, so
-            whoever reaches that interface can watch and change the scene.
+            machine (an IPv6 one with or without brackets), or "*" for every interface.
+            Anything but loopback logs a warning: Meshcat has no authentication and
+            accepts a websocket from any origin, so whoever reaches that interface can
+            watch and change the scene.
         port: the port (None: Drake's choice, the first free one from 7000).
+    Raises:
+        ConfigError: Meshcat could not listen there (not this machine's address, or no
+            free port), naming the host.
     """
+    host = _bare(host)
     if not is_loopback_host(host):
         log.warning(
             "Meshcat listens on %s: any host that reaches this machine there can watch and "
@@ -89,13 +148,18 @@ def make_meshcat(live: bool, host: str = LOOPBACK_HOST, port: int | None = None)
             "every interface" if host in ("*", "0.0.0.0", "::") else host,
         )
     params = MeshcatParams(host=host, port=port)
-    if live:
-        return Meshcat(params)
     drake_log = logging.getLogger("drake")
     level = drake_log.level
     drake_log.setLevel(logging.WARNING)
     try:
         return Meshcat(params)
+    except RuntimeError as e:  # "Meshcat failed to open a websocket port."
+        where = f"port {port}" if port is not None else "a port from 7000"
+        what = "Meshcat" if host == LOOPBACK_HOST else f"--meshcat-host {host!r}: Meshcat"
+        raise ConfigError(
+            f"{what} could not listen on {where} of {host} ({e}); give localhost, '*' or an "
+            "address of this machine, and check that a port is free"
+        ) from None
     finally:
         drake_log.setLevel(level)
 
@@ -266,12 +330,12 @@ def show_caption_controls(meshcat: Meshcat, caption: ReplayCaption) -> None:
 def start_live_view(meshcat: Meshcat, wait: bool, caption: ReplayCaption | None = None) -> None:
     """Print the URL, show the caption (if any) in the control panel and, with `wait`,
     block until a browser is connected (Ctrl-C stops the wait)."""
-    print(f"Meshcat: {meshcat.web_url()}", flush=True)
+    print(f"Meshcat: {meshcat_url(meshcat)}", flush=True)
     if caption is not None:
         show_caption_controls(meshcat, caption)
     if wait and meshcat.GetNumActiveConnections() == 0:
         print(
-            f"waiting for a browser at {meshcat.web_url()} (open it; --no-wait to start "
+            f"waiting for a browser at {meshcat_url(meshcat)} (open it; --no-wait to start "
             "at once, Ctrl-C to quit)",
             flush=True,
         )
@@ -287,5 +351,5 @@ def finish_live_view(
     if caption is not None:
         show_caption_controls(meshcat, caption)
     if keep_serving:
-        print(f"Meshcat still serving at {meshcat.web_url()} (Ctrl-C to exit)", flush=True)
+        print(f"Meshcat still serving at {meshcat_url(meshcat)} (Ctrl-C to exit)", flush=True)
         serve_until_interrupted(meshcat)

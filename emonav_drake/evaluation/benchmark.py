@@ -12,12 +12,19 @@ A *run directory* holds one benchmark:
   docs does not); the commit is kept for the record.
 * `trials.jsonl` — one JSON line per finished trial, appended as it finishes
   (`method`, `seed`, `plant`, `record` = `EpisodeRecord.to_json()`, `wall_seconds`), each
-  line written with one `write` + flush + fsync. A kill can leave at most a torn last line;
+  line written with one `write` + fsync. A kill can leave at most a torn last line;
   it is detected and dropped (and its trial redone) when the directory is opened again.
   Every other line is checked when read (`check_trial`: a known outcome, counts and
   lengths >= 0, …); a bad one is an error naming the file and line, never a table entry.
 * `tables.md` and `table2.csv`, `table3.csv`, `social.csv`, `pairwise.csv` — the tables of
   `evaluation.tables`, written at the end and on an interruption, from the sorted trials.
+
+A failed append (a full disk) cuts `trials.jsonl` back to its finished trials and is the
+error reported (the tables written after it may fail on the same disk: that is logged,
+not raised). A run that fails before its first trial leaves nothing it made: a
+`--ray-address` is checked (`parallel.check_ray_address`: does a Ray cluster answer
+there?) before any file is written, and a new run directory that holds no trial is
+removed again (its `settings.json`, and the folders this call created).
 
 The files of a run directory must be regular files: a symbolic link (or a `trials.jsonl`
 with another hard link) is refused when the directory is opened, since a write would go
@@ -41,6 +48,7 @@ different orders and on fresh planners). Torch runs one thread per process in bo
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses as dc
 import logging
 import os
@@ -144,6 +152,10 @@ def run_benchmark(
         plant, trials, first_seed, workers, ray_address, emotion_estimate_yaml
     )
     out = check_output_dir(out, "--out")
+    if ray_address:  # a cluster that is not there fails now, before any work or file
+        from emonav_drake.parallel import check_ray_address
+
+        check_ray_address(ray_address)
     # the same YAML text drives every engine (the driver's and the workers' configs are equal)
     config = load_config(data=dump_config(config))
     _check_scenarios(config, first_seed, trials, config_source)
@@ -158,18 +170,51 @@ def run_benchmark(
         config_source,
         emotion_estimate_yaml,
     )
+    made = _missing_folders(out)
     rd = RunDirectory(out)
     t0 = time.perf_counter()
-    with rd.locked():
-        settings, done = rd.open(settings)
-        # the directory's method order; this call's checkpoint paths (same hashes)
-        given = {m.name: m for m in spec.methods}
-        spec.methods = [given[n] for n in settings["planners"]]
-        engine = (workers, ray_address)
-        all_trials, new = _run_missing(rd, spec, settings, done, engine, progress, on_trial)
+    new_run = False
+    try:
+        with rd.locked():
+            new_run = not rd.settings_path.exists()
+            settings, done = rd.open(settings)
+            # the directory's method order; this call's checkpoint paths (same hashes)
+            given = {m.name: m for m in spec.methods}
+            spec.methods = [given[n] for n in settings["planners"]]
+            engine = (workers, ray_address)
+            all_trials, new = _run_missing(rd, spec, settings, done, engine, progress, on_trial)
+    except (KeyboardInterrupt, RunInterrupted):
+        raise  # the settings stay: "run the same command again to start"
+    except BaseException:
+        _remove_empty_start(rd, new_run, made)
+        raise
     rank = {m: i for i, m in enumerate(settings["planners"])}
     all_trials.sort(key=lambda t: (rank[t["method"]], t["seed"]))
     return BenchmarkResult(out, settings, all_trials, len(new), time.perf_counter() - t0)
+
+
+def _missing_folders(out: Path) -> list[Path]:
+    """The folders of `out` (itself included) that do not exist yet, innermost first."""
+    missing = []
+    p = out.absolute()
+    while not p.exists():
+        missing.append(p)
+        p = p.parent
+    return missing
+
+
+def _remove_empty_start(rd: RunDirectory, new_run: bool, made: list[Path]) -> None:
+    """After a failure: if this call started the run (`new_run`) and no trial was written,
+    remove its `settings.json` (and an empty `trials.jsonl`); then the folders of `made`
+    (this call created them) that are empty. Nothing else is touched."""
+    trials = rd.trials_path
+    if new_run and not (trials.exists() and trials.stat().st_size):
+        with contextlib.suppress(OSError):
+            trials.unlink(missing_ok=True)
+            rd.settings_path.unlink(missing_ok=True)
+    for folder in made:  # innermost first: a folder emptied by the one before
+        with contextlib.suppress(OSError):
+            folder.rmdir()  # only an empty one
 
 
 def _check_run_args(
@@ -255,30 +300,44 @@ def _run_missing(
                 run_trials(spec, tasks, on_result, workers, ray_address)
     except KeyboardInterrupt:
         bar.close()
-        md = rd.write_tables(settings, all_trials, interrupted=True)
+        md = _tables_after_a_stop(rd, settings, all_trials)
         total = len(seeds) * len(settings["planners"])
         raise _interruption(rd.path, md, len(new), len(all_trials), total) from None
     except BaseException:
         bar.close()
-        rd.write_tables(settings, all_trials, interrupted=True)
+        _tables_after_a_stop(rd, settings, all_trials)
         raise
     bar.close()
     rd.write_tables(settings, all_trials)
     return all_trials, new
 
 
-def _interruption(out: Path, md: Path, new: int, finished: int, total: int) -> RunInterrupted:
+def _tables_after_a_stop(rd: RunDirectory, settings: dict, trials: list[dict]) -> Path | None:
+    """The tables of the finished trials after an interruption or an error (their
+    `tables.md`), or None if they could not be written — logged, not raised: what stopped
+    the run (a full disk while appending a trial) is the error to report, not its echo."""
+    try:
+        return rd.write_tables(settings, trials, interrupted=True)
+    except Exception as e:  # noqa: BLE001 — the run's own error is raised by the caller
+        log.warning("the tables of the finished trials were not written: %s", e)
+        return None
+
+
+def _interruption(
+    out: Path, md: Path | None, new: int, finished: int, total: int
+) -> RunInterrupted:
     """The `RunInterrupted` of a run into `out` stopped after `new` trials of this call,
-    `finished` of the directory's `total`, with the tables of the finished ones in `md`."""
+    `finished` of the directory's `total`, with the tables of the finished ones in `md`
+    (None: they could not be written)."""
     if not finished:
         return RunInterrupted(
             f"interrupted before the first trial finished; {out} holds the settings "
             "only; run the same command again to start"
         )
+    tables = f"tables of the finished ones in {md}" if md else "their tables not written"
     return RunInterrupted(
         f"interrupted after {new} new trials ({finished} of {total} in "
-        f"{out}); tables of the finished ones in {md}; run the same command again "
-        "to continue"
+        f"{out}); {tables}; run the same command again to continue"
     )
 
 

@@ -1,11 +1,15 @@
 """A benchmark's run directory: `settings.json`, `trials.jsonl`, the tables.
 
 `trials.jsonl` holds one JSON line per finished trial, appended as it finishes with one
-`write` + flush + fsync; a torn last line (a kill mid-write) is dropped and its trial
-redone when the directory is opened again, and every other line is checked when read
-(`check_trial`). The files must be regular files (a symbolic link, or a `trials.jsonl`
-with another hard link, is refused). `RunDirectory` opens, checks, appends and writes
-the tables; `load_run` reads a finished run. See `evaluation/benchmark.py` for the run.
+`write` + fsync; a torn last line (a kill mid-write) is dropped and its trial redone when
+the directory is opened again, and every other line is checked when read (`check_trial`:
+each record consistent in itself and with the run's configuration — `nav_time` is
+`steps` × `robot.step_time`, a timeout ends at `episode.max_steps`, …). An append that
+fails (a full disk) cuts the file back to its previous length: the finished trials stay,
+no half line. `settings.json` is checked on every read (`run_settings.check_settings`).
+The files must be regular files (a symbolic link, or a `trials.jsonl` with another hard
+link, is refused). `RunDirectory` opens, checks, appends and writes the tables;
+`load_run` reads a finished run. See `evaluation/benchmark.py` for the run.
 """
 
 from __future__ import annotations
@@ -30,12 +34,18 @@ from emonav_drake.core.metrics import COLLISION, FALL, SUCCESS, TIMEOUT, Episode
 from emonav_drake.core.scenario import MAX_SEED
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.evaluation import tables
-from emonav_drake.evaluation.run_settings import BenchmarkSettingsError, settings_difference
+from emonav_drake.evaluation.run_settings import (
+    BenchmarkSettingsError,
+    check_settings,
+    settings_difference,
+)
+from emonav_drake.json_input import JsonInputError, parse_json, read_json
 
 log = logging.getLogger(__name__)
 
 if TYPE_CHECKING:
     from emonav_drake.diagrams.trials import TrialRunner
+    from emonav_drake.params import EmoNavConfig
 
 SETTINGS_FILE = "settings.json"
 TRIALS_FILE = "trials.jsonl"
@@ -54,6 +64,7 @@ def comparable(t: dict) -> dict:
     return {k: v for k, v in t.items() if k != "wall_seconds"}
 
 
+_LINE_FIELDS = {"method", "seed", "plant", "record", "wall_seconds"}
 _RECORD_FIELDS = {f.name for f in dc.fields(EpisodeRecord)}
 _RECORD_REQUIRED = (
     "outcome",
@@ -75,12 +86,22 @@ def _is_number(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
-def check_trial(t: dict) -> str | None:
+def check_trial(t: dict, config: EmoNavConfig | None = None) -> str | None:
     """What is wrong with one `trials.jsonl` line (a dict with `method`, `seed`, `record`),
-    in words; None if it is a valid trial: a method name, a seed in [0, 2**64 - 1], a
-    record with every field of `EpisodeRecord.to_json()` and no other, a known outcome,
-    step counts that are integers in [0, steps], lengths and times that are finite and
-    >= 0 (`min_ped_distance` may be null: no pedestrian), a finite reward."""
+    in words; None if it is a valid trial: no fields but `_LINE_FIELDS`, a method name, a
+    seed in [0, 2**64 - 1], a record with every field of `EpisodeRecord.to_json()` and no
+    other, a known outcome, step counts that are integers in [0, steps], lengths and times
+    that are finite and >= 0 (`min_ped_distance` may be null: no pedestrian), a finite
+    reward, DT between the largest IDT entry and their sum, `collided_with` only on a
+    collision and `fall_reason` only on a fall. With the run's `config`, also what the
+    episode's bookkeeping (`core.metrics.EpisodeTracker`, on either plant) makes of it:
+    `nav_time` = `steps` × `robot.step_time`, at most `episode.max_steps` steps, a
+    timeout exactly at `episode.max_steps`, at least one step before a success or a
+    collision."""
+    unknown = sorted(set(t) - _LINE_FIELDS)
+    if unknown:
+        fields = ", ".join(sorted(_LINE_FIELDS))
+        return f"the line has the unknown field {unknown[0]!r} (a trial line has {fields})"
     if not isinstance(t["method"], str) or not t["method"]:
         return f"method = {t['method']!r} is not a method name"
     if not (_is_int(t["seed"]) and 0 <= t["seed"] <= MAX_SEED):
@@ -120,18 +141,48 @@ def check_trial(t: dict) -> str | None:
         return f"record.total_reward = {r['total_reward']!r} must be a finite number"
     if "seed" in r and r["seed"] != t["seed"]:
         return f"record.seed = {r['seed']!r} differs from the line's seed {t['seed']!r}"
-    for name in ("fall_reason", "collided_with"):
+    for name, outcome in (("fall_reason", FALL), ("collided_with", COLLISION)):
         if name in r and not isinstance(r[name], str):
             return f"record.{name} = {r[name]!r} must be a string"
+        if r.get(name) and r["outcome"] != outcome:
+            return (
+                f"record.{name} = {r[name]!r} with outcome {r['outcome']}: only a {outcome} has one"
+            )
+    if r["idt"] and not max(r["idt"]) <= r["discomfort_steps"] <= sum(r["idt"]):
+        return (
+            f"record.discomfort_steps = {r['discomfort_steps']} does not fit record.idt = "
+            f"{r['idt']}: a step in a zone counts once in DT and once per kind of zone in IDT"
+        )
+    return None if config is None else _check_against_config(r, config)
+
+
+def _check_against_config(r: dict, config: EmoNavConfig) -> str | None:
+    """What `check_trial` finds wrong in record `r` given the run's configuration."""
+    steps, most, period = r["steps"], config.episode.max_steps, config.robot.step_time
+    if steps > most:
+        return f"record.steps = {steps} is more than the run's episode.max_steps = {most}"
+    if r["outcome"] == TIMEOUT and steps != most:
+        return (
+            f"record.steps = {steps} with outcome timeout: a timeout ends at the run's "
+            f"episode.max_steps = {most}"
+        )
+    if r["outcome"] in (SUCCESS, COLLISION) and steps < 1:
+        return f"record.steps = 0 with outcome {r['outcome']}: it ends on a step"
+    expected = steps * period
+    if not math.isclose(r["nav_time"], expected, rel_tol=1e-9, abs_tol=1e-9):
+        return (
+            f"record.nav_time = {r['nav_time']!r} s is not record.steps × robot.step_time = "
+            f"{steps} × {period:g} = {expected:g} s"
+        )
     return None
 
 
-def read_trials(path: Path, repair: bool = False) -> list[dict]:
-    """The trial lines of `trials.jsonl`, each checked (`check_trial`). A torn last line (a
-    kill while writing: no final newline, or not a trial's JSON) is dropped — and cut from
-    the file with `repair`, so the next append starts on a fresh line; a damaged earlier
-    line, or any line that is a trial's JSON with invalid values, is an error naming the
-    file and the line."""
+def read_trials(path: Path, repair: bool = False, config: EmoNavConfig | None = None) -> list[dict]:
+    """The trial lines of `trials.jsonl`, each checked (`check_trial`, against the run's
+    `config` if given). A torn last line (a kill while writing: no final newline, or not a
+    trial's JSON) is dropped — and cut from the file with `repair`, so the next append
+    starts on a fresh line; a damaged earlier line, or any line that is a trial's JSON
+    with invalid values, is an error naming the file and the line."""
     if not path.exists():
         return []
     data = path.read_bytes()
@@ -144,11 +195,12 @@ def read_trials(path: Path, repair: bool = False) -> list[dict]:
         end = len(data) if nl < 0 else nl
         line = data[pos:end]
         t = None
+        why = "not a trial's JSON"
         if nl >= 0 and line.strip():
             try:
-                t = json.loads(line)
-            except ValueError:
-                t = None
+                t = parse_json(line, f"line {number}")
+            except JsonInputError as e:
+                t, why = None, str(e).removeprefix(f"line {number}: ")
             if not (isinstance(t, dict) and {"method", "seed", "record"} <= set(t)):
                 t = None
         elif nl >= 0:  # an empty line
@@ -159,9 +211,9 @@ def read_trials(path: Path, repair: bool = False) -> list[dict]:
                 log.warning("%s: dropping a torn last line (%d bytes)", path, len(line))
                 break
             raise BenchmarkSettingsError(
-                f"{path}: line {number} is damaged (not a trial's JSON); fix or remove that line"
+                f"{path}: line {number} is damaged ({why}); fix or remove that line"
             )
-        problem = check_trial(t)
+        problem = check_trial(t, config)
         if problem is not None:
             raise BenchmarkSettingsError(
                 f"{path}: line {number} is not a valid trial: {problem}; fix or remove that line"
@@ -231,13 +283,13 @@ class RunDirectory:
                 "by a copy, or use another --out"
             )
 
-    def read_settings(self) -> dict | None:
+    def read_settings(self) -> tuple[dict, EmoNavConfig] | None:
+        """(`settings.json`, the run's configuration) checked (`check_settings`); None if
+        there is no `settings.json`."""
         if not self.settings_path.exists():
             return None
-        try:
-            return json.loads(self.settings_path.read_text())
-        except ValueError as e:
-            raise BenchmarkSettingsError(f"{self.settings_path}: not valid JSON ({e})") from None
+        settings = read_json(self.settings_path)
+        return settings, check_settings(settings, str(self.settings_path))
 
     def open(self, settings: dict) -> tuple[dict, list[dict]]:
         """Check or create `settings.json`; the valid trials already done (torn line cut).
@@ -247,8 +299,8 @@ class RunDirectory:
         that is a link is refused first (`check_regular_files`).
         """
         self.check_regular_files()
-        old = self.read_settings()
-        if old is None:
+        found = self.read_settings()
+        if found is None:
             if self.trials_path.exists() and self.trials_path.stat().st_size:
                 raise BenchmarkSettingsError(
                     f"--out {self.path}: has {TRIALS_FILE} but no {SETTINGS_FILE}; use an empty "
@@ -256,6 +308,7 @@ class RunDirectory:
                 )
             write_json(self.settings_path, settings)
             return settings, []
+        old, config = found
         diff = settings_difference(old, settings)
         if diff is not None:
             raise BenchmarkSettingsError(
@@ -267,6 +320,9 @@ class RunDirectory:
                 f"--trials {settings['trials']}: {self.path} already plans {old['trials']} trials "
                 f"per method; give --trials >= {old['trials']} (a run can only be extended)"
             )
+        # every line checked before anything is written (an extension included)
+        trials = read_trials(self.trials_path, repair=True, config=config)
+        trials = check_run_trials(self.trials_path, trials, old)
         merged = dict(old)
         if settings["trials"] > old["trials"]:
             merged["trials"] = settings["trials"]
@@ -274,42 +330,34 @@ class RunDirectory:
                 {"from": old["trials"], "to": settings["trials"], "at": settings["created"]}
             )
             write_json(self.settings_path, merged)
-        trials = read_trials(self.trials_path, repair=True)
-        return merged, self._check_trials(trials, merged)
-
-    def _check_trials(self, trials: list[dict], settings: dict) -> list[dict]:
-        seen: dict[tuple[str, int], dict] = {}
-        lo = settings["first_seed"]
-        hi = lo + settings["trials"]
-        for t in trials:
-            key = trial_key(t)
-            if t["method"] not in settings["planners"] or t.get("plant") != settings["plant"]:
-                raise BenchmarkSettingsError(
-                    f"{self.trials_path}: a trial of {t['method']!r} on {t.get('plant')!r} "
-                    "does not belong to this run's settings"
-                )
-            if not lo <= key[1] < hi:
-                raise BenchmarkSettingsError(
-                    f"{self.trials_path}: seed {key[1]} is outside this run's seeds [{lo}, {hi})"
-                )
-            if key in seen:
-                if comparable(seen[key]) != comparable(t):
-                    raise BenchmarkSettingsError(
-                        f"{self.trials_path}: two different results for {key[0]} seed {key[1]}"
-                    )
-                continue
-            seen[key] = t
-        return list(seen.values())
+        return merged, trials
 
     def append(self, trial: dict) -> None:
-        """Append one trial line: one write, flushed and fsynced (never through a link)."""
-        line = json.dumps(json_safe(trial), allow_nan=False) + "\n"
+        """Append one trial line: one write, fsynced (never through a link). A failed
+        append (a full disk) cuts the file back to its previous length — no half line —
+        and raises the `OSError` naming `trials.jsonl`."""
+        data = (json.dumps(json_safe(trial), allow_nan=False) + "\n").encode()
         flags = os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW
-        with naming_full_disk(self.trials_path, "could not be appended to"):
-            with os.fdopen(os.open(self.trials_path, flags, 0o666), "ab") as f:
-                f.write(line.encode())
-                f.flush()
-                os.fsync(f.fileno())
+        what = (
+            "could not be appended to (cut back to its finished trials, which are kept; "
+            "free some space and run the same command again to continue)"
+        )
+        with naming_full_disk(self.trials_path, what):
+            fd = os.open(self.trials_path, flags, 0o666)
+            try:
+                size = os.fstat(fd).st_size
+                try:
+                    view = memoryview(data)
+                    while view:  # a short write (the disk filling up) goes on, or raises
+                        view = view[os.write(fd, view) :]
+                    os.fsync(fd)
+                except BaseException:
+                    with contextlib.suppress(OSError):
+                        os.ftruncate(fd, size)
+                        os.fsync(fd)
+                    raise
+            finally:
+                os.close(fd)
 
     def write_tables(
         self, settings: dict, trials: Sequence[dict], interrupted: bool = False
@@ -362,14 +410,46 @@ class RunDirectory:
         return md
 
 
+def check_run_trials(path: Path, trials: list[dict], settings: dict) -> list[dict]:
+    """The trials of the run file `path` that belong to its `settings` (one per method and
+    seed: a repeated identical line is kept once); `BenchmarkSettingsError` for a trial
+    of another method or plant, a seed outside the run's, or two different results for
+    one trial."""
+    seen: dict[tuple[str, int], dict] = {}
+    lo = settings["first_seed"]
+    hi = lo + settings["trials"]
+    for t in trials:
+        key = trial_key(t)
+        if t["method"] not in settings["planners"] or t.get("plant") != settings["plant"]:
+            raise BenchmarkSettingsError(
+                f"{path}: a trial of {t['method']!r} on {t.get('plant')!r} "
+                "does not belong to this run's settings"
+            )
+        if not lo <= key[1] < hi:
+            raise BenchmarkSettingsError(
+                f"{path}: seed {key[1]} is outside this run's seeds [{lo}, {hi})"
+            )
+        if key in seen:
+            if comparable(seen[key]) != comparable(t):
+                raise BenchmarkSettingsError(
+                    f"{path}: two different results for {key[0]} seed {key[1]}"
+                )
+            continue
+        seen[key] = t
+    return list(seen.values())
+
+
 def load_run(path: str | Path) -> tuple[dict, list[dict]]:
-    """(settings, trials sorted by method and seed) of a run directory (read only)."""
+    """(settings, trials sorted by method and seed) of a run directory (read only), every
+    file checked as when a benchmark continues it: the settings (`check_settings`), each
+    trial line against them (`check_trial`, `check_run_trials`)."""
     rd = RunDirectory(path)
-    settings = rd.read_settings()
-    if settings is None:
+    found = rd.read_settings()
+    if found is None:
         raise BenchmarkSettingsError(f"{path}: no {SETTINGS_FILE}: not a benchmark run directory")
+    settings, config = found
     rank = {m: i for i, m in enumerate(settings["planners"])}
-    trials = read_trials(rd.trials_path)
+    trials = check_run_trials(rd.trials_path, read_trials(rd.trials_path, config=config), settings)
     trials.sort(key=lambda t: (rank.get(t["method"], len(rank)), t["seed"]))
     return settings, trials
 

@@ -5,6 +5,12 @@ plant, trials, first seed, the full resolved configuration as YAML and its hash,
 emotion estimate and the package's identity; `settings_difference` names the first field
 in which a later run into the same directory differs (a run may only add trials);
 `spec_from_settings` rebuilds what a worker needs (`diagrams.trials.BenchmarkSpec`).
+
+`check_settings` is applied on every read of a run (`emonav benchmark` continuing one,
+`diagnose`, `compare`): the file must be a JSON object with every field the code reads,
+each of its kind, and the configuration text (`config_yaml`, `emotion_estimate_yaml`)
+must still have the hash recorded beside it — an edited configuration would be
+re-simulated, or its trials compared, as if the run had used it.
 """
 
 from __future__ import annotations
@@ -12,15 +18,19 @@ from __future__ import annotations
 import dataclasses as dc
 import datetime
 import logging
+import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from emonav_drake.core.scenario import MAX_SEED
+from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.diagrams.trials import (
+    MAX_TRIALS,
     BenchmarkSpec,
     MethodSpec,
 )
-from emonav_drake.params import ConfigError, EmoNavConfig, dump_config
+from emonav_drake.params import ConfigError, EmoNavConfig, dump_config, load_config
 from emonav_drake.provenance import package_identity, sha256_bytes
 
 log = logging.getLogger(__name__)
@@ -84,6 +94,128 @@ def _source_name(config_source: str) -> str:
     return "default"
 
 
+# The fields of `settings.json` the code reads, and what each must be (`check_settings`).
+_STR, _OPT_STR = (str,), (str, type(None))
+_SETTINGS_KINDS: dict[str, tuple[tuple[type, ...], str]] = {
+    "format": ((int,), "an integer"),
+    "planners": ((list,), "a list of method names"),
+    "methods": ((dict,), "an object: method name → its planner and checkpoint"),
+    "plant": (_STR, f"one of {', '.join(PLANTS)}"),
+    "trials": ((int,), f"an integer in [1, {MAX_TRIALS}]"),
+    "first_seed": ((int,), "a seed: an integer in [0, 2**64 - 1]"),
+    "setting": (_OPT_STR, "a setting name or null"),
+    "setting_label": (_STR, "a string"),
+    "config_source": (_STR, "a string"),
+    "config_sha256": (_STR, "a SHA-256 in hex"),
+    "config_yaml": (_STR, "the configuration as YAML text"),
+    "time_varying": ((bool,), "true or false"),
+    "goal_radius": ((int, float), "a number [m]"),
+    "emotion_estimate_yaml": (_OPT_STR, "YAML text or null"),
+    "emotion_estimate_sha256": (_OPT_STR, "a SHA-256 in hex or null"),
+    "package": ((dict,), "an object"),
+    "created": (_STR, "a date and time"),
+}
+_METHOD_FIELDS = {f.name for f in dc.fields(MethodSpec)}
+
+
+def _kind_problem(settings: dict) -> str | None:
+    """The first field of `settings` that is missing or not of its kind, in words."""
+    for key, (kinds, what) in _SETTINGS_KINDS.items():
+        if key not in settings:
+            return f"lacks the field {key!r} (not a benchmark's settings?)"
+        v = settings[key]
+        if not isinstance(v, kinds) or (isinstance(v, bool) and bool not in kinds):
+            return f"{key} = {_short(v)} is not {what}"
+    if settings["format"] != FORMAT:
+        return f"format = {settings['format']!r}: this emonav reads format {FORMAT}"
+    names = settings["planners"]
+    if (
+        not names
+        or not all(isinstance(n, str) and n for n in names)
+        or len(set(names)) < len(names)
+    ):
+        return f"planners = {_short(names)} is not a list of distinct method names"
+    for name in names:
+        m = settings["methods"].get(name)
+        if not isinstance(m, dict):
+            return f"methods lacks the method {name!r} of planners"
+        unknown = sorted(set(m) - _METHOD_FIELDS)
+        if unknown:
+            return f"methods.{name} has the unknown field {unknown[0]!r}"
+        if m.get("name") != name or not isinstance(m.get("planner"), str):
+            return f"methods.{name} is not a method (its name and planner)"
+        for key in ("checkpoint", "checkpoint_sha256", "observation"):
+            if not isinstance(m.get(key), _OPT_STR):
+                return f"methods.{name}.{key} = {_short(m.get(key))} is not a string"
+    if settings["plant"] not in PLANTS:
+        return f"plant = {settings['plant']!r} is not one of {', '.join(PLANTS)}"
+    trials, first = settings["trials"], settings["first_seed"]
+    if not 1 <= trials <= MAX_TRIALS:
+        return f"trials = {trials} is not in [1, {MAX_TRIALS}]"
+    if not 0 <= first <= MAX_SEED - trials + 1:
+        return f"first_seed = {first} with trials = {trials}: the seeds are not in [0, 2**64 - 1]"
+    if not (math.isfinite(settings["goal_radius"]) and settings["goal_radius"] > 0):
+        return f"goal_radius = {settings['goal_radius']!r} is not a number > 0"
+    extended = settings.get("extended", [])
+    if not (isinstance(extended, list) and all(isinstance(e, dict) for e in extended)):
+        return f"extended = {_short(extended)} is not a list of objects"
+    return None
+
+
+def check_settings(settings: Any, where: str) -> EmoNavConfig:
+    """`settings` (read from the file `where`) checked; the run's configuration.
+
+    Raises `BenchmarkSettingsError` naming the file and the field: not a JSON object, a
+    field missing or of another kind, a configuration (`config_yaml`,
+    `emotion_estimate_yaml`) whose hash is not the one recorded beside it (edited after
+    the run), a configuration that does not load, or `time_varying` / `goal_radius`
+    that are not the configuration's.
+    """
+    if not isinstance(settings, dict):
+        raise BenchmarkSettingsError(
+            f"{where}: not a JSON object ({_a(settings)}); a benchmark's settings.json is "
+            "an object (written by `emonav benchmark`)"
+        )
+    problem = _kind_problem(settings)
+    if problem is not None:
+        raise BenchmarkSettingsError(f"{where}: {problem}")
+    for text_key, hash_key in (
+        ("config_yaml", "config_sha256"),
+        ("emotion_estimate_yaml", "emotion_estimate_sha256"),
+    ):
+        text, recorded = settings[text_key], settings[hash_key]
+        found = None if text is None else sha256_bytes(text.encode())
+        if found != recorded:
+            raise BenchmarkSettingsError(
+                f"{where}: {text_key} does not match {hash_key} ({_short(found)} against "
+                f"{_short(recorded)} recorded): the text was edited after the run, whose "
+                f"trials were not run with it; restore it, or run a new benchmark with the "
+                "changed configuration"
+            )
+    try:
+        config = load_config(data=settings["config_yaml"])
+    except ConfigError as e:
+        raise BenchmarkSettingsError(
+            f"{where} (config_yaml): {str(e).removeprefix('<yaml>: ')}"
+        ) from None
+    derived = (
+        ("time_varying", bool(config.crowd.time_varying_emotions), "crowd.time_varying_emotions"),
+        ("goal_radius", config.episode.eval_goal_radius, "episode.eval_goal_radius"),
+    )
+    for key, value, source in derived:
+        if settings[key] != value:
+            raise BenchmarkSettingsError(
+                f"{where}: {key} = {settings[key]!r} is not the configuration's {source} = "
+                f"{value!r} (config_yaml)"
+            )
+    return config
+
+
+def _a(value: Any) -> str:
+    """'a list', 'a str', …: what a JSON value is."""
+    return f"a {type(value).__name__}" if value is not None else "null"
+
+
 def spec_from_settings(settings: dict) -> BenchmarkSpec:
     return BenchmarkSpec(
         methods=[MethodSpec(**settings["methods"][n]) for n in settings["planners"]],
@@ -96,7 +228,8 @@ def spec_from_settings(settings: dict) -> BenchmarkSpec:
 def _short(v: Any) -> str:
     if isinstance(v, str):
         return repr(v if len(v) <= 14 else v[:12] + "…")
-    return str(v)
+    text = repr(v)
+    return text if len(text) <= 40 else text[:38] + "…"
 
 
 # The settings that say what a trial is (its goal radius is in the configuration): two

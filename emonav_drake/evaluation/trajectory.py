@@ -39,7 +39,6 @@ centre is within margin + robot radius of the surface).
 from __future__ import annotations
 
 import dataclasses as dc
-import json
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -47,6 +46,7 @@ import numpy as np
 
 from emonav_drake.core.metrics import COLLISION, EpisodeRecord
 from emonav_drake.core.scenario import Scenario
+from emonav_drake.json_input import JsonInputError, read_json
 from emonav_drake.params import EMOTION_NAMES, ConfigError, EmoNavConfig
 
 FORMAT = 1
@@ -354,11 +354,9 @@ def load_trajectory(path: str | Path) -> Trajectory:
     """
     path = Path(path)
     try:
-        data = json.loads(path.read_text())
-    except json.JSONDecodeError as e:
-        raise TrajectoryFileError(f"{path}: not a JSON file ({e})") from None
-    except UnicodeDecodeError:
-        raise TrajectoryFileError(f"{path}: not a JSON file (binary content)") from None
+        data = read_json(path, "not a JSON file")
+    except JsonInputError as e:  # bad syntax, binary content, nesting too deep
+        raise TrajectoryFileError(str(e)) from None
     if not isinstance(data, dict) or "trajectory" not in data:
         if isinstance(data, dict) and "episodes" in data and "summary" in data:
             what = "an `emonav eval` summary (episode records only, no steps)"

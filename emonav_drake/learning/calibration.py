@@ -26,6 +26,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from emonav_drake.json_input import JsonInputError, parse_json
 from emonav_drake.params import ConfigError, EmoNavConfig
 
 
@@ -198,9 +199,9 @@ def read_trace_lines(path: str | Path) -> list[dict]:
     lines = []
     for i, line in enumerate(text.splitlines(), 1):
         try:
-            h = json.loads(line)
-        except ValueError as e:
-            raise ConfigError(f"{path}:{i}: not a JSON trace line ({e}); damaged file?") from None
+            h = parse_json(line, f"{path}:{i}", "not a JSON trace line")
+        except JsonInputError as e:
+            raise ConfigError(f"{e}; damaged file?") from None
         if not isinstance(h, dict):
             raise ConfigError(f"{path}:{i}: not a trace line (a JSON {type(h).__name__})")
         for key, kind in TRACE_KEYS.items():

@@ -14,10 +14,10 @@ route cannot drift apart.
 from __future__ import annotations
 
 import copy
-import json
 from pathlib import Path
 
 from emonav_drake.core.step_response import StepResponseModel
+from emonav_drake.json_input import JsonInputError, read_json
 from emonav_drake.params import ConfigError, EmoNavConfig
 
 # The DAgger routes' experts (`DaggerConfig.expert`, `route_expert`); the last two label
@@ -34,7 +34,10 @@ def read_response(path: str | Path) -> StepResponseModel:
     if not path.is_file():
         raise ConfigError(f"step-response model {path}: no such file")
     try:
-        data = json.loads(path.read_text())
+        data = read_json(path)
+    except JsonInputError as e:
+        raise ConfigError(f"step-response model {e}") from None
+    try:
         return StepResponseModel.from_plain(data.get("model", data))
     except (ValueError, KeyError, TypeError, AttributeError) as e:
         raise ConfigError(f"step-response model {path}: {e}") from None
