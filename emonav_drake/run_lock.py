@@ -100,3 +100,25 @@ def claim_new_run(path: Path, overwrite: bool, flag: str = "--out") -> list[Path
         else:
             p.unlink()
     return removed
+
+
+@contextlib.contextmanager
+def training_run_directory(
+    path: Path, resume: bool, overwrite: bool = False, flag: str = "--out"
+) -> Iterator[Path]:
+    """The run directory of a training command, locked for the block: a new run
+    (`resume` False) claims it (`claim_new_run`: empty, or `overwrite`); the removed files
+    are named on stderr. A directory this call created and left empty (a refusal before
+    any work) is removed again."""
+    import sys
+
+    created = not path.exists()
+    try:
+        with locked_directory(path, flag, "training run"):
+            if not resume:
+                for p in claim_new_run(path, overwrite, flag):
+                    print(f"--overwrite: removed {p}", file=sys.stderr)
+            yield path
+    finally:
+        if created and path.is_dir() and not any(path.iterdir()):
+            path.rmdir()

@@ -269,3 +269,56 @@ def test_a_run_state_with_nan_is_refused_naming_the_tensor(tmp_path):
     write_run_state(path, SAC_FORMAT, {"x": 1}, {"actor": {"w": torch.tensor([1.0, float("nan")])}})
     with pytest.raises(RunStateError, match=r"checkpoint\.pt in .*torch\.actor\.w holds NaN"):
         read_run_state(path, SAC_FORMAT)
+
+
+# --- 7. every numeric field of a training configuration has a two-sided range ---------------
+
+
+@pytest.mark.parametrize("schema", ["DaggerConfig", "SacConfig", "FinetuneConfig", "SarlConfig"])
+def test_every_numeric_training_field_has_a_bounded_range(schema):
+    import dataclasses as dc
+    import math
+
+    from emonav_drake.learning import config
+
+    cls = getattr(config, schema)
+    table = {
+        "DaggerConfig": config._DAGGER_RANGES,
+        "SacConfig": config._SAC_RANGES,
+        "FinetuneConfig": config._FINETUNE_RANGES,
+        "SarlConfig": config._SARL_RANGES,
+    }[schema]
+    numeric = [
+        f.name
+        for f in dc.fields(cls)
+        if f.type in (int, float, "int", "float") and not f.name.startswith("_")
+    ]
+    missing = [n for n in numeric if n not in table]
+    assert not missing, f"{schema}: no range for {missing}"
+    for name in numeric:
+        lo, hi = table[name]
+        assert lo is not None and hi is not None and math.isfinite(lo) and math.isfinite(hi)
+    assert table["seed"] == (0, 2**64 - 1)
+
+
+def test_a_training_seed_beyond_64_bits_is_refused(tmp_path, capsys):
+    cfg = _yaml(tmp_path / "s.yaml", TINY_SAC | {"seed": 2**70})
+    assert_user_error(
+        *run(capsys, "train", "--algo", "sac", "--config", cfg, "--out", tmp_path / "o"),
+        "seed",
+        "out of range",
+    )
+
+
+def test_digit_rounds_into_a_finished_run_is_refused(tmp_path, capsys):
+    out = tmp_path / "rounds"
+    out.mkdir()
+    (out / "digit_rounds.pt").write_bytes(b"the rounds of an earlier run")
+    source = tmp_path / "calibrated"
+    source.mkdir()
+    (source / "dagger_state.pt").write_bytes(b"checked later")
+    argv = ["digit-rounds", "--from", source, "--rounds", "1", "--out", out]
+    assert_user_error(*run(capsys, *argv), f"--out {out}", "not empty", "--resume")
+    assert (out / "digit_rounds.pt").read_bytes() == b"the rounds of an earlier run"
+    with locked_directory(out, what="training run"):
+        assert_user_error(*run(capsys, *argv, "--resume"), "another emonav training run")

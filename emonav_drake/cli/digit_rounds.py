@@ -10,8 +10,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from emonav_drake.atomic_io import check_output_dir
 from emonav_drake.cli.common import SeedArg, check_workers
 from emonav_drake.params import ConfigError
+from emonav_drake.run_lock import training_run_directory
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -44,7 +46,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     r.add_argument("--grad-steps", type=int, default=1500, help="gradient steps per round, >= 1")
     r.add_argument("--workers", type=int, default=1, help="parallel Ray workers, >= 1")
     r.add_argument("--ray-address")
-    r.add_argument("--out", type=Path, required=True)
+    r.add_argument(
+        "--out", type=Path, required=True, help="run directory: new or empty, unless --resume"
+    )
     r.add_argument("--resume", action="store_true", help="continue the rounds in --out")
     r.set_defaults(func=cmd_digit_rounds)
     return r
@@ -61,11 +65,13 @@ def cmd_digit_rounds(args: argparse.Namespace) -> int:
         beta=args.beta,
         grad_steps=args.grad_steps,
     ).validate()
-    check_workers(args.workers)
+    check_workers(args.workers, args.ray_address)
     if not (args.source / "dagger_state.pt").is_file():
         raise ConfigError(f"--from {args.source}: no DAgger run there (dagger_state.pt)")
-    policy = run_digit_rounds(
-        args.out, args.source, cfg, args.workers, args.ray_address, resume=args.resume
-    )
+    check_output_dir(args.out, "--out")
+    with training_run_directory(args.out, args.resume):  # a new run: an empty --out only
+        policy = run_digit_rounds(
+            args.out, args.source, cfg, args.workers, args.ray_address, resume=args.resume
+        )
     print(f"policy written to {policy}")
     return 0

@@ -23,7 +23,7 @@ from emonav_drake.cli.common import SeedArg
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.params import ConfigError
 from emonav_drake.planners.variants import VARIANTS, variant
-from emonav_drake.run_lock import claim_new_run, locked_directory
+from emonav_drake.run_lock import training_run_directory
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -86,7 +86,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     t.add_argument(
         "--seed",
         action=SeedArg,
-        help="seed of the run, in [0, 2**64 - 1] (default 0; with --resume: the run's own)",
+        help="seed of the run, in [0, 2**64 - 1] (default: the --config's seed, 0; with "
+        "--resume: the run's own)",
     )
     t.add_argument(
         "--device", help="cpu or cuda (cuda:N) (default cpu; with --resume: the run's own)"
@@ -203,10 +204,10 @@ def _training_config(args: argparse.Namespace):
         cfg = schema()
     if args.steps is not None and args.steps < 1:
         raise ConfigError(f"--steps {args.steps}: must be >= 1")
-    if args.seed is not None or args.resume is None:
-        cfg.seed = args.seed or 0
-    if args.device is not None or args.resume is None:
-        cfg.device = args.device or "cpu"
+    if args.seed is not None:  # else the configuration's (0 by default; a run's own)
+        cfg.seed = args.seed
+    if args.device is not None:
+        cfg.device = args.device
     if args.steps is not None:
         cfg.total_steps = args.steps
     if args.plant is not None:
@@ -321,16 +322,9 @@ def cmd_train(args: argparse.Namespace) -> int:
         out = args.resume
     else:
         out = check_output_dir(args.out, "--out")
-    created = not out.exists()
-    try:
-        with locked_directory(out, "--resume" if args.resume else "--out", "training run"):
-            if args.resume is None:
-                for p in claim_new_run(out, args.overwrite):
-                    print(f"--overwrite: removed {p}", file=sys.stderr)
-            return _run_training(args, cfg, out)
-    finally:
-        if created and out.is_dir() and not any(out.iterdir()):
-            out.rmdir()  # refused before any work: leave no empty folder behind
+    flag = "--resume" if args.resume else "--out"
+    with training_run_directory(out, args.resume is not None, args.overwrite, flag):
+        return _run_training(args, cfg, out)
 
 
 def _run_training(args: argparse.Namespace, cfg, out: Path) -> int:
