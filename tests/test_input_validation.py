@@ -24,6 +24,7 @@ from emonav_drake.cli import main
 from emonav_drake.evaluation.run_directory import load_run, read_trials
 from emonav_drake.evaluation.run_settings import BenchmarkSettingsError
 from tests.cli_errors import assert_user_error, run
+from tests.small_disk import run_on_small_disk
 
 TINY = "episode: {max_steps: 2}\n"
 BIG_SEED = 2**64  # one beyond 64 bits
@@ -399,34 +400,11 @@ FULL_DISK_SCRIPT = textwrap.dedent(
 
 def test_a_full_disk_names_the_file(tmp_path):
     """A 4 KiB tmpfs in a private mount namespace (unshare): every writer fills it."""
-    if shutil.which("unshare") is None:
-        pytest.skip("no unshare(1)")
     full = tmp_path / "full"
     full.mkdir()
-    probe = subprocess.run(
-        ["unshare", "-rm", "mount", "-t", "tmpfs", "-o", "size=4k", "tmpfs", str(full)],
-        capture_output=True,
-    )
-    if probe.returncode != 0:
-        pytest.skip(f"cannot mount a tmpfs in a user namespace: {probe.stderr.decode().strip()}")
     script = tmp_path / "fill.py"
     script.write_text(FULL_DISK_SCRIPT)
-    p = subprocess.run(
-        [
-            "unshare",
-            "-rm",
-            "sh",
-            "-c",
-            'mount -t tmpfs -o size=4k tmpfs "$1" && exec "$2" "$3" "$1"',
-            "sh",
-            str(full),
-            sys.executable,
-            str(script),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    p = run_on_small_disk(full, 4, [sys.executable, script, full], timeout=120)
     errors = json.loads(p.stdout.splitlines()[0])
     target = full / "out.json"
     assert f"No space left on device: {target} not written" in errors["write_text_atomic"]

@@ -12,7 +12,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import shutil
 import subprocess
 import sys
 import textwrap
@@ -27,6 +26,7 @@ from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec
 from emonav_drake.evaluation.trajectory import build_trajectory
 from emonav_drake.params import EmoNavConfig
 from tests.cli_errors import assert_user_error, run
+from tests.small_disk import run_on_small_disk
 
 PAGE = 4096
 FREE_KIB = 256  # room left on the small disk: less than any file saved there
@@ -63,38 +63,17 @@ def _on_a_small_disk(tmp_path: Path, staged: Path, script: str, *args: str):
     """Run `script` (after `_DIGEST`) in a private mount namespace where `disk` (argv[1])
     is a tmpfs holding a copy of `staged` and FREE_KIB more; argv[2] is `staged`.
     Returns (the completed process, the script's RESULT mapping or None)."""
-    if shutil.which("unshare") is None:
-        pytest.skip("no unshare(1)")
     disk = tmp_path / "disk"
     disk.mkdir()
-    probe = subprocess.run(
-        ["unshare", "-rm", "mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(disk)],
-        capture_output=True,
-    )
-    if probe.returncode != 0:
-        pytest.skip(f"cannot mount a tmpfs in a user namespace: {probe.stderr.decode().strip()}")
     size = _kib_used(staged) + FREE_KIB
     path = tmp_path / "script.py"
     path.write_text(_DIGEST + textwrap.dedent(script))
-    p = subprocess.run(
-        [
-            "unshare",
-            "-rm",
-            "sh",
-            "-c",
-            f'mount -t tmpfs -o size={size}k tmpfs "$1" && shift && exec "$@"',
-            "sh",
-            str(disk),
-            sys.executable,
-            str(path),
-            str(disk),
-            str(staged),
-            *args,
-        ],
-        capture_output=True,
-        text=True,
-        timeout=180,
+    p = run_on_small_disk(
+        disk,
+        size,
+        [sys.executable, path, disk, staged, *args],
         cwd=Path(__file__).resolve().parent.parent,
+        timeout=180,
     )
     lines = [line for line in p.stdout.splitlines() if line.startswith(MARK)]
     return p, (json.loads(lines[-1][len(MARK) :]) if lines else None)

@@ -23,6 +23,8 @@ import pytest
 from emonav_drake.cli import main
 from emonav_drake.evaluation.run_directory import load_run
 from tests.cli_errors import assert_user_error, run
+from tests.small_disk import run_on_small_disk
+from tests.test_input_validation import _bench_argv as bench_argv
 
 REPO = Path(__file__).resolve().parents[1]
 COMMITTED = REPO / "benchmarks" / "results"
@@ -43,24 +45,8 @@ def emonav(*argv, timeout=120, prefix=()) -> tuple[int, str, float]:
     return p.returncode, p.stderr, time.monotonic() - t0
 
 
-def _bench_argv(out: Path, tiny: Path, trials: int = 2, *extra: str) -> list[str]:
-    return [
-        "benchmark",
-        "--planners",
-        "dwa",
-        "--trials",
-        str(trials),
-        "--first-seed",
-        "4",
-        "--workers",
-        "1",
-        "--quiet",
-        "--config",
-        str(tiny),
-        "--out",
-        str(out),
-        *extra,
-    ]
+def _bench_argv(out: Path, tiny: Path, trials: int = 2) -> list[str]:
+    return bench_argv(out, tiny, trials)
 
 
 @pytest.fixture(scope="module")
@@ -404,36 +390,11 @@ def test_a_full_disk_while_appending_a_trial_names_trials_jsonl_and_cuts_the_tor
 ):
     """Before: the error named tables.md (written after the failed append) and
     trials.jsonl kept half a line."""
-    if shutil.which("unshare") is None:
-        pytest.skip("no unshare(1)")
     full = tmp_path / "full"
     full.mkdir()
-    probe = subprocess.run(
-        ["unshare", "-rm", "mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(full)],
-        capture_output=True,
-    )
-    if probe.returncode != 0:
-        pytest.skip(f"cannot mount a tmpfs in a user namespace: {probe.stderr.decode().strip()}")
     script = tmp_path / "fill.py"
     script.write_text(FULL_DISK_BENCH)
-    p = subprocess.run(
-        [
-            "unshare",
-            "-rm",
-            "sh",
-            "-c",
-            'mount -t tmpfs -o size=64k tmpfs "$1" && cd "$4" && exec "$2" "$3" "$1" "$5"',
-            "sh",
-            str(full),
-            sys.executable,
-            str(script),
-            str(REPO),
-            str(tiny),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    p = run_on_small_disk(full, 64, [sys.executable, script, full, tiny], cwd=REPO)
     assert p.stdout.strip(), p.stderr
     report = json.loads(p.stdout.splitlines()[-1])
     errors = [line for line in p.stderr.splitlines() if line.startswith("emonav: error: ")]

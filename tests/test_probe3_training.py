@@ -19,24 +19,10 @@ from emonav_drake.planners.sarl import load_sarl
 from emonav_drake.planners.variants import resolve_policy_file
 from emonav_drake.run_lock import locked_directory
 from tests.cli_errors import assert_user_error, run
+from tests.test_learning_inputs import TINY_SAC as TINY_SAC_30
+from tests.test_learning_inputs import _yaml
 
-TINY_SAC = {
-    "grid_kind": "scan",
-    "total_steps": 20,
-    "random_steps": 10,
-    "replay_size": 400,
-    "batch_size": 8,
-    "hidden": 32,
-    "eval_every": 1000,
-    "eval_episodes": 1,
-    "checkpoint_every": 10,
-    "threads": 1,
-}
-
-
-def _yaml(path, fields):
-    path.write_text("".join(f"{k}: {v}\n" for k, v in fields.items()))
-    return path
+TINY_SAC = TINY_SAC_30 | {"total_steps": 20}
 
 
 def _snapshot(folder):

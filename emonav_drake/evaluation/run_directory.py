@@ -40,6 +40,7 @@ from emonav_drake.evaluation.run_settings import (
     settings_difference,
 )
 from emonav_drake.json_input import JsonInputError, parse_json, read_json
+from emonav_drake.run_lock import RunDirectoryBusy, locked_directory
 
 log = logging.getLogger(__name__)
 
@@ -236,29 +237,17 @@ class RunDirectory:
         self.path = Path(path)
         self.settings_path = self.path / SETTINGS_FILE
         self.trials_path = self.path / TRIALS_FILE
-        self._lock_fd: int | None = None
 
     @contextlib.contextmanager
     def locked(self) -> Iterator[RunDirectory]:
-        """Exclusive use of the directory (a second benchmark into it is refused)."""
-        import fcntl
-
-        self.path.mkdir(parents=True, exist_ok=True)
-        fd = os.open(self.path, os.O_RDONLY)  # the directory itself: no lock file to leave
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            os.close(fd)
-            raise BenchmarkSettingsError(
-                f"--out {self.path}: another emonav benchmark is running in this directory"
-            ) from None
-        self._lock_fd = fd
-        try:
+        """Exclusive use of the directory (`run_lock.locked_directory`: a second benchmark,
+        or a training run, into it is refused)."""
+        with contextlib.ExitStack() as stack:
+            try:
+                stack.enter_context(locked_directory(self.path, "--out", "benchmark"))
+            except RunDirectoryBusy as e:
+                raise BenchmarkSettingsError(str(e)) from None
             yield self
-        finally:
-            fcntl.flock(fd, fcntl.LOCK_UN)
-            os.close(fd)
-            self._lock_fd = None
 
     def check_regular_files(self) -> None:
         """`BenchmarkSettingsError` if a file of the run directory (`RUN_FILES`) is a
