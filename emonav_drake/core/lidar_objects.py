@@ -1,0 +1,268 @@
+"""Objects in a 2-D LiDAR scan: segmentation into clusters and a circle per cluster.
+
+Everything a robot can see of the crowd is its scan (`core/lidar.py`: K beams over 360°,
+beam i at ``beam_angles(K)[i]`` from the heading, ``max_range`` = no hit). This module
+turns one scan into discs in the world frame (numpy only, deterministic):
+
+1. **Points.** A beam with ``range < max_range`` is a hit; its world point is
+   ``robot_xy + range · (cos(heading + angle), sin(heading + angle))``.
+2. **Segmentation.** Neighbouring beams (beam K−1 and beam 0 are neighbours too: the scan
+   wraps round at 360°) belong to one cluster when both hit and their points are at most
+   ``jump_distance + jump_ratio · range`` apart (range = the nearer of the two). A miss or
+   a larger jump ends a cluster. The range term lets the gap grow with the beam spacing
+   and with the steep range change at a disc's grazing edge (up to about √(2·r·d·Δφ),
+   13 cm for a 0.4 m disc at 6 m with Δφ = 2π/1800); an edge beam that jumps more is cut
+   off as a cluster of its own and dropped below ``min_points``.
+3. **Circle per cluster.** Clusters with fewer than ``min_points`` beams are dropped.
+   From ``min_fit_points`` beams on: an algebraic (Kåsa) fit on the centred points gives
+   a start, Gauss-Newton steps on the geometric residuals ``|p − c| − r`` refine it
+   (at most ``gauss_newton_iterations``, until no step exceeds ``convergence``). The fit
+   is accepted when it is finite, its radius lies in ``[min_radius, max_radius]``, its
+   RMS residual is at most ``fit_tolerance`` and its centre lies behind the arc as seen
+   from the robot (a LiDAR sees the near side of a disc, less than half of its circle).
+   Otherwise — too few beams, a nearly straight arc (ill-conditioned), a radius out of
+   bounds, a poor fit — the **fallback**: radius ``prior_radius`` (or half the arc's
+   chord if that is larger, at most ``max_radius``), centre that far behind the arc's
+   middle beam along its line of sight.
+
+All clusters are fitted at once (sums per cluster with ``np.add.reduceat``, batched 3 × 3
+solves; the refinement stops when every cluster has converged), so a scan costs
+O(hits) numpy work and a bounded number of numpy calls whatever the number of objects.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+import math
+
+import numpy as np
+
+from emonav_drake.core.lidar import as_point, beam_table
+
+
+@dc.dataclass(frozen=True)
+class DetectionParams:
+    """Segmentation and circle fitting of `detect_objects` (metres, beams)."""
+
+    jump_distance: float = 0.1  # points farther apart start a new cluster [m] …
+    jump_ratio: float = 0.01  # … plus this times the nearer of their ranges [m/m]
+    min_points: int = 5  # clusters with fewer beams are dropped (slivers: no reliable centre)
+    min_fit_points: int = 5  # fewer beams: no fit, the fallback circle
+    min_radius: float = 0.1  # smallest accepted fitted radius [m]
+    max_radius: float = 0.7  # largest accepted fitted radius [m]
+    prior_radius: float = 0.3  # fallback radius (a pedestrian's) [m]
+    fit_tolerance: float = 0.03  # largest accepted RMS residual of a fit [m]
+    gauss_newton_iterations: int = 10  # most geometric refinement steps after the algebraic fit
+    convergence: float = 1e-6  # refinement stops once no centre or radius moves more [m]
+
+    def validate(self) -> DetectionParams:
+        """Raise ValueError naming the field if a value is out of range; returns self."""
+        for name in ("jump_distance", "min_radius", "max_radius", "prior_radius"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0.0):
+                raise ValueError(f"DetectionParams.{name} must be finite and > 0, got {v!r}")
+        for name in ("jump_ratio", "fit_tolerance", "convergence"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0.0):
+                raise ValueError(f"DetectionParams.{name} must be finite and >= 0, got {v!r}")
+        for name, low in (("min_points", 1), ("min_fit_points", 3), ("gauss_newton_iterations", 0)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < low:
+                raise ValueError(f"DetectionParams.{name} must be an int >= {low}, got {v!r}")
+        if self.min_radius > self.max_radius:
+            raise ValueError(
+                f"DetectionParams.min_radius ({self.min_radius}) must not exceed "
+                f"max_radius ({self.max_radius})"
+            )
+        if not self.min_radius <= self.prior_radius <= self.max_radius:
+            raise ValueError(
+                f"DetectionParams.prior_radius ({self.prior_radius}) must lie in "
+                f"[min_radius, max_radius] = [{self.min_radius}, {self.max_radius}]"
+            )
+        return self
+
+
+@dc.dataclass(frozen=True)
+class Detections:
+    """The discs found in one scan, world frame."""
+
+    centers: np.ndarray  # (K, 2) disc centres [m]
+    radii: np.ndarray  # (K,) disc radii [m]
+    points: np.ndarray  # (K,) number of beams in each disc's cluster
+
+    def __len__(self) -> int:
+        return int(self.radii.shape[0])
+
+    @staticmethod
+    def empty() -> Detections:
+        """No detection."""
+        return Detections(np.zeros((0, 2)), np.zeros(0), np.zeros(0, dtype=np.int64))
+
+
+def detect_objects(
+    ranges: np.ndarray,
+    robot_xy: np.ndarray,
+    heading: float,
+    max_range: float,
+    params: DetectionParams = DetectionParams(),
+) -> Detections:
+    """The discs in one LiDAR scan (module docstring for the method).
+
+    Args:
+        ranges: (K,) ranges [m] of the K beams of `core.lidar` (``beam_angles(K)``);
+            ``max_range`` (or more) = no hit.
+        robot_xy: LiDAR position (2,) in the world frame [m].
+        heading: robot heading in the world frame [rad], CCW from +x.
+        max_range: the scan's maximum range [m].
+        params: segmentation and fit parameters.
+
+    Returns:
+        `Detections`, ordered by the beam index of each cluster's first beam (a cluster
+        across the seam behind the robot counts from its first beam before the seam).
+    """
+    r = np.asarray(ranges, dtype=np.float64)
+    if r.ndim != 1 or r.size == 0:
+        raise ValueError(f"ranges must have shape (K,) with K >= 1, got {r.shape}")
+    if np.isnan(r).any() or (r < 0.0).any():
+        raise ValueError("ranges must be >= 0 (no NaN)")
+    params.validate()
+    ox, oy = as_point(robot_xy, "robot_xy")
+    heading, max_range = float(heading), float(max_range)
+    if not (math.isfinite(heading) and math.isfinite(max_range) and max_range > 0.0):
+        raise ValueError(
+            f"heading and max_range must be finite (max_range > 0): {heading}, {max_range}"
+        )
+    k = r.size
+    beams = np.flatnonzero(r < max_range)  # the hits, in beam order
+    m = beams.size
+    if m == 0:
+        return Detections.empty()
+
+    # World points of the hits: the robot-frame beam directions rotated by the heading.
+    _, cos_b, sin_b = beam_table(k)
+    ch, sh = math.cos(heading), math.sin(heading)
+    rh, cb, sb = r[beams], cos_b[beams], sin_b[beams]
+    px = ox + rh * (ch * cb - sh * sb)
+    py = oy + rh * (sh * cb + ch * sb)
+
+    # link[j]: hit j and the next hit (mod m) are neighbouring beams in one cluster.
+    nxt = np.arange(1, m + 1)
+    nxt[-1] = 0
+    adjacent = (beams[nxt] - beams) % k == 1
+    gap = np.hypot(px[nxt] - px, py[nxt] - py)
+    limit = params.jump_distance + params.jump_ratio * np.minimum(rh, rh[nxt])
+    link = adjacent & (gap <= limit)
+    if link.all():  # one closed ring round the robot (e.g. inside a disc)
+        order = np.arange(m)
+        starts = np.zeros(1, dtype=np.intp)
+    else:
+        # Start right after the first break, so no cluster straddles the array's end; a
+        # cluster starts wherever its predecessor does not link to it.
+        first = int(np.argmin(link)) + 1
+        order = (np.arange(m) + first) % m
+        starts = np.flatnonzero(~np.concatenate(([False], link[order][:-1])))
+    counts = np.diff(np.append(starts, order.size))
+    big = counts >= params.min_points
+    if not big.any():
+        return Detections.empty()
+    # Drop small clusters: rebuild the concatenation of the kept ones.
+    sel = np.repeat(big, counts)
+    order = order[sel]
+    counts = counts[big]
+    starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
+    centers, radii = _fit_circles(px[order], py[order], starts, counts, (ox, oy), params)
+    # Report clusters by their first beam index (deterministic and independent of `first`).
+    first_beam = beams[order[starts]]
+    idx = np.argsort(first_beam, kind="stable")
+    return Detections(centers[idx], radii[idx], counts[idx].astype(np.int64))
+
+
+def _fit_circles(
+    x: np.ndarray,
+    y: np.ndarray,
+    starts: np.ndarray,
+    counts: np.ndarray,
+    origin: tuple[float, float],
+    p: DetectionParams,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Circles (centres (C, 2), radii (C,)) of C clusters laid end to end in `x`, `y`
+    (cluster j = ``[starts[j], starts[j] + counts[j])``), fitted as the module docstring
+    says; `origin` is the LiDAR position."""
+    n = counts.astype(np.float64)
+    seg = np.repeat(np.arange(counts.size), counts)
+    mx = np.add.reduceat(x, starts) / n
+    my = np.add.reduceat(y, starts) / n
+    u, v = x - mx[seg], y - my[seg]  # centred, for a well-scaled algebraic fit
+
+    # Kåsa: minimise Σ(z + D·u + E·v + F)² with z = u² + v²; Σu = Σv = 0 after centring,
+    # so the normal equations decouple into a 2 × 2 system for (D, E) and F = −mean(z).
+    z = u * u + v * v
+    suu = np.add.reduceat(u * u, starts)
+    svv = np.add.reduceat(v * v, starts)
+    suv = np.add.reduceat(u * v, starts)
+    suz = np.add.reduceat(u * z, starts)
+    svz = np.add.reduceat(v * z, starts)
+    det = suu * svv - suv * suv
+    # Ill-conditioned (nearly straight or tiny arc): the smaller eigenvalue of the
+    # scatter matrix is tiny against the larger one.
+    trace = suu + svv
+    ok = (counts >= p.min_fit_points) & (det > 1e-10 * trace * trace) & (trace > 0.0)
+    safe = np.where(ok, det, 1.0)
+    d_coef = -(svv * suz - suv * svz) / safe
+    e_coef = -(suu * svz - suv * suz) / safe
+    f_coef = -np.add.reduceat(z, starts) / n
+    cx, cy = -d_coef / 2.0, -e_coef / 2.0  # centre relative to the cluster's mean
+    rad = np.sqrt(np.maximum(cx * cx + cy * cy - f_coef, 0.0))
+
+    # Gauss-Newton on the geometric residuals |q − c| − r, in the centred coordinates.
+    jac = np.empty((u.size, 4))  # per point: ∂res/∂(cx, cy, r) and the residual
+    jac[:, 2] = -1.0
+    eye = np.eye(3)
+    for _ in range(p.gauss_newton_iterations):
+        du, dv = u - cx[seg], v - cy[seg]
+        dist = np.maximum(np.hypot(du, dv), 1e-12)
+        np.divide(-du, dist, out=jac[:, 0])
+        np.divide(-dv, dist, out=jac[:, 1])
+        np.subtract(dist, rad[seg], out=jac[:, 3])
+        # [JᵀJ | Jᵀres] per cluster in one pass: (C, 3, 4).
+        normal = np.add.reduceat(jac[:, :3, None] * jac[:, None, :], starts, axis=0)
+        a, rhs = normal[:, :, :3], -normal[:, :, 3:]
+        a[~ok] = eye  # keep the batch solvable; those clusters fall back anyway
+        rhs[~ok] = 0.0
+        with np.errstate(all="ignore"):
+            step = np.linalg.solve(a, rhs)[:, :, 0]
+        cx, cy, rad = cx + step[:, 0], cy + step[:, 1], rad + step[:, 2]
+        if not np.abs(step[ok]).max(initial=0.0) > p.convergence:
+            break  # converged (also: nothing left to refine)
+
+    du, dv = u - cx[seg], v - cy[seg]
+    res = np.hypot(du, dv) - rad[seg]
+    rms = np.sqrt(np.add.reduceat(res * res, starts) / n)
+    centers = np.stack([cx + mx, cy + my], axis=1)
+    # The centre must lie behind the arc: farther from the LiDAR than the arc's mean point.
+    ox, oy = origin
+    behind = np.hypot(centers[:, 0] - ox, centers[:, 1] - oy) > np.hypot(mx - ox, my - oy)
+    with np.errstate(invalid="ignore"):
+        ok &= (
+            np.isfinite(centers).all(axis=1)
+            & np.isfinite(rad)
+            & (rad >= p.min_radius)
+            & (rad <= p.max_radius)
+            & (rms <= p.fit_tolerance)
+            & behind
+        )
+    if ok.all():
+        return centers, rad
+
+    # Fallback: the prior radius behind the arc's middle beam, along its line of sight.
+    last = starts + counts - 1
+    lo, hi = starts + (counts - 1) // 2, starts + counts // 2  # the middle beam(s)
+    chord = np.hypot(x[last] - x[starts], y[last] - y[starts])
+    fr = np.clip(np.maximum(p.prior_radius, chord / 2.0), p.min_radius, p.max_radius)
+    qx, qy = (x[lo] + x[hi]) / 2.0, (y[lo] + y[hi]) / 2.0
+    sx, sy = qx - ox, qy - oy
+    sn = np.maximum(np.hypot(sx, sy), 1e-12)
+    fallback = np.stack([qx + fr * sx / sn, qy + fr * sy / sn], axis=1)
+    centers = np.where(ok[:, None], centers, fallback)
+    rad = np.where(ok, rad, fr)
+    return centers, rad
