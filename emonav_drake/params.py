@@ -192,6 +192,24 @@ class MpcParams:
     time_limit: float = 1.0  # OSQP wall-clock limit per QP, a safety only [s]
 
 
+# Where the model-based planners' crowd state comes from (`PerceptionParams.state_source`).
+STATE_SOURCES = ("truth", "lidar")
+
+
+@dc.dataclass
+class PerceptionParams:
+    """What the robot knows of the crowd (docs/perception.md, "Perceived state").
+
+    The learned policies read the LiDAR grid maps in either case; `state_source` decides
+    what the state-based planners (DWA, MPC, SARL, RGL) read: "truth", the simulator's
+    exact crowd (privileged: every pedestrian, also hidden ones), or "lidar", the
+    pedestrians and obstacles detected in the 1800-beam scan and tracked at the scan's
+    rate (`core/lidar_objects.py`, `core/crowd_tracker.py`): what a robot can run.
+    """
+
+    state_source: str = "truth"  # "truth" (the simulator's crowd) or "lidar" (tracked)
+
+
 @dc.dataclass
 class WalkingParams:
     """Full-order Digit walking: gait, ALIP planner, passivity controller, model options.
@@ -261,6 +279,7 @@ class EmoNavConfig:
     dwa: DwaParams = dc.field(default_factory=DwaParams)
     mpc: MpcParams = dc.field(default_factory=MpcParams)
     walking: WalkingParams = dc.field(default_factory=WalkingParams)
+    perception: PerceptionParams = dc.field(default_factory=PerceptionParams)
 
     def validate(self) -> "EmoNavConfig":
         """Check every field against `_RANGES`; raise `ConfigError` naming the field."""
@@ -312,6 +331,8 @@ class EmoNavConfig:
             li.min_range,
             f"< lidar.max_range ({li.max_range})",
         )
+        source = self.perception.state_source
+        require(source in STATE_SOURCES, "perception.state_source", source, '"truth" or "lidar"')
         w = self.walking
         require(w.arms in ("welded", "held"), "walking.arms", w.arms, '"welded" or "held"')
         require(

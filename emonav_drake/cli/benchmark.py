@@ -14,7 +14,7 @@ from emonav_drake.cli.common import (
     check_workers,
     emotion_estimate_of,
 )
-from emonav_drake.cli.config import add_config_choice, resolve_config
+from emonav_drake.cli.config import add_config_choice, add_state_source, resolve_config
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.diagrams.trials import MAX_TRIALS
 from emonav_drake.params import ConfigError
@@ -83,6 +83,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     add_config_choice(b)
     b.add_argument("--time-varying", action="store_true", help=TIME_VARYING_HELP)
     add_emotion_flags(b)
+    add_state_source(b)
     b.add_argument(
         "--checkpoint",
         action="append",

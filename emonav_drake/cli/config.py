@@ -2,9 +2,9 @@
 
 Every sub-command that runs on an `EmoNavConfig` resolves it here, in one order:
 `--setting NAME` (a shipped setting, `emonav_drake/configs/NAME.yaml`), else
-`--config F.yaml`, else the defaults; then `--time-varying` on top. `--setting` and
-`--config` are mutually exclusive (`add_config_choice`); a sub-command without one of
-these flags resolves as if it were not given. `sim` and `lgm` also take a scenario
+`--config F.yaml`, else the defaults; then `--time-varying` and `--state-source` on top.
+`--setting` and `--config` are mutually exclusive (`add_config_choice`); a sub-command
+without one of these flags resolves as if it were not given. `sim` and `lgm` also take a scenario
 (`--scenario NAME|F.yaml`, else one sampled from the seed): `resolve_scenario`.
 
 `sim`, `eval`, `benchmark` and `config` take `--setting`; `lgm` and `walk` only `--config`.
@@ -39,12 +39,16 @@ class ResolvedConfig:
     setting: str | None  # the --setting name, if one was given
     origin: str  # "--setting NAME", "--config F" or "the default configuration"
     time_varying: bool  # --time-varying was given (applied to `config` already)
+    state_source: str | None = None  # --state-source, if given (applied to `config`)
 
     @property
     def source(self) -> str:
-        """`origin` plus " --time-varying" when the flag was given (recorded by `benchmark`,
-        printed by `config`)."""
-        return self.origin + (" --time-varying" if self.time_varying else "")
+        """`origin` plus " --time-varying" / " --state-source S" when given (recorded by
+        `benchmark`, printed by `config`)."""
+        flags = " --time-varying" if self.time_varying else ""
+        if self.state_source is not None:
+            flags += f" --state-source {self.state_source}"
+        return self.origin + flags
 
 
 def resolve_config(args: argparse.Namespace) -> ResolvedConfig:
@@ -65,7 +69,10 @@ def resolve_config(args: argparse.Namespace) -> ResolvedConfig:
     time_varying = bool(getattr(args, "time_varying", False))
     if time_varying:
         cfg.crowd.time_varying_emotions = True
-    return ResolvedConfig(cfg, setting, origin, time_varying)
+    state_source = getattr(args, "state_source", None)
+    if state_source is not None:
+        cfg.perception.state_source = state_source
+    return ResolvedConfig(cfg, setting, origin, time_varying, state_source)
 
 
 def add_config_choice(p: argparse.ArgumentParser) -> None:
@@ -74,6 +81,21 @@ def add_config_choice(p: argparse.ArgumentParser) -> None:
     g = p.add_mutually_exclusive_group()
     g.add_argument("--config", type=Path, help=CONFIG_HELP)
     g.add_argument("--setting", choices=SETTINGS, help=SETTING_HELP)
+
+
+STATE_SOURCE_HELP = (
+    "what the state-based planners (dwa, mpc, sarl, rgl) read of the crowd: truth (the "
+    "simulator's exact crowd, privileged) or lidar (pedestrians and obstacles detected in "
+    "the LiDAR scan and tracked: what a robot can run); default: the configuration's "
+    "perception.state_source, truth"
+)
+
+
+def add_state_source(p: argparse.ArgumentParser) -> None:
+    """`--state-source truth|lidar` (`PerceptionParams.state_source`)."""
+    from emonav_drake.params import STATE_SOURCES
+
+    p.add_argument("--state-source", choices=STATE_SOURCES, help=STATE_SOURCE_HELP)
 
 
 def sample(seed: int, resolved: ResolvedConfig) -> Scenario:

@@ -57,6 +57,7 @@ from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
 from emonav_drake.systems.crowd_system import CrowdSystem
+from emonav_drake.systems.crowd_tracker_system import CrowdTrackerSystem
 from emonav_drake.systems.emotion_estimate_source import AddEmotionEstimateSource
 from emonav_drake.systems.episode_monitor import (
     EpisodeMonitor,
@@ -167,6 +168,7 @@ class NavigationStack:
     planner: NavigationPlanner
     monitor: EpisodeMonitor
     perception: CameraPerception | None = None  # mode "camera": the camera chain
+    tracker: CrowdTrackerSystem | None = None  # perception.state_source "lidar"
 
 
 def AddNavigationStack(
@@ -202,7 +204,15 @@ def AddNavigationStack(
     monitor = b.AddNamedSystem("monitor", EpisodeMonitor(scenario, config, goal_radius))
     for sys in (crowd, maps, plan, monitor):
         b.Connect(robot_state, sys.GetInputPort("robot_state"))
-    perceivers = [maps.GetInputPort("crowd"), plan.GetInputPort("crowd")]
+    planner_crowd = plan.GetInputPort("crowd")
+    tracker = None
+    if config.perception.state_source == "lidar":  # the planner reads the tracked crowd
+        tracker = b.AddNamedSystem("crowd_tracker", CrowdTrackerSystem(config))
+        b.Connect(robot_state, tracker.GetInputPort("robot_state"))
+        b.Connect(maps.GetOutputPort("scan"), tracker.GetInputPort("scan"))
+        b.Connect(tracker.GetOutputPort("crowd"), planner_crowd)
+        planner_crowd = tracker.GetInputPort("crowd")  # its emotion reports
+    perceivers = [maps.GetInputPort("crowd"), planner_crowd]
     perception = None
     if emotion_estimate is not None and emotion_estimate.mode == "camera":
         from emonav_drake.diagrams.camera_perception import AddCameraPerception
@@ -229,7 +239,7 @@ def AddNavigationStack(
             b.Connect(crowd.GetOutputPort("crowd"), port)
     b.Connect(crowd.GetOutputPort("crowd"), monitor.GetInputPort("crowd"))
     b.Connect(maps.GetOutputPort("lgm_stack"), plan.GetInputPort("lgm_stack"))
-    return NavigationStack(crowd, maps, plan, monitor, perception)
+    return NavigationStack(crowd, maps, plan, monitor, perception, tracker)
 
 
 def build_navigation_diagram(

@@ -50,6 +50,8 @@ def setting_label(config: EmoNavConfig, name: str | None) -> str:
     label += f"{r.negative_discomfort:g}] m"
     if config.crowd.time_varying_emotions:
         label += ", time-varying"
+    if config.perception.state_source != "truth":
+        label += f", {config.perception.state_source} state"
     return label
 
 

@@ -1,0 +1,113 @@
+"""`CrowdTrackerSystem`: the crowd as a robot estimates it from its LiDAR scan.
+
+At the scan's rate (every `crowd.dt`, 10 Hz) it segments the 1800-beam scan into objects
+and fits circles (`core/lidar_objects.py`), then updates a multi-target tracker
+(`core/crowd_tracker.py`: constant-velocity Kalman filters, gated Hungarian assignment,
+birth, confirmation, coasting through occlusions, deletion). Its output replaces the
+simulator's crowd on the planner's input when `perception.state_source` is "lidar":
+
+    LidarGridMapBuilder ── scan ──► CrowdTrackerSystem ── crowd ──► NavigationPlanner
+    crowd (emotion estimate) ──────────┘ (emotions, by association)
+
+Input ports:
+    robot_state (4): (x [m], y [m], θ [rad], v [m/s]) of the robot CoM, world frame: the
+        LiDAR's pose (it sits at the CoM; beam angles are measured from θ).
+    scan (K): the LiDAR ranges now [m] (`LidarGridMapBuilder.scan`).
+    crowd (abstract `CrowdSnapshot`): the crowd as the emotion source reports it; only
+        its pedestrians' positions and emotion codes are read, to attach an emotion to a
+        track (the nearest report within the tracker's association gate, else neutral).
+Output port:
+    crowd (abstract `CrowdSnapshot`), world frame, SI units: the confirmed moving tracks as
+        pedestrians (position predicted to the current time with the track's velocity,
+        velocity, the nominal pedestrian radius, the associated emotion and its discomfort
+        distance) and the confirmed still tracks as static discs (centre, fitted radius).
+Abstract state: the tracker (its tracks and the time of its last scan).
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses as dc
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import Context, LeafSystem, State
+
+from emonav_drake.core.crowd import CrowdSnapshot
+from emonav_drake.core.crowd_tracker import CrowdTracker, TrackerParams
+from emonav_drake.core.lidar_objects import DetectionParams, detect_objects
+from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
+from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
+
+NEUTRAL = EMOTION_NAMES.index("neutral")  # a track no emotion report is near
+
+
+class CrowdTrackerSystem(LeafSystem):
+    """LiDAR detection + tracking → the crowd snapshot the state-based planners read.
+
+    Args:
+        config: the LiDAR (beams, range), the scan period `crowd.dt`, the nominal
+            pedestrian radius and the discomfort distances.
+        detection, tracking: the detector's and the tracker's parameters (defaults:
+            `DetectionParams()`, `TrackerParams()`).
+    """
+
+    def __init__(
+        self,
+        config: EmoNavConfig,
+        detection: DetectionParams | None = None,
+        tracking: TrackerParams | None = None,
+    ) -> None:
+        super().__init__()
+        self._config = config
+        self._detection = detection or DetectionParams()
+        self._tracking = tracking or TrackerParams()
+        self._distances = np.asarray(config.reward.emotion_distances(), dtype=float)
+        self._robot_in = self.DeclareVectorInputPort("robot_state", 4)
+        self._scan_in = self.DeclareVectorInputPort("scan", config.lidar.num_beams)
+        self._crowd_in = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
+        self._tracker = self.DeclareAbstractState(AbstractValue.Make(CrowdTracker(self._tracking)))
+        self.DeclareAbstractOutputPort(
+            "crowd",
+            lambda: AbstractValue.Make(object()),
+            self._calc_crowd,
+            {self.all_state_ticket(), self.input_port_ticket(self._crowd_in.get_index())},
+        )
+        self.DeclarePeriodicUnrestrictedUpdateEvent(config.crowd.dt, 0.0, self._scan)
+
+    def tracker(self, context: Context) -> CrowdTracker:
+        """The tracker in `context` (read only)."""
+        return context.get_abstract_state(self._tracker).get_value()
+
+    def _scan(self, context: Context, state: State) -> None:
+        robot = lip_state_from_vector(self._robot_in.Eval(context))
+        detections = detect_objects(
+            np.asarray(self._scan_in.Eval(context), dtype=float),
+            np.array([robot.x, robot.y]),
+            robot.heading,
+            self._config.lidar.max_range,
+            self._detection,
+        )
+        tracker = copy.deepcopy(self.tracker(context))
+        tracker.update(context.get_time(), detections)
+        state.get_mutable_abstract_state(self._tracker).set_value(tracker)
+
+    def _calc_crowd(self, context: Context, output: AbstractValue) -> None:
+        output.set_value(self.perceived(context))
+
+    def perceived(self, context: Context) -> CrowdSnapshot:
+        """The crowd snapshot of the tracks now (see the output port)."""
+        reported: CrowdSnapshot = self._crowd_in.Eval(context)
+        tracker = self.tracker(context)
+        snap = tracker.snapshot(
+            np.asarray(reported.positions, dtype=float).reshape(-1, 2),
+            np.asarray(reported.emotions, dtype=int).reshape(-1),
+            self._distances,
+            self._config.crowd.pedestrian_radius,
+            self._config.reward.static_discomfort,
+            NEUTRAL,
+        )
+        lag = context.get_time() - tracker.time if tracker.time is not None else 0.0
+        if lag > 0 and len(snap.positions):  # the last scan's tracks, predicted to now
+            snap = dc.replace(snap, positions=snap.positions + snap.velocities * lag)
+        return snap
