@@ -1,20 +1,28 @@
 """Measure the head camera's face pipeline: detection vs geometry, in-loop confusion.
 
-    python scripts/perception_study.py --out benchmarks/results/perception \
-        --png docs/figures/camera_perception.png
+    python scripts/perception_study.py --out benchmarks/results/perception_hd720 \
+        --png docs/figures/camera_perception_hd720.png
+    python scripts/perception_study.py --camera-width 640 --camera-height 480 --fov-y 45 \
+        --out benchmarks/results/perception --png docs/figures/camera_perception.png
 
 Writes into --out: `sweep.jsonl` (one pedestrian placed at a grid of distances, bearings
 and facing angles, each emotion; `evaluation.perception_study.sweep`), `episodes.jsonl`
 (every pedestrian at every classification of --episodes LIP episodes with camera
 emotions, seeds --first-seed …, the MPC planning; `episode_samples`) and `summary.json`
-(confusion matrices, detection rates, wall times). Seeds 800 000 … are used by default:
-never used to train, select or evaluate a planner. --png draws the figure. Resumable:
-an existing `sweep.jsonl` / `episodes.jsonl` with the same settings is reused.
+(confusion matrices, detection rates, wall times, the time of one classification).
+Seeds 800 000 … are used by default: never used to train, select or evaluate a planner.
+--png draws the figure. The camera is `HeadCameraParams` (default: the ZED 2 at HD720,
+1280 × 720, 70° vertical) with --camera-width / --camera-height / --fov-y /
+--min-face-size; it is recorded in `camera.json`. Resumable: an existing `sweep.jsonl` /
+`episodes.jsonl` is reused, and refused if it was made with another camera (a directory
+written before `camera.json` existed was made with the 640 × 480, 45° camera).
+--timing-only prints the time of one classification at the camera and writes nothing.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses as dc
 import json
 import sys
 import time
@@ -23,17 +31,23 @@ from pathlib import Path
 import numpy as np
 
 from emonav_drake.evaluation.perception_study import (
+    classification_seconds,
     confusion_counts,
     episode_samples,
+    half_fov_x_deg,
     rate_by,
     sweep,
 )
-from emonav_drake.params import EMOTION_NAMES
+from emonav_drake.params import EMOTION_NAMES, ConfigError
+from emonav_drake.perception.noisy_emotions import EmotionEstimateParams, HeadCameraParams
 
 DISTANCES = [1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 4.5, 5.0, 5.5, 6.0]
 BEARINGS = [-28.0, -20.0, -10.0, 0.0, 10.0, 20.0, 28.0]
 FACINGS = [0.0, 30.0, 60.0, 90.0, 135.0, 180.0]
 DISTANCE_EDGES = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 12.0]
+# ≈ half the horizontal field of view of the 640 × 480, 45° camera (28.9°) [deg], the
+# in-view filter of its runs: the "central" rates compare cameras over the same bearings
+CENTRAL_HALF_FOV_DEG = 29.0
 
 
 def _write_jsonl(path: Path, rows: list[dict]) -> None:
@@ -46,17 +60,42 @@ def _read_jsonl(path: Path) -> list[dict]:
     return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
 
 
-def run_sweep(out: Path) -> tuple[list[dict], float]:
+def check_camera(out: Path, params: EmotionEstimateParams) -> None:
+    """Record the camera in `out/camera.json`; `ConfigError` if the directory already
+    holds samples of another camera (without camera.json: the 640 × 480, 45° one)."""
+    path = out / "camera.json"
+    camera = dc.asdict(params.camera)
+    if path.is_file():
+        recorded = json.loads(path.read_text())
+    elif (out / "sweep.jsonl").is_file() or (out / "episodes.jsonl").is_file():
+        recorded = dc.asdict(HeadCameraParams.vga())
+    else:
+        recorded = camera
+    if recorded != camera:
+        diff = {k: (recorded.get(k), v) for k, v in camera.items() if recorded.get(k) != v}
+        raise ConfigError(
+            f"--out {out}: its samples were made with another camera "
+            f"({', '.join(f'{k} {a} there, {b} now' for k, (a, b) in diff.items())}): "
+            "give the same camera flags or another --out"
+        )
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(camera, indent=1) + "\n")
+    tmp.replace(path)
+
+
+def run_sweep(out: Path, params: EmotionEstimateParams) -> tuple[list[dict], float]:
     path = out / "sweep.jsonl"
     if path.is_file():
         return _read_jsonl(path), float("nan")
     t0 = time.perf_counter()
-    rows = sweep(DISTANCES, BEARINGS, FACINGS, progress=True)
+    rows = sweep(DISTANCES, BEARINGS, FACINGS, params=params, progress=True)
     _write_jsonl(path, rows)
     return rows, time.perf_counter() - t0
 
 
-def run_episodes(out: Path, first_seed: int, episodes: int) -> tuple[list[dict], list, float]:
+def run_episodes(
+    out: Path, first_seed: int, episodes: int, params: EmotionEstimateParams
+) -> tuple[list[dict], list, float]:
     from tqdm import tqdm
 
     from emonav_drake.core.scenario import sample_scenario
@@ -71,7 +110,7 @@ def run_episodes(out: Path, first_seed: int, episodes: int) -> tuple[list[dict],
     rows, records = [], []
     t0 = time.perf_counter()
     for seed in tqdm(range(first_seed, first_seed + episodes), desc="camera episodes"):
-        record, samples = episode_samples(sample_scenario(seed, cfg), cfg, planner)
+        record, samples = episode_samples(sample_scenario(seed, cfg), cfg, planner, params)
         rows += samples
         records.append({"seed": seed, **record.to_json()})
     _write_jsonl(path, rows)
@@ -79,7 +118,12 @@ def run_episodes(out: Path, first_seed: int, episodes: int) -> tuple[list[dict],
     return rows, records, time.perf_counter() - t0
 
 
-def summarise(sweep_rows: list[dict], episode_rows: list[dict], records: list) -> dict:
+def summarise(
+    sweep_rows: list[dict],
+    episode_rows: list[dict],
+    records: list,
+    params: EmotionEstimateParams,
+) -> dict:
     front = [r for r in sweep_rows if r["facing_deg"] == 0.0 and r["bearing_deg"] == 0.0]
     by_distance = {}
     for e, name in enumerate(EMOTION_NAMES):
@@ -90,8 +134,16 @@ def summarise(sweep_rows: list[dict], episode_rows: list[dict], records: list) -
         }
     c_all = confusion_counts(episode_rows)
     c_seen = confusion_counts(episode_rows, detected_only=True)
-    in_view = [r for r in episode_rows if abs(r["bearing_deg"]) <= 29.0]
+    half = half_fov_x_deg(params)
+    in_view = [r for r in episode_rows if abs(r["bearing_deg"]) <= half]
     rate, n = rate_by(in_view, "distance", DISTANCE_EDGES)
+    central = [r for r in episode_rows if abs(r["bearing_deg"]) <= CENTRAL_HALF_FOV_DEG]
+    c_rate, c_n = rate_by(central, "distance", DISTANCE_EDGES)
+    rows = c_all.sum(axis=1)
+    recognised = {
+        name: float(c_all[e, e] / rows[e]) if rows[e] else None
+        for e, name in enumerate(EMOTION_NAMES)
+    }
     return {
         "sweep_shots": len(sweep_rows),
         "sweep_detection_rate": float(np.mean([r["detected"] for r in sweep_rows])),
@@ -105,15 +157,25 @@ def summarise(sweep_rows: list[dict], episode_rows: list[dict], records: list) -
         "detected_samples": int(sum(r["detected"] for r in episode_rows)),
         "confusion_all": c_all.tolist(),
         "confusion_detected": c_seen.tolist(),
+        "recognised_fraction": recognised,
         "in_view_detection_by_distance": {
+            "half_fov_deg": half,
             "edges_m": DISTANCE_EDGES,
             "rate": [None if np.isnan(x) else float(x) for x in rate],
             "samples": n.tolist(),
         },
+        "central_detection_by_distance": {
+            "half_fov_deg": CENTRAL_HALF_FOV_DEG,
+            "edges_m": DISTANCE_EDGES,
+            "rate": [None if np.isnan(x) else float(x) for x in c_rate],
+            "samples": c_n.tolist(),
+        },
     }
 
 
-def plot(sweep_rows: list[dict], episode_rows: list[dict], png: Path) -> None:
+def plot(
+    sweep_rows: list[dict], episode_rows: list[dict], png: Path, params: EmotionEstimateParams
+) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -170,6 +232,11 @@ def plot(sweep_rows: list[dict], episode_rows: list[dict], png: Path) -> None:
     ax.set_yticks(range(3), EMOTION_NAMES)
     ax.set(xlabel="perceived (unseen → neutral)", ylabel="true emotion")
     ax.set_title(f"In the loop (LIP, MPC), n = {c.sum()}")
+    cam = params.camera
+    fig.suptitle(
+        f"Head camera {cam.width} × {cam.height} px, {cam.fov_y_deg:g}° vertical "
+        f"({2 * half_fov_x_deg(params):.0f}° horizontal), faces ≥ {cam.min_face_size} px"
+    )
     fig.tight_layout()
     png.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(png, dpi=110)
@@ -177,16 +244,71 @@ def plot(sweep_rows: list[dict], episode_rows: list[dict], png: Path) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", type=Path, required=True, help="run directory")
+    default = HeadCameraParams()
+    p.add_argument("--out", type=Path, help="run directory (required unless --timing-only)")
     p.add_argument("--episodes", type=int, default=100, help="LIP episodes with camera emotions")
     p.add_argument("--first-seed", type=int, default=800_000, help="first episode seed")
     p.add_argument("--png", type=Path, help="write the figure here")
+    p.add_argument(
+        "--camera-width",
+        type=int,
+        default=default.width,
+        help=f"image width [px] ({default.width})",
+    )
+    p.add_argument(
+        "--camera-height",
+        type=int,
+        default=default.height,
+        help=f"image height [px] ({default.height})",
+    )
+    p.add_argument(
+        "--fov-y",
+        type=float,
+        default=default.fov_y_deg,
+        help=f"vertical field of view [deg] ({default.fov_y_deg:g})",
+    )
+    p.add_argument(
+        "--min-face-size",
+        type=int,
+        default=default.min_face_size,
+        help=f"smallest face the cascade accepts [px] ({default.min_face_size})",
+    )
+    p.add_argument(
+        "--timing-only",
+        action="store_true",
+        help="print the time of one classification at this camera; write nothing",
+    )
     args = p.parse_args(argv)
-    args.out.mkdir(parents=True, exist_ok=True)
-    sweep_rows, sweep_s = run_sweep(args.out)
-    episode_rows, records, episodes_s = run_episodes(args.out, args.first_seed, args.episodes)
-    summary = summarise(sweep_rows, episode_rows, records)
+    camera = dc.replace(
+        default,
+        width=args.camera_width,
+        height=args.camera_height,
+        fov_y_deg=args.fov_y,
+        min_face_size=args.min_face_size,
+    )
+    try:
+        params = EmotionEstimateParams(mode="camera", camera=camera).validate()
+        if args.timing_only:
+            print(json.dumps({"camera": dc.asdict(camera), **classification_seconds(params)}))
+            return 0
+        if args.out is None:
+            raise ConfigError("--out: required (unless --timing-only)")
+        if args.episodes < 1 or args.first_seed < 0:
+            raise ConfigError("--episodes must be >= 1 and --first-seed >= 0")
+        args.out.mkdir(parents=True, exist_ok=True)
+        check_camera(args.out, params)
+    except (ConfigError, OSError) as e:
+        print(f"perception_study: error: {e}", file=sys.stderr)
+        return 2
+    timing = classification_seconds(params)
+    sweep_rows, sweep_s = run_sweep(args.out, params)
+    episode_rows, records, episodes_s = run_episodes(
+        args.out, args.first_seed, args.episodes, params
+    )
+    summary = summarise(sweep_rows, episode_rows, records, params)
+    summary["classification_seconds"] = timing
     summary["settings"] = {
+        "camera": dc.asdict(camera),
         "distances_m": DISTANCES,
         "bearings_deg": BEARINGS,
         "facings_deg": FACINGS,
@@ -208,7 +330,7 @@ def main(argv: list[str] | None = None) -> int:
     (args.out / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
     print(json.dumps({k: summary[k] for k in ("confusion_all", "confusion_detected")}))
     if args.png is not None:
-        plot(sweep_rows, episode_rows, args.png)
+        plot(sweep_rows, episode_rows, args.png, params)
         print(f"figure written to {args.png}")
     return 0
 

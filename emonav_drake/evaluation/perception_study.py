@@ -12,6 +12,11 @@ real renderer, Haar cascade and CNN:
   whether its face was found, and its geometry at that instant. The confusion matrix of
   the in-loop pipeline against the ground truth, with unseen pedestrians (neutral by
   rule) counted.
+* `classification_seconds`: the wall time of one classification (render + Haar cascade
+  + CNN + assignment) and of the cascade alone, at the camera of the params.
+
+The camera is `EmotionEstimateParams.camera` (default: the ZED 2 at HD720; the earlier
+640 × 480 camera is `HeadCameraParams.vga()`).
 
 A sample is a plain dict (JSON-ready): distance, bearing_deg, facing_deg, truth, estimate
 (codes HAPPY 0, NEUTRAL 1, NEGATIVE 2), detected (a face was assigned to it), and for
@@ -120,6 +125,42 @@ class CameraRig:
         port = self.camera.color_image
         img = port.Eval(self.camera.sensor.GetMyContextFromRoot(self.context))
         return np.array(img.data)[:, :, :3].copy()
+
+
+def classification_seconds(
+    params: EmotionEstimateParams | None = None,
+    distances: Sequence[float] = (1.5, 2.0, 3.0, 4.0, 5.0),
+    repeats: int = 4,
+) -> dict[str, float]:
+    """Median wall times [s] of one classification at the camera of `params`: "shot"
+    (render + Haar cascade + CNN + assignment: `CameraRig.shot`) and "detect" (the
+    cascade alone on that image), over a happy pedestrian facing the camera at each of
+    `distances` [m], `repeats` times each, after one warm-up shot."""
+    import time
+
+    from emonav_drake.perception.image_io import to_gray
+
+    rig = CameraRig(params)
+    rig.shot(distances[0], 0.0, 0.0, 0)  # warm-up: renderer and network initialised
+    shot, detect = [], []
+    for _ in range(repeats):
+        for d in distances:
+            t0 = time.perf_counter()
+            rig.shot(d, 0.0, 0.0, 0)
+            shot.append(time.perf_counter() - t0)
+            gray = to_gray(rig.image(), "rgb")
+            t0 = time.perf_counter()
+            rig.classifier.classifier.detect(gray)
+            detect.append(time.perf_counter() - t0)
+    return {"shot": float(np.median(shot)), "detect": float(np.median(detect)), "n": len(shot)}
+
+
+def half_fov_x_deg(params: EmotionEstimateParams) -> float:
+    """Half the camera's horizontal field of view [deg] (pinhole: from the vertical one
+    and the aspect ratio)."""
+    cam = params.camera
+    half_y = math.radians(cam.fov_y_deg) / 2.0
+    return math.degrees(math.atan(math.tan(half_y) * cam.width / cam.height))
 
 
 def sweep(

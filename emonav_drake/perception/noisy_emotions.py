@@ -116,27 +116,42 @@ def replace_emotions(
 class HeadCameraParams:
     """The robot's head camera and the face pipeline on its images (mode "camera").
 
+    The default is the paper's robot's camera, a ZED stereo camera, in its HD720 mode
+    (one lens; ZED 2 HD720: 1280 × 720 px, 70° vertical field of view — the ZED 2 / 2i
+    datasheet's 110° H × 70° V; as the rectified pinhole image Drake renders, 70° vertical
+    at 16:9 is ≈ 102° horizontal, f ≈ 514 px). `vga()` is the earlier 640 × 480 camera
+    with a 45° vertical field of view (≈ 58° horizontal, f ≈ 579 px); in YAML:
+    `camera: {width: 640, height: 480, fov_y_deg: 45}`.
+
     Attributes:
         width, height: image size [px].
-        fov_y_deg: vertical field of view [deg] (45° at 640 × 480: ≈ 58° horizontal).
+        fov_y_deg: vertical field of view [deg].
         lip_height: camera height above the ground on the LIP robot [m].
         digit_offset: camera origin in Digit's torso frame (x forward, y left, z up) [m];
             the optical axis is the torso's x axis.
         near, far: rendering clipping range [m].
-        min_face_size: smallest face the Haar cascade accepts [px] (24: a 0.16 m face
-            up to ≈ 3.9 m away at the default intrinsics).
+        min_face_size: smallest face the Haar cascade accepts [px]. 24 is the cascade's
+            own window, the smallest face it can find at all: a face facing the camera is
+            found up to ≈ 3.5 m with the ZED 2 HD720 intrinsics, ≈ 4 m at 640 × 480 / 45°
+            (the wider field spreads fewer pixels over a face).
         max_range: pedestrians farther than this get no face [m].
     """
 
-    width: int = 640
-    height: int = 480
-    fov_y_deg: float = 45.0
+    width: int = 1280
+    height: int = 720
+    fov_y_deg: float = 70.0
     lip_height: float = 1.45
     digit_offset: list[float] = dc.field(default_factory=lambda: [0.05, 0.0, 0.45])
     near: float = 0.1
     far: float = 15.0
     min_face_size: int = 24
     max_range: float = 6.0
+
+    @classmethod
+    def vga(cls, **overrides: object) -> "HeadCameraParams":
+        """The earlier head camera: 640 × 480 px, 45° vertical field of view (≈ 58°
+        horizontal); the other fields as the default, or `overrides`."""
+        return cls(**{"width": 640, "height": 480, "fov_y_deg": 45.0, **overrides})
 
     def validate(self) -> "HeadCameraParams":
         """Raise `ConfigError` naming the field if a value is invalid: the ranges of

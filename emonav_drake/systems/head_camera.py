@@ -9,6 +9,10 @@ on the plant's body poses, so the camera sways with the torso) — and a fixed o
 image's right is B's −y and its down is B's −z (Drake's camera frame: +z forward,
 +x right, +y down).
 
+Its intrinsics are `HeadCameraParams` (`camera_info`): by default the paper's ZED stereo
+camera in its HD720 mode (ZED 2 HD720: 1280 × 720 px, 70° vertical field of view, ≈ 102°
+horizontal as a pinhole), or the earlier 640 × 480, 45° camera (`HeadCameraParams.vga()`).
+
 The sensor renders only when its `color_image` output is evaluated: wired to the
 `EmotionClassifier`, whose periodic update reads it, it renders once per classification
 (0.5 Hz).
