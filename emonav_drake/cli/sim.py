@@ -214,6 +214,7 @@ def _open_viewer(
                 scenario.seed,
                 rays=args.rays,
                 footsteps=robot.footsteps,
+                tracks=cfg.perception.state_source == "lidar",
             )
             start_live_view(meshcat, wait=not args.no_wait, caption=caption)
     return meshcat, caption

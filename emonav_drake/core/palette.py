@@ -24,6 +24,7 @@ LiDAR rays                  light grey (hit points: dark grey)
 discomfort zones            the colour of their pedestrian (or static disc), dashed or
                             faded; in a legend, dark grey
 footstep targets            left sky blue #56B4E9, right reddish purple #CC79A7
+LiDAR tracks                violet #A020F0 (tracked static discs: dark violet)
 commands                    mid grey
 heading marks, ink          black; labels near black; paper white
 ==========================  ==========================================================
@@ -88,6 +89,14 @@ LIDAR_RAY_RGB: RGB = _grey(0.75)  # LiDAR rays (Meshcat) and the range circle (f
 LIDAR_HIT_RGB: RGB = _grey(0.15)  # LiDAR hit points (figures)
 
 FOOTSTEP_RGB: tuple[RGB, RGB] = (OKABE_ITO["sky_blue"], OKABE_ITO["reddish_purple"])  # L, R
+
+# The crowd as the robot tracks it from its LiDAR scan (`--state-source lidar`), drawn
+# beside the true crowd: a violet none of the scene's other roles takes (no emotion's hue,
+# apart from the robot's blue and the footsteps' even under colour blindness); tracked
+# static discs in a darker shade of it.
+TRACK_RGB: RGB = _hex("#A020F0")
+TRACK_STATIC_RGB: RGB = tuple(0.5 * v for v in TRACK_RGB)  # type: ignore[assignment]
+
 COMMAND_RGB: RGB = _grey(0.60)  # a command held over a step (step plots)
 
 INK_RGB: RGB = OKABE_ITO["black"]  # heading marks, outlines, collision/fall marks, error bars

@@ -50,6 +50,10 @@ LEGEND = (
     ("goal", _css(nm.GOAL_RGBA)),
 )
 RAYS_LEGEND = ("LiDAR rays (per walking step)", _css(nm.RAY_RGBA))
+TRACKS_LEGEND = (
+    ("tracked pedestrian (LiDAR), arrow: 1 s of its velocity", palette.css(palette.TRACK_RGB)),
+    ("tracked static obstacle (LiDAR)", palette.css(palette.TRACK_STATIC_RGB)),
+)
 FOOTSTEP_LEGEND = (
     ("footstep target, left", _css(nm.FOOT_RGBA[0])),
     ("footstep target, right", _css(nm.FOOT_RGBA[1])),
@@ -199,7 +203,8 @@ class ReplayCaption:
         seed: the scenario's seed (None for a hand-made scenario without one).
         outcome: "success", "collision", "timeout", "fall" (None while running).
         steps: walking steps taken; nav_time: simulated time [s].
-        rays: the replay draws LiDAR rays; footsteps: it draws footstep targets.
+        rays: the replay draws LiDAR rays; footsteps: it draws footstep targets; tracks:
+            it draws the LiDAR tracks the state-based planners read (`--state-source lidar`).
     """
 
     planner: str
@@ -210,6 +215,7 @@ class ReplayCaption:
     nav_time: float | None = None
     rays: bool = False
     footsteps: bool = False
+    tracks: bool = False
 
     @classmethod
     def for_episode(
@@ -220,6 +226,7 @@ class ReplayCaption:
         record=None,
         rays: bool = False,
         footsteps: bool = False,
+        tracks: bool = False,
     ) -> ReplayCaption:
         """The caption of an episode: `planner` a `Planner` (its `name`), `plant` the
         robot's caption name (`Plant.caption_name`), `scenario` a `Scenario` (its `seed`),
@@ -232,6 +239,7 @@ class ReplayCaption:
             seed=getattr(scenario, "seed", None),
             rays=rays,
             footsteps=footsteps,
+            tracks=tracks,
         )
         if record is not None:
             cap.set_outcome(record)
@@ -256,6 +264,8 @@ class ReplayCaption:
             items.append(RAYS_LEGEND)
         if self.footsteps:
             items.extend(FOOTSTEP_LEGEND)
+        if self.tracks:
+            items.extend(TRACKS_LEGEND)
         return items
 
 

@@ -313,6 +313,8 @@ def build_navigation_diagram(
         b.Connect(state, vis.GetInputPort("robot_state"))
         b.Connect(crowd.GetOutputPort("crowd"), vis.GetInputPort("crowd"))
         b.Connect(maps.GetOutputPort("scan"), vis.GetInputPort("scan"))
+        if stack.tracker is not None:  # the crowd the planner reads, beside the true one
+            b.Connect(stack.tracker.GetOutputPort("crowd"), vis.GetInputPort("tracks"))
     diagram = b.Build()
     diagram.set_name("emonav_navigation")
     return NavigationDiagram(diagram, robot, crowd, maps, plan, monitor, vis)
@@ -397,7 +399,10 @@ def run_episode(
     if record_html is not None:
         meshcat.StopRecording()
         meshcat.PublishRecording()
-        caption = ReplayCaption.for_episode(planner, "LIP", scenario, record, show_rays)
+        tracks = config.perception.state_source == "lidar"
+        caption = ReplayCaption.for_episode(
+            planner, "LIP", scenario, record, show_rays, tracks=tracks
+        )
         write_replay_html(meshcat, record_html, caption)
     return record, log_
 

@@ -153,6 +153,8 @@ def build_digit_navigation_diagram(
         b.Connect(robot_state, vis.GetInputPort("robot_state"))
         b.Connect(crowd.GetOutputPort("crowd"), vis.GetInputPort("crowd"))
         b.Connect(station.GetOutputPort("targets"), vis.GetInputPort("footstep_targets"))
+        if stack.tracker is not None:  # the crowd the planner reads, beside the true one
+            b.Connect(stack.tracker.GetOutputPort("crowd"), vis.GetInputPort("tracks"))
     diagram = b.Build()
     diagram.set_name("emonav_navigation_digit")
     return DigitNavigationDiagram(diagram, station, crowd, nav, monitor)
@@ -203,7 +205,10 @@ def run_digit_episode(
     if record_html is not None:
         meshcat.StopRecording()
         meshcat.PublishRecording()
-        caption = ReplayCaption.for_episode(planner, "Digit", scenario, record, footsteps=True)
+        tracks = config.perception.state_source == "lidar"
+        caption = ReplayCaption.for_episode(
+            planner, "Digit", scenario, record, footsteps=True, tracks=tracks
+        )
         write_replay_html(meshcat, record_html, caption)
     return record
 

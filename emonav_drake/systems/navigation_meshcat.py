@@ -8,6 +8,10 @@ Input ports:
     footstep_targets (abstract `core.walking_targets.WalkingTargets`): the full-order
         Digit's footstep planner output (swing-foot landing target and yaw, W); leave
         unconnected for the LIP robot.
+    tracks (abstract `CrowdSnapshot`): the crowd as the robot tracks it from its LiDAR
+        scan (`CrowdTrackerSystem.crowd`, with `perception.state_source` "lidar": what the
+        state-based planners read): pedestrians' positions [m] and velocities [m/s],
+        static discs' centres and radii [m]; leave unconnected when the state is the truth.
 
 What is drawn (all under `/emonav`, world frame W, z up), in the shared palette
 (`core/palette.py`; the names of the colours here are its roles):
@@ -23,6 +27,17 @@ What is drawn (all under `/emonav`, world frame W, z up), in the shared palette
       position at t_{k−1} to t_k, bright for `TRAIL_RECENT_STEPS` steps, then pale) and,
       with `show_rays`, the LiDAR rays of t_k (light grey, every `RAY_STRIDE`-th beam, one
       line-segment object per step, visible from t_k to t_{k+1});
+    * with `tracks` connected, every `publish_period`, beside the true crowd: each
+      tracked pedestrian as a flat violet ring at waist height (`TRACK_HEIGHT`), just
+      wider than a pedestrian, with a velocity arrow from its position along its velocity,
+      as long as the distance it covers in `TRACK_ARROW_HORIZON` (1 s; none for a track
+      slower than `TRACK_ARROW_MIN_SPEED`); each tracked static disc as a dark violet ring
+      of its fitted radius on top of the disc (still tracks: a pedestrian that stands still
+      gets one too). Tracks come and go: a fixed pool of `TRACK_SLOTS` pedestrian and
+      `TRACK_STATIC_SLOTS` static slots is drawn once, hidden, and a slot is shown while a
+      track is in it (a track keeps its slot while it lives); a replay thus shows a track
+      appear once it is confirmed, coast on while its pedestrian is hidden from the LiDAR,
+      and vanish when deleted;
     * with `footstep_targets` connected: a foot-sized marker at each planned footstep
       (left sky blue, right reddish purple), following the target while the planner
       re-plans it and pale once `FOOTSTEPS_RECENT` newer steps have started;
@@ -32,10 +47,11 @@ What is drawn (all under `/emonav`, world frame W, z up), in the shared palette
 
 Recording. Every dynamic call passes the simulation time, so with
 `Meshcat.StartRecording` the episode is recorded frame by frame and
-`PublishRecording` + `StaticHtml` replay it: poses, emotions (visibility), trail, rays and
-footsteps. Objects created during the episode are hidden at frame 0 and shown from the
-frame they appear in. Meshcat objects persist in the server, so this visualizer draws
-one episode: build a new one (or call `Meshcat.Delete`) for the next.
+`PublishRecording` + `StaticHtml` replay it: poses, emotions (visibility), trail, rays,
+footsteps and tracks (their slots' visibility, poses and scales: an arrow's length, a
+static ring's radius). Objects created during the episode are hidden at frame 0 and shown
+from the frame they appear in. Meshcat objects persist in the server, so this visualizer
+draws one episode: build a new one (or call `Meshcat.Delete`) for the next.
 """
 
 from __future__ import annotations
@@ -68,6 +84,8 @@ GOAL_RGBA = _rgba(palette.GOAL_RGB)
 GOAL_RADIUS_RGBA = _rgba(palette.GOAL_RADIUS_RGB)
 RAY_RGBA = _rgba(palette.LIDAR_RAY_RGB, 0.8)
 FOOT_RGBA = tuple(_rgba(rgb, 0.9) for rgb in palette.FOOTSTEP_RGB)  # left, right
+TRACK_RGBA = _rgba(palette.TRACK_RGB)  # a tracked pedestrian: ring and velocity arrow
+TRACK_STATIC_RGBA = _rgba(palette.TRACK_STATIC_RGB)  # a tracked static disc: ring
 PREFIX = "/emonav"
 TRAIL_RECENT_STEPS = 10  # trail segments drawn bright for this many walking steps
 FOOTSTEPS_RECENT = 6  # footstep markers drawn bright until this many newer steps
@@ -77,6 +95,16 @@ OVERVIEW_FOV = 45.0  # vertical field of view of the overview camera [deg]
 # vertical one in windows narrower than that (`meshcat_viewing.replay_html`)
 OVERVIEW_MIN_HFOV = 50.0
 _GOAL_POLE = 2.0  # [m]
+TRACK_SLOTS = 24  # tracked pedestrians drawn at most (a pool of slots, shown or hidden)
+TRACK_STATIC_SLOTS = 8  # tracked static discs drawn at most
+TRACK_ARROW_HORIZON = 1.0  # a track's velocity arrow: the distance it covers in this [s]
+TRACK_ARROW_MIN_SPEED = 0.05  # [m/s] a slower track gets no arrow
+TRACK_HEIGHT = 1.0  # [m] the height of a tracked pedestrian's ring and arrow (its waist)
+TRACK_RING_GAP = 0.05  # [m] between a tracked disc's radius and its ring's inner edge
+TRACK_RING_WIDTH = 0.07  # [m] the ring's width (a static one's at its nominal radius)
+TRACK_STATIC_NOMINAL = 0.3  # [m] the radius a static ring is drawn for, scaled to the track's
+TRACK_SLOT_GATE = 0.8  # [m] a track stays in its slot when it moved at most this far
+_STATIC_HEIGHT = 0.8  # [m] of a static disc's column
 
 
 def _faded(rgba: Rgba, alpha: float) -> Rgba:
@@ -84,8 +112,8 @@ def _faded(rgba: Rgba, alpha: float) -> Rgba:
 
 
 class NavigationMeshcatVisualizer(LeafSystem):
-    """Draws robot, crowd, obstacles, goal, trail, LiDAR rays and footsteps in Meshcat
-    (see the module docstring).
+    """Draws robot, crowd, obstacles, goal, trail, LiDAR rays, footsteps and LiDAR tracks in
+    Meshcat (see the module docstring).
 
     Args:
         meshcat: the Meshcat instance to draw in.
@@ -130,6 +158,8 @@ class NavigationMeshcatVisualizer(LeafSystem):
         self._footsteps = self.DeclareAbstractInputPort(
             "footstep_targets", AbstractValue.Make(object())
         )
+        self._tracks = self.DeclareAbstractInputPort("tracks", AbstractValue.Make(object()))
+        self._track_pool = False  # the tracks' slots are drawn (at the first publish)
         self._step_time = config.robot.step_time
         self._reset_drawing()
         self._draw_static_scene(scenario)
@@ -148,6 +178,11 @@ class NavigationMeshcatVisualizer(LeafSystem):
         self._last_rays: str | None = None
         self._step_start: float | None = None
         self._footstep_count = 0
+        # per slot: the position of the track it shows (None: hidden), and whether its
+        # arrow is shown; None until the first publish draws every slot's visibility
+        self._ped_slots: list[np.ndarray | None] | None = None
+        self._static_slots: list[np.ndarray | None] | None = None
+        self._arrows: list[bool] = [False] * TRACK_SLOTS
 
     def _draw_static_scene(self, scenario: Scenario) -> None:
         m, c = self._meshcat, self._config
@@ -178,8 +213,8 @@ class NavigationMeshcatVisualizer(LeafSystem):
         m.SetTransform(f"{PREFIX}/goal", RigidTransform([goal[0], goal[1], 0.0]))
         for i, o in enumerate(scenario.obstacles):
             path = f"{PREFIX}/static/{i}"
-            m.SetObject(f"{path}/disc", Cylinder(o.radius, 0.8), STATIC_RGBA)
-            m.SetTransform(f"{path}/disc", RigidTransform([0, 0, 0.4]))
+            m.SetObject(f"{path}/disc", Cylinder(o.radius, _STATIC_HEIGHT), STATIC_RGBA)
+            m.SetTransform(f"{path}/disc", RigidTransform([0, 0, _STATIC_HEIGHT / 2]))
             m.SetObject(
                 f"{path}/ring",
                 Cylinder(o.radius + c.reward.static_discomfort, 0.01),
@@ -250,7 +285,94 @@ class NavigationMeshcatVisualizer(LeafSystem):
         self._emotions = emotions
         if self._footsteps.HasValue(context):
             self._draw_footstep(self._footsteps.Eval(context), t)
+        if self._tracks.HasValue(context):
+            self._draw_tracks(self._tracks.Eval(context), t)
         return EventStatus.Succeeded()
+
+    # -- the LiDAR tracks ----------------------------------------------------------------
+
+    def _draw_track_pool(self, radius: float) -> None:
+        """Every slot, hidden: a ring and a velocity arrow per pedestrian slot (arrow along
+        the slot's +x, its shaft 1 m long, scaled to the track's speed), a ring per static
+        slot (drawn for `TRACK_STATIC_NOMINAL`, scaled to the track's radius)."""
+        m = self._meshcat
+        ring = _annulus(radius + TRACK_RING_GAP, radius + TRACK_RING_GAP + TRACK_RING_WIDTH)
+        head = np.array([[0.0, -0.1, 0.0], [0.18, 0.0, 0.0], [0.0, 0.1, 0.0]]).T
+        for j in range(TRACK_SLOTS):
+            path = f"{PREFIX}/tracks/pedestrians/{j}"
+            m.SetTriangleMesh(f"{path}/ring", *ring, TRACK_RGBA)
+            m.SetTransform(f"{path}/ring", RigidTransform([0, 0, TRACK_HEIGHT]))
+            m.SetObject(f"{path}/arrow/shaft", Box(1.0, 0.05, 0.03), TRACK_RGBA)
+            m.SetTriangleMesh(
+                f"{path}/arrow/head", head, np.array([[0], [1], [2]], dtype=np.int32), TRACK_RGBA
+            )
+            m.SetProperty(path, "visible", False)
+            m.SetProperty(f"{path}/arrow", "visible", False)
+        r0 = TRACK_STATIC_NOMINAL
+        ring = _annulus(r0 + TRACK_RING_GAP, r0 + TRACK_RING_GAP + TRACK_RING_WIDTH)
+        for j in range(TRACK_STATIC_SLOTS):
+            path = f"{PREFIX}/tracks/static/{j}"
+            m.SetTriangleMesh(f"{path}/ring", *ring, TRACK_STATIC_RGBA)
+            m.SetTransform(f"{path}/ring", RigidTransform([0, 0, _STATIC_HEIGHT + 0.02]))
+            m.SetProperty(path, "visible", False)
+        self._track_pool = True
+
+    def _draw_tracks(self, snap, t: float) -> None:
+        """The tracked crowd `snap` (a `CrowdSnapshot`) at t: each track in a slot of its
+        own, kept while it lives; slots without a track hidden."""
+        if not self._track_pool:
+            self._draw_track_pool(float(snap.radius))
+        first = self._ped_slots is None
+        if first:
+            self._ped_slots = [None] * TRACK_SLOTS
+            self._static_slots = [None] * TRACK_STATIC_SLOTS
+        positions = np.asarray(snap.positions, dtype=float).reshape(-1, 2)
+        velocities = np.asarray(snap.velocities, dtype=float).reshape(-1, 2)
+        centres = np.asarray(snap.static_centers, dtype=float).reshape(-1, 2)
+        radii = np.asarray(snap.static_radii, dtype=float).reshape(-1)
+        peds = _assign_slots(self._ped_slots, positions)
+        statics = _assign_slots(self._static_slots, centres)
+        m = self._meshcat
+        for j, i in enumerate(peds):
+            path = f"{PREFIX}/tracks/pedestrians/{j}"
+            shown = i is not None
+            if first or shown != (self._ped_slots[j] is not None):
+                m.SetProperty(path, "visible", shown, t)
+            self._ped_slots[j] = None if i is None else positions[i]
+            if i is None:
+                if first:
+                    m.SetProperty(f"{path}/arrow", "visible", False, t)
+                    self._arrows[j] = False
+                continue
+            (px, py), (vx, vy) = positions[i], velocities[i]
+            speed = math.hypot(vx, vy)
+            arrow = speed >= TRACK_ARROW_MIN_SPEED  # a still track has no heading to show
+            yaw = math.atan2(vy, vx) if arrow else 0.0
+            m.SetTransform(path, RigidTransform(RotationMatrix.MakeZRotation(yaw), [px, py, 0]), t)
+            if first or arrow != self._arrows[j]:
+                m.SetProperty(f"{path}/arrow", "visible", arrow, t)
+                self._arrows[j] = arrow
+            if arrow:
+                length = speed * TRACK_ARROW_HORIZON
+                m.SetTransform(
+                    f"{path}/arrow/shaft", RigidTransform([length / 2, 0, TRACK_HEIGHT]), t
+                )
+                m.SetProperty(f"{path}/arrow/shaft", "scale", [length, 1.0, 1.0], t)
+                m.SetTransform(f"{path}/arrow/head", RigidTransform([length, 0, TRACK_HEIGHT]), t)
+        for j, i in enumerate(statics):
+            path = f"{PREFIX}/tracks/static/{j}"
+            shown = i is not None
+            if first or shown != (self._static_slots[j] is not None):
+                m.SetProperty(path, "visible", shown, t)
+            self._static_slots[j] = None if i is None else centres[i]
+            if i is None:
+                continue
+            cx, cy = centres[i]
+            scale = (radii[i] + TRACK_RING_GAP + TRACK_RING_WIDTH) / (
+                TRACK_STATIC_NOMINAL + TRACK_RING_GAP + TRACK_RING_WIDTH
+            )
+            m.SetTransform(path, RigidTransform([cx, cy, 0.0]), t)
+            m.SetProperty(path, "scale", [scale, scale, 1.0], t)
 
     def _draw_footstep(self, targets, t: float) -> None:
         """The marker of the step being planned; a new step gets a new marker."""
@@ -330,6 +452,47 @@ class NavigationMeshcatVisualizer(LeafSystem):
         if self._last_rays is not None:
             self._meshcat.SetProperty(self._last_rays, "visible", False, t)
         self._last_rays = path
+
+
+def _annulus(inner: float, outer: float, sides: int = 48) -> tuple[np.ndarray, np.ndarray]:
+    """A flat ring in the plane z = 0, centred at the origin: (vertices (3, 2n), faces
+    (3, 2n) int32) for `Meshcat.SetTriangleMesh`."""
+    ang = np.linspace(0.0, 2.0 * np.pi, sides, endpoint=False)
+    rim = np.vstack([np.cos(ang), np.sin(ang), np.zeros(sides)])
+    vertices = np.hstack([inner * rim, outer * rim])
+    i = np.arange(sides)
+    n = (i + 1) % sides
+    faces = np.hstack([np.vstack([i, sides + i, sides + n]), np.vstack([i, sides + n, n])])
+    return vertices, faces.astype(np.int32)
+
+
+def _assign_slots(slots: list[np.ndarray | None], points: np.ndarray) -> list[int | None]:
+    """Which of `points` (N, 2) each slot shows now (an index, or None): a point within
+    `TRACK_SLOT_GATE` of a slot's last position stays in it (nearest pairs first); the others
+    take a slot that showed nothing, else one freed now, so that a new track rarely takes
+    the slot a dead one just left. Points beyond the slots are not drawn."""
+    out: list[int | None] = [None] * len(slots)
+    taken = set()
+    pairs = sorted(
+        (float(np.hypot(*(points[i] - last))), j, i)
+        for j, last in enumerate(slots)
+        if last is not None
+        for i in range(len(points))
+    )
+    for gap, j, i in pairs:
+        if gap > TRACK_SLOT_GATE:
+            break
+        if out[j] is None and i not in taken:
+            out[j] = i
+            taken.add(i)
+    # a new track takes a slot that showed nothing before, else one just freed
+    free = [j for j in range(len(slots)) if slots[j] is None] + [
+        j for j in range(len(slots)) if slots[j] is not None and out[j] is None
+    ]
+    for i in range(len(points)):
+        if i not in taken and free:
+            out[free.pop(0)] = i
+    return out
 
 
 def set_overview_camera(meshcat: Meshcat, config: EmoNavConfig) -> None:
