@@ -93,3 +93,14 @@ def test_a_benchmark_records_its_state_source(tmp_path, short):
     assert "state_source: lidar" in settings["config_yaml"]
     assert settings["setting_label"].endswith("lidar state")
     assert "--state-source lidar" in settings["config_source"]
+
+
+def test_eval_takes_the_state_source(tmp_path):
+    runs = {}
+    for source in ("truth", "lidar"):
+        out = tmp_path / f"{source}.json"
+        argv = ["eval", "--planner", "mpc", "--episodes", "3", "--first-seed", "7"]
+        assert main([*argv, "--state-source", source, "--json", str(out)]) == 0
+        runs[source] = json.loads(out.read_text())
+    assert len(runs["truth"]["episodes"]) == len(runs["lidar"]["episodes"]) == 3
+    assert runs["truth"]["episodes"] != runs["lidar"]["episodes"]  # the MPC read other state
