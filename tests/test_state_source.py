@@ -45,7 +45,7 @@ def test_every_state_based_planner_runs_on_the_tracked_crowd_deterministically(t
     assert first["trajectory"]["robot"] != truth["trajectory"]["robot"]  # it reads other state
 
 
-@pytest.mark.parametrize("planner", ["dwa", "mpc"])
+@pytest.mark.parametrize("planner", ["dwa", "mpc", "sarl", "rgl"])
 def test_digit_runs_on_the_tracked_crowd_deterministically(tmp_path, short, planner):
     first = _sim(tmp_path, short, planner, "lidar", plant="digit", seed=5)
     again = _sim(tmp_path / ".." / tmp_path.name, short, planner, "lidar", plant="digit", seed=5)
@@ -104,3 +104,18 @@ def test_eval_takes_the_state_source(tmp_path):
         runs[source] = json.loads(out.read_text())
     assert len(runs["truth"]["episodes"]) == len(runs["lidar"]["episodes"]) == 3
     assert runs["truth"]["episodes"] != runs["lidar"]["episodes"]  # the MPC read other state
+
+
+def test_a_parallel_lidar_benchmark_equals_the_serial_one(tmp_path, short):
+    """The tracker lives in each trial's diagram: two Ray workers give the serial trials."""
+    from emonav_drake.evaluation.run_directory import comparable, read_trials
+
+    runs = {}
+    for workers in ("1", "2"):
+        out = tmp_path / f"w{workers}"
+        argv = ["benchmark", "--planners", "dwa,mpc", "--trials", "3", "--first-seed", "20"]
+        argv += ["--config", str(short), "--state-source", "lidar", "--quiet"]
+        assert main([*argv, "--workers", workers, "--out", str(out)]) == 0
+        trials = read_trials(out / "trials.jsonl")
+        runs[workers] = sorted(map(comparable, trials), key=lambda t: (t["method"], t["seed"]))
+    assert len(runs["1"]) == 6 and runs["1"] == runs["2"]
