@@ -14,7 +14,7 @@ Checkpoints, policies and run states are read by `load_checked`, in three checks
 
 A failure is a `CheckpointReadError` whose message says why in a few words without the
 file's name (each caller puts its own file and flag in front), and without torch's advice
-to load with `weights_only=False`.
+to switch its safe unpickler off.
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ def refused_global(e: BaseException) -> str | None:
 
 def load_failure(e: BaseException) -> str:
     """Why a `torch.load` failed, in one short line: torch's own reason without its advice
-    to retry with `weights_only=False` (which would run the file's code)."""
+    to retry with the safe unpickler switched off (which would run the file's code)."""
     text = str(e).strip()
     m = _WEIGHTS_ONLY_REASON.search(text)
     if m and m["reason"]:

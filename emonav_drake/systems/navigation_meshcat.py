@@ -317,6 +317,16 @@ class NavigationMeshcatVisualizer(LeafSystem):
             m.SetProperty(path, "visible", False)
         self._track_pool = True
 
+    def _fill_slot(
+        self, slots: list, j: int, path: str, position: np.ndarray | None, first: bool, t: float
+    ) -> None:
+        """Show slot `j` at a track (`position`) or hide it (None); its "visible" property is
+        recorded only when that changes (and at the first publish)."""
+        shown = position is not None
+        if first or shown != (slots[j] is not None):
+            self._meshcat.SetProperty(path, "visible", shown, t)
+        slots[j] = position
+
     def _draw_tracks(self, snap, t: float) -> None:
         """The tracked crowd `snap` (a `CrowdSnapshot`) at t: each track in a slot of its
         own, kept while it lives; slots without a track hidden."""
@@ -335,10 +345,7 @@ class NavigationMeshcatVisualizer(LeafSystem):
         m = self._meshcat
         for j, i in enumerate(peds):
             path = f"{PREFIX}/tracks/pedestrians/{j}"
-            shown = i is not None
-            if first or shown != (self._ped_slots[j] is not None):
-                m.SetProperty(path, "visible", shown, t)
-            self._ped_slots[j] = None if i is None else positions[i]
+            self._fill_slot(self._ped_slots, j, path, None if i is None else positions[i], first, t)
             if i is None:
                 if first:
                     m.SetProperty(f"{path}/arrow", "visible", False, t)
@@ -361,10 +368,9 @@ class NavigationMeshcatVisualizer(LeafSystem):
                 m.SetTransform(f"{path}/arrow/head", RigidTransform([length, 0, TRACK_HEIGHT]), t)
         for j, i in enumerate(statics):
             path = f"{PREFIX}/tracks/static/{j}"
-            shown = i is not None
-            if first or shown != (self._static_slots[j] is not None):
-                m.SetProperty(path, "visible", shown, t)
-            self._static_slots[j] = None if i is None else centres[i]
+            self._fill_slot(
+                self._static_slots, j, path, None if i is None else centres[i], first, t
+            )
             if i is None:
                 continue
             cx, cy = centres[i]
