@@ -161,6 +161,10 @@ OBSTACLE_RANGES: dict[str, Any] = {
     "center": RANGES["robot.start"],
     "radius": (0.01, 5.0),  # a hand-placed disc may be larger than the sampler's
 }
+WALL_RANGES: dict[str, Any] = {
+    "start": RANGES["robot.start"],
+    "end": RANGES["robot.start"],
+}
 
 # An emotion estimate (`perception.noisy_emotions.EmotionEstimateParams`) and its head
 # camera; the confusion matrix's rows must also sum to 1 (`validate_confusion`).

@@ -34,6 +34,7 @@ from emonav_drake.core.scenario import (
     PedestrianSpec,
     Scenario,
     StaticDiscSpec,
+    WallSpec,
     load_scenario,
 )
 from emonav_drake.params import EmoNavConfig, load_config
@@ -616,6 +617,7 @@ def _list_item_schemas(schema: type) -> dict[str, type]:
         (Scenario, "SCENARIO_RANGES"),
         (PedestrianSpec, "PEDESTRIAN_RANGES"),
         (StaticDiscSpec, "OBSTACLE_RANGES"),
+        (WallSpec, "WALL_RANGES"),
         (EmotionEstimateParams, "ESTIMATE_RANGES"),
     ],
 )
@@ -640,7 +642,7 @@ def test_the_scenario_and_the_estimate_use_the_configs_ranges():
     assert r.PEDESTRIAN_RANGES["start"] == r.PEDESTRIAN_RANGES["goal"] == r.RANGES["robot.start"]
     assert r.SCENARIO_RANGES["seed"] == (-1, 2**64 - 1)
     assert r.ESTIMATE_RANGES["seed"] == r.SEED_RANGE == (0, 2**64 - 1)
-    assert set(_list_item_schemas(Scenario)) == {"pedestrians", "obstacles"}
+    assert set(_list_item_schemas(Scenario)) == {"pedestrians", "obstacles", "walls"}
     assert dc.is_dataclass(HeadCameraParams)
 
 

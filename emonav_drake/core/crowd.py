@@ -71,6 +71,8 @@ class CrowdSnapshot:
     static_centers: np.ndarray  # (S, 2) [m]
     static_radii: np.ndarray  # (S,) [m]
     static_discomfort: float  # d_static [m]
+    # (W, 2, 2) walls: segment k runs from wall_segments[k, 0] to wall_segments[k, 1] [m]
+    wall_segments: np.ndarray = dc.field(default_factory=lambda: np.zeros((0, 2, 2)))
 
 
 class Crowd:
@@ -105,6 +107,9 @@ class Crowd:
             -1, 2
         )
         self.static_radii = np.array([o.radius for o in scenario.obstacles], dtype=float)
+        self.wall_segments = np.array(
+            [[w.start, w.end] for w in scenario.walls], dtype=float
+        ).reshape(-1, 2, 2)
         # Emotion schedule: row i = codes of every pedestrian during period i.
         base = np.array([EMOTION_NAMES.index(p.emotion) for p in peds], dtype=np.int64)
         length = max([len(p.emotion_schedule) for p in peds], default=0)
@@ -202,6 +207,7 @@ class Crowd:
             static_centers=self.static_centers,
             static_radii=self.static_radii,
             static_discomfort=self.static_discomfort,
+            wall_segments=self.wall_segments,
         )
 
 

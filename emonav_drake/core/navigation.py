@@ -41,7 +41,7 @@ from emonav_drake.core.lip import LipState, lip_in_step, lip_step, lip_velocity
 from emonav_drake.core.metrics import EpisodeRecord, EpisodeTracker
 from emonav_drake.core.observations import observation_kind
 from emonav_drake.core.reward import StepEvaluation, evaluate_step
-from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec
+from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec, WallSpec
 from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.params import EmoNavConfig, RobotParams
 
@@ -337,4 +337,5 @@ def scenario_from_plain(d: dict) -> Scenario:
     d = dict(d)
     d["pedestrians"] = [PedestrianSpec(**p) for p in d.get("pedestrians", [])]
     d["obstacles"] = [StaticDiscSpec(**o) for o in d.get("obstacles", [])]
+    d["walls"] = [WallSpec(**w) for w in d.get("walls", [])]
     return Scenario(**d).validate()

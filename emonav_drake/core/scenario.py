@@ -36,6 +36,7 @@ from emonav_drake.param_ranges import (
     PEDESTRIAN_RANGES,
     SCENARIO_RANGES,
     SEED_RANGE,
+    WALL_RANGES,
 )
 from emonav_drake.params import EMOTION_NAMES, CrowdParams, EmoNavConfig
 
@@ -44,6 +45,8 @@ PLACEMENT_TRIES = 1000  # rejection-sampling draws per object
 # (crowd.max_pedestrians, crowd.max_static <= 20); the crowd's ORCA step is quadratic in it.
 MAX_PEDESTRIANS = 20
 MAX_OBSTACLES = 20
+MAX_WALLS = 40  # a corridor, a room with a door, a maze of a few cells
+MIN_WALL_LENGTH = 0.01  # [m]: a shorter segment is a point, not a wall
 # The most entries an emotion schedule in a file may hold, checked before the typed load
 # (parsing a million took 63 s): at the default period of 2 s an episode of 20 000 s, at
 # the shortest (crowd.emotion_change_period >= 0.1 s) 1000 s; the paper's 50 s episodes
@@ -84,18 +87,37 @@ class StaticDiscSpec:
 
 
 @dc.dataclass
+class WallSpec:
+    """A wall: the line segment start → end in the world frame, of no thickness.
+
+    Seen by the LiDAR, respected by the pedestrians (an ORCA obstacle, as RVO2's
+    two-vertex obstacles) and a collision for the robot (its disc must not touch it).
+    """
+
+    start: list[float] = dc.field(default_factory=lambda: [0.0, 0.0])  # [m]
+    end: list[float] = dc.field(default_factory=lambda: [1.0, 0.0])  # [m]
+
+    _REQUIRED = ("start", "end")  # in YAML (no annotation: not a field)
+
+
+@dc.dataclass
 class Scenario:
     """Everything random about one episode."""
 
     pedestrians: list[PedestrianSpec] = dc.field(default_factory=list)
     obstacles: list[StaticDiscSpec] = dc.field(default_factory=list)
+    walls: list[WallSpec] = dc.field(default_factory=list)
     robot_start: list[float] = dc.field(default_factory=lambda: [-4.0, 0.0])
     robot_goal: list[float] = dc.field(default_factory=lambda: [4.0, 0.0])
     robot_heading: float = 0.0  # initial heading [rad]
     emotion_change_period: float = 2.0  # [s], used when a schedule is present
     seed: int = -1  # the seed it was sampled with, −1 when written by hand
 
-    _MAX_ITEMS = {"pedestrians": MAX_PEDESTRIANS, "obstacles": MAX_OBSTACLES}  # in YAML
+    _MAX_ITEMS = {  # in YAML
+        "pedestrians": MAX_PEDESTRIANS,
+        "obstacles": MAX_OBSTACLES,
+        "walls": MAX_WALLS,
+    }
 
     def validate(
         self, robot_radius: float = 0.3, pedestrian_radius: float = 0.3, goal_radius: float = 0.2
@@ -130,6 +152,8 @@ class Scenario:
             raise ConfigError(
                 f"obstacles: {len(self.obstacles)} given, at most {MAX_OBSTACLES} allowed"
             )
+        if len(self.walls) > MAX_WALLS:
+            raise ConfigError(f"walls: {len(self.walls)} given, at most {MAX_WALLS} allowed")
         if not (self.seed == -1 or 0 <= self.seed <= MAX_SEED):
             raise ConfigError(
                 f"seed = {self.seed!r} is invalid: must be -1 (written by hand) or in "
@@ -151,6 +175,14 @@ class Scenario:
                     )
         for i, o in enumerate(self.obstacles):
             validate_ranges(o, OBSTACLE_RANGES, prefix=f"obstacles[{i}].")
+        for i, w in enumerate(self.walls):
+            validate_ranges(w, WALL_RANGES, prefix=f"walls[{i}].")
+            if math.dist(w.start, w.end) < MIN_WALL_LENGTH:
+                raise ConfigError(
+                    f"walls[{i}]: start {w.start!r} and end {w.end!r} are "
+                    f"{math.dist(w.start, w.end):.3g} m apart; a wall must be at least "
+                    f"{MIN_WALL_LENGTH} m long"
+                )
 
     def _check_robot_placement(self, robot_radius: float, goal_radius: float) -> None:
         """The robot's start and goal clear of every obstacle, its goal not within
@@ -164,6 +196,14 @@ class Scenario:
                         f"{name} = {point!r} is inside obstacles[{i}] (center {o.center!r}, "
                         f"radius {o.radius}): the robot (radius {robot_radius} m) must stand "
                         f"clear of it ({-gap:.2f} m overlap)"
+                    )
+            for i, w in enumerate(self.walls):
+                gap = point_segment_distance(point, w.start, w.end) - robot_radius
+                if gap < 0:
+                    raise ConfigError(
+                        f"{name} = {point!r} touches walls[{i}] ({w.start!r} → {w.end!r}): "
+                        f"the robot (radius {robot_radius} m) must stand clear of it "
+                        f"({-gap:.2f} m overlap)"
                     )
         if math.dist(self.robot_start, self.robot_goal) <= goal_radius:
             raise ConfigError(
@@ -197,6 +237,22 @@ class Scenario:
                             f"(center {o.center!r}, radius {o.radius}): the pedestrian (radius "
                             f"{pedestrian_radius} m) must stand clear of it"
                         )
+                for k, w in enumerate(self.walls):
+                    if point_segment_distance(point, w.start, w.end) < pedestrian_radius:
+                        raise ConfigError(
+                            f"pedestrians[{i}].{where} = {point!r} touches walls[{k}] "
+                            f"({w.start!r} → {w.end!r}): the pedestrian (radius "
+                            f"{pedestrian_radius} m) must stand clear of it"
+                        )
+
+
+def point_segment_distance(point: list[float], a: list[float], b: list[float]) -> float:
+    """Distance [m] from `point` to the segment a → b (all world [m])."""
+    (px, py), (ax, ay), (bx, by) = point, a, b
+    dx, dy = bx - ax, by - ay
+    length2 = dx * dx + dy * dy
+    t = 0.0 if length2 == 0 else min(1.0, max(0.0, ((px - ax) * dx + (py - ay) * dy) / length2))
+    return math.hypot(px - ax - t * dx, py - ay - t * dy)
 
 
 def load_scenario(path: str | Path, config: EmoNavConfig | None = None) -> Scenario:
