@@ -70,8 +70,9 @@ def _validate_ranges(obj: Any, ranges: dict[str, Any], prefix: str, key: str = "
 
     `ranges` maps a dotted field name (relative to `obj`) to (low, high) inclusive —
     either bound may be None for "no bound" — or, for a list field, (length, low, high)
-    for each element (of each row, for a list of lists). `prefix` goes before the field's
-    name in the messages.
+    for each element (of each row, for a list of lists; length None: any number of them).
+    `prefix` goes before the field's name in the messages; an unset optional field (None)
+    is not checked.
     """
     for f in dc.fields(obj):
         name, dotted = f"{prefix}{f.name}", f"{key}{f.name}"
@@ -82,11 +83,11 @@ def _validate_ranges(obj: Any, ranges: dict[str, Any], prefix: str, key: str = "
         if isinstance(value, float) and not math.isfinite(value):
             raise ConfigError(f"{name} = {value!r} is invalid: must be a finite number")
         spec = ranges.get(dotted)
-        if spec is None:
+        if spec is None or value is None:  # an unset optional field has no range to check
             continue
         if len(spec) == 3:
             length, lo, hi = spec
-            if len(value) != length:
+            if length is not None and len(value) != length:
                 raise ConfigError(
                     f"{name} = {short_repr(value)} is invalid: must have {length} elements"
                 )
@@ -115,8 +116,8 @@ def validate_ranges(obj: Any, ranges: dict[str, Any], prefix: str = "") -> None:
     raise `ConfigError` "`prefix``field` = value is out of range: …" for the first outside.
 
     `ranges`: dotted field name relative to `obj` → (low, high) inclusive (None: no bound),
-    or (length, low, high) for a list field's elements. A non-finite float is refused in
-    any field.
+    or (length, low, high) for a list field's elements (length None: any length). A
+    non-finite float is refused in any field.
     """
     _validate_ranges(obj, ranges, prefix)
 

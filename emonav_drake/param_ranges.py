@@ -153,9 +153,15 @@ SCENARIO_RANGES: dict[str, Any] = {
     "seed": (-1, SEED_RANGE[1]),
 }
 # Its pedestrians (`PedestrianSpec`) and obstacles (`StaticDiscSpec`): in the robot's world.
+MAX_GROUPS = 20  # group numbers 0 … 20 (a scenario holds at most 20 pedestrians)
 PEDESTRIAN_RANGES: dict[str, Any] = {
     "start": RANGES["robot.start"],
     "goal": RANGES["robot.start"],
+    "waypoints": (None, *RANGES["robot.start"][1:]),  # any number of points [x, y]
+    "speed": (0.05, 2.0),  # [m/s] walking; 1.0 is the paper's "high walking speed"
+    "stand_time": (0.0, 1000.0),  # [s]
+    "start_delay": (0.0, 1000.0),  # [s]
+    "group": (-1, MAX_GROUPS),
 }
 OBSTACLE_RANGES: dict[str, Any] = {
     "center": RANGES["robot.start"],

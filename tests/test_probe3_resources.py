@@ -19,6 +19,7 @@ import subprocess
 import sys
 import textwrap
 import time
+import types
 import typing
 import zlib
 from pathlib import Path
@@ -585,6 +586,8 @@ def _numeric(kind: typing.Any) -> bool:
     """int, float or (nested) lists of them; bool is not numeric."""
     if kind in (int, float):
         return True
+    if typing.get_origin(kind) in (typing.Union, types.UnionType):  # float | None
+        return any(_numeric(k) for k in typing.get_args(kind) if k is not type(None))
     if typing.get_origin(kind) is list:
         return _numeric(typing.get_args(kind)[0])
     return False

@@ -22,6 +22,7 @@ import math
 import numpy as np
 
 from emonav_drake.core.orca import OrcaParams, orca_velocities
+from emonav_drake.core.pedestrian_routes import RoutePlan
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 
@@ -36,6 +37,12 @@ class CrowdState:
     origins: np.ndarray  # (P, 2) the other end of each pedestrian's route [m]
     emotions: np.ndarray  # (P,) int emotion codes in force now
     substep: int  # number of crowd periods since the episode began
+    # Route progress of the pedestrians that are not the paper's plain walkers
+    # (`core/pedestrian_routes.py`): index of `goals` in the route, walking it back,
+    # periods left standing (−1: for good). None in states saved before routes existed.
+    targets: np.ndarray | None = None  # (P,) int
+    backwards: np.ndarray | None = None  # (P,) bool
+    waits: np.ndarray | None = None  # (P,) int
 
     def to_plain(self) -> dict:
         """The state as plain data (copies of the arrays; `from_plain` reads it back)."""
@@ -52,7 +59,10 @@ class CrowdState:
                 raise ValueError(f"crowd {name} have shape {np.shape(d[name])}, expected {p}")
         if np.shape(d["emotions"]) != p[:1]:
             raise ValueError(f"crowd emotions have shape {np.shape(d['emotions'])}")
-        return cls(**{f.name: _copy(d[f.name]) for f in dc.fields(cls)})
+        for name in ("targets", "backwards", "waits"):
+            if d.get(name) is not None and np.shape(d[name]) != p[:1]:
+                raise ValueError(f"crowd {name} have shape {np.shape(d[name])}, expected {p[:1]}")
+        return cls(**{f.name: _copy(d.get(f.name)) for f in dc.fields(cls)})
 
 
 def _copy(v: object) -> object:
@@ -102,7 +112,8 @@ class Crowd:
         peds = scenario.pedestrians
         self.num_pedestrians = len(peds)
         self._starts = np.array([p.start for p in peds], dtype=float).reshape(-1, 2)
-        self._goals = np.array([p.goal for p in peds], dtype=float).reshape(-1, 2)
+        self.routes = RoutePlan.from_specs(peds, self.preferred_speed, self.dt)
+        self._all_plain = bool(self.routes.plain.all())
         self.static_centers = np.array([o.center for o in scenario.obstacles], dtype=float).reshape(
             -1, 2
         )
@@ -126,10 +137,12 @@ class Crowd:
         n = self.num_pedestrians + 1
         self._radii = np.full(n, self.radius + self.safety_space)
         self._radii[-1] = self.robot_radius + self.safety_space
-        self._max_speeds = np.full(n, self.preferred_speed)
+        self._max_speeds = np.append(self.routes.max_speeds, self.preferred_speed)
         self._active = np.ones(n, dtype=bool)
         self._active[-1] = False
         self._visible = ~np.eye(n, dtype=bool)
+        # Members of a group keep their formation instead of avoiding each other.
+        self._visible[:-1, :-1] &= ~self.routes.same_group()
 
     def emotions_at(self, substep: int) -> np.ndarray:
         """Emotion codes in force after `substep` crowd periods."""
@@ -138,13 +151,17 @@ class Crowd:
 
     def initial_state(self) -> CrowdState:
         """Pedestrians at rest at their starts."""
+        p = self.num_pedestrians
         return CrowdState(
             positions=self._starts.copy(),
             velocities=np.zeros_like(self._starts),
-            goals=self._goals.copy(),
+            goals=self.routes.first_targets(),
             origins=self._starts.copy(),
             emotions=self.emotions_at(0),
             substep=0,
+            targets=np.ones(p, dtype=np.int64),
+            backwards=np.zeros(p, dtype=bool),
+            waits=self.routes.delay_substeps.copy(),
         )
 
     def step(
@@ -154,16 +171,26 @@ class Crowd:
         if self.num_pedestrians == 0:
             return dc.replace(state, substep=state.substep + 1)
         goals, origins = state.goals.copy(), state.origins.copy()
-        # Turn round at the goal: swap the route's ends.
+        plain = self.routes.plain
+        # The paper's pedestrians turn round at the goal: swap the route's ends.
         to_goal = goals - state.positions
-        arrived = np.hypot(to_goal[:, 0], to_goal[:, 1]) < self.goal_tolerance
+        arrived = plain & (np.hypot(to_goal[:, 0], to_goal[:, 1]) < self.goal_tolerance)
         if arrived.any():
             goals[arrived], origins[arrived] = state.origins[arrived], state.goals[arrived]
-            to_goal = goals - state.positions
+        targets, backwards, waits = _route_progress(state)
+        standing = None
+        if not self._all_plain:
+            standing = self.routes.advance(
+                state.positions, goals, origins, targets, backwards, waits, self.goal_tolerance
+            )
+        to_goal = goals - state.positions
         dist = np.hypot(to_goal[:, 0], to_goal[:, 1])
         # Preferred velocity: towards the goal, slowing to arrive exactly in one period.
-        speed = np.minimum(self.preferred_speed, dist / self.dt)
+        speed = np.minimum(self.routes.speeds, dist / self.dt)
         pref = to_goal * (speed / np.maximum(dist, 1e-9))[:, None]
+        if standing is not None:
+            pref[standing] = 0.0
+            self.routes.follower_velocities(state.positions, state.velocities, pref)
 
         positions = np.vstack([state.positions, robot_xy[None, :]])
         velocities = np.vstack([state.velocities, robot_velocity[None, :]])
@@ -194,6 +221,9 @@ class Crowd:
             origins=origins,
             emotions=self.emotions_at(substep),
             substep=substep,
+            targets=targets,
+            backwards=backwards,
+            waits=waits,
         )
 
     def snapshot(self, state: CrowdState) -> CrowdSnapshot:
@@ -209,6 +239,14 @@ class Crowd:
             static_discomfort=self.static_discomfort,
             wall_segments=self.wall_segments,
         )
+
+
+def _route_progress(state: CrowdState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Copies of the state's route progress (a state saved before routes: the start's)."""
+    p = len(state.positions)
+    if state.targets is None:
+        return np.ones(p, dtype=np.int64), np.zeros(p, dtype=bool), np.zeros(p, dtype=np.int64)
+    return state.targets.copy(), state.backwards.copy(), state.waits.copy()
 
 
 def obstacle_discs(snapshot: CrowdSnapshot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -45,6 +45,8 @@ PLACEMENT_TRIES = 1000  # rejection-sampling draws per object
 # (crowd.max_pedestrians, crowd.max_static <= 20); the crowd's ORCA step is quadratic in it.
 MAX_PEDESTRIANS = 20
 MAX_OBSTACLES = 20
+MAX_WAYPOINTS = 50  # per pedestrian
+AT_GOAL = ("return", "stand")  # what a pedestrian does at its goal
 MAX_WALLS = 40  # a corridor, a room with a door, a maze of a few cells
 MIN_WALL_LENGTH = 0.01  # [m]: a shorter segment is a point, not a wall
 # The most entries an emotion schedule in a file may hold, checked before the typed load
@@ -63,7 +65,13 @@ class ScenarioSamplingError(ConfigError):
 
 @dc.dataclass
 class PedestrianSpec:
-    """One pedestrian: walks start → goal → start … at the preferred speed (ORCA)."""
+    """One pedestrian: walks start → waypoints → goal and back … at its preferred speed (ORCA).
+
+    The paper's pedestrian sets only start, goal and emotion: it walks start → goal →
+    start … at the crowd's preferred speed. The other fields make the scenes of the
+    scenario families: a speed of its own, a route through waypoints, standing at the
+    goal for good or for a while at each end, a delayed start, and walking in a group.
+    """
 
     start: list[float] = dc.field(default_factory=lambda: [0.0, 4.0])  # world [m]
     goal: list[float] = dc.field(default_factory=lambda: [0.0, -4.0])  # world [m]
@@ -71,9 +79,24 @@ class PedestrianSpec:
     # Time-varying mode: emotion_schedule[i] holds during [i·period, (i+1)·period).
     # Empty: the emotion is constant.
     emotion_schedule: list[str] = dc.field(default_factory=list)
+    # Preferred (and ORCA maximum) speed [m/s]; None: the crowd's `preferred_speed`.
+    speed: float | None = None
+    # Points walked through between start and goal, in order (and reversed on the way back).
+    waypoints: list[list[float]] = dc.field(default_factory=list)  # world [m]
+    # At the goal: "return" walks the route back (and so on), "stand" stops there for good.
+    at_goal: str = "return"
+    stand_time: float = 0.0  # [s] standing at each end of the route before turning round
+    start_delay: float = 0.0  # [s] standing at the start before walking
+    # Pedestrians with the same group number (>= 0) walk as a group: the first of them in
+    # the list leads (its route, speed and behaviour), the others keep their start offset
+    # from the leader (world frame) while avoiding; their goals and routes are not used.
+    group: int = -1
 
     _REQUIRED = ("start", "goal", "emotion")  # in YAML (no annotation: not a field)
-    _MAX_ITEMS = {"emotion_schedule": MAX_SCHEDULE}  # in YAML, before the typed load
+    _MAX_ITEMS = {  # in YAML, before the typed load
+        "emotion_schedule": MAX_SCHEDULE,
+        "waypoints": MAX_WAYPOINTS,
+    }
 
 
 @dc.dataclass
@@ -166,6 +189,7 @@ class Scenario:
         (`PEDESTRIAN_RANGES`, `OBSTACLE_RANGES`)."""
         for i, p in enumerate(self.pedestrians):
             validate_ranges(p, PEDESTRIAN_RANGES, prefix=f"pedestrians[{i}].")
+            _check_route(p, f"pedestrians[{i}].")
             for j, e in enumerate([p.emotion, *p.emotion_schedule]):
                 if e not in EMOTION_NAMES:
                     where = "emotion" if j == 0 else f"emotion_schedule[{j - 1}]"
@@ -228,8 +252,9 @@ class Scenario:
                         f"= {q.start!r}: pedestrians (radius {pedestrian_radius} m) must start "
                         f"at least {2 * pedestrian_radius:g} m apart"
                     )
-            for where in ("start", "goal"):
-                point = getattr(p, where)
+            points = [("start", p.start), ("goal", p.goal)]
+            points += [(f"waypoints[{k}]", w) for k, w in enumerate(p.waypoints)]
+            for where, point in points:
                 for k, o in enumerate(self.obstacles):
                     if math.dist(point, o.center) < o.radius + pedestrian_radius:
                         raise ConfigError(
@@ -244,6 +269,20 @@ class Scenario:
                             f"({w.start!r} → {w.end!r}): the pedestrian (radius "
                             f"{pedestrian_radius} m) must stand clear of it"
                         )
+
+
+def _check_route(p: PedestrianSpec, prefix: str) -> None:
+    """A pedestrian's waypoints are points [x, y] (their ranges: `PEDESTRIAN_RANGES`); its
+    `at_goal` is one of `AT_GOAL`."""
+    for k, w in enumerate(p.waypoints):
+        if len(w) != 2:
+            raise ConfigError(
+                f"{prefix}waypoints[{k}] = {short_repr(w)} is invalid: must be a point [x, y]"
+            )
+    if p.at_goal not in AT_GOAL:
+        raise ConfigError(
+            f"{prefix}at_goal = {short_repr(p.at_goal)} is invalid: must be one of {list(AT_GOAL)}"
+        )
 
 
 def point_segment_distance(point: list[float], a: list[float], b: list[float]) -> float:
