@@ -2,7 +2,7 @@
 
 Tables of data, read through `config_yaml.validate_ranges`: the dotted field name → its
 bounds, both ends finite. `RANGES` is `EmoNavConfig`'s (`params.py`); `SCENARIO_RANGES`,
-`PEDESTRIAN_RANGES` and `OBSTACLE_RANGES` are a scenario file's (`core/scenario.py`),
+`PEDESTRIAN_RANGES` and `OBSTACLE_RANGES` are a scenario file's (`core/scenario_spec.py`),
 taken from `RANGES` wherever a scenario holds what a configuration holds (the robot's
 start and goal, the emotion change period), so that a file and a configuration are held
 to one range; `ESTIMATE_RANGES` is an emotion estimate's (`perception/noisy_emotions.py`).

@@ -106,6 +106,8 @@ class CrowdParams:
     emotion_probs: list[float] = dc.field(default_factory=lambda: [1 / 3, 1 / 3, 1 / 3])
     time_varying_emotions: bool = False  # one pedestrian's emotion changes periodically
     emotion_change_period: float = 2.0  # time-varying mode: period of the changes [s]
+    # The scenario sampler (core/scenario_families.py): "paper" is §IV-B's arena
+    family: str = "paper"
 
 
 @dc.dataclass
@@ -191,6 +193,26 @@ class MpcParams:
     # planner counts it (time_limit_hits) and warns
     time_limit: float = 1.0  # OSQP wall-clock limit per QP, a safety only [s]
 
+
+# The named scenario samplers (`CrowdParams.family`, core/scenario_families.py).
+SCENARIO_FAMILIES = (
+    "paper",
+    "circle_crossing",
+    "parallel_traffic",
+    "perpendicular_traffic",
+    "robot_crowding",
+    "delayed_crossing",
+    "crossing_with_obstacles",
+    "corner_traffic",
+    "blocker",
+    "group_approach",
+    "all_dynamic",
+    "corridor_head_on",
+    "dense_8",
+    "dense_12",
+    "dense_20",
+    "fast_pedestrians",
+)
 
 # Where the model-based planners' crowd state comes from (`PerceptionParams.state_source`).
 STATE_SOURCES = ("truth", "lidar")
@@ -331,6 +353,8 @@ class EmoNavConfig:
             li.min_range,
             f"< lidar.max_range ({li.max_range})",
         )
+        family = self.crowd.family
+        require(family in SCENARIO_FAMILIES, "crowd.family", family, f"one of {SCENARIO_FAMILIES}")
         source = self.perception.state_source
         require(source in STATE_SOURCES, "perception.state_source", source, '"truth" or "lidar"')
         w = self.walking

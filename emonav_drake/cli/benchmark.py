@@ -14,7 +14,12 @@ from emonav_drake.cli.common import (
     check_workers,
     emotion_estimate_of,
 )
-from emonav_drake.cli.config import add_config_choice, add_state_source, resolve_config
+from emonav_drake.cli.config import (
+    add_config_choice,
+    add_family,
+    add_state_source,
+    resolve_config,
+)
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.diagrams.trials import MAX_TRIALS
 from emonav_drake.params import ConfigError
@@ -84,6 +89,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     b.add_argument("--time-varying", action="store_true", help=TIME_VARYING_HELP)
     add_emotion_flags(b)
     add_state_source(b)
+    add_family(b)
     b.add_argument(
         "--checkpoint",
         action="append",

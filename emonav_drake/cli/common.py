@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from emonav_drake.atomic_io import check_distinct, check_output_file, write_text_atomic
-from emonav_drake.cli.config import add_config_choice, add_state_source
+from emonav_drake.cli.config import add_config_choice, add_family, add_state_source
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners import is_learned
 
@@ -125,6 +125,7 @@ def add_episode_flags(p: argparse.ArgumentParser) -> None:
     )
     add_emotion_flags(p)
     add_state_source(p)
+    add_family(p)
     p.add_argument(
         "--time-varying",
         action="store_true",

@@ -2,7 +2,8 @@
 
 Every sub-command that runs on an `EmoNavConfig` resolves it here, in one order:
 `--setting NAME` (a shipped setting, `emonav_drake/configs/NAME.yaml`), else
-`--config F.yaml`, else the defaults; then `--time-varying` and `--state-source` on top.
+`--config F.yaml`, else the defaults; then `--time-varying`, `--state-source` and
+`--family` on top.
 `--setting` and `--config` are mutually exclusive (`add_config_choice`); a sub-command
 without one of these flags resolves as if it were not given. `sim` and `lgm` also take a scenario
 (`--scenario NAME|F.yaml`, else one sampled from the seed): `resolve_scenario`.
@@ -40,14 +41,17 @@ class ResolvedConfig:
     origin: str  # "--setting NAME", "--config F" or "the default configuration"
     time_varying: bool  # --time-varying was given (applied to `config` already)
     state_source: str | None = None  # --state-source, if given (applied to `config`)
+    family: str | None = None  # --family, if given (applied to `config`)
 
     @property
     def source(self) -> str:
-        """`origin` plus " --time-varying" / " --state-source S" when given (recorded by
-        `benchmark`, printed by `config`)."""
+        """`origin` plus " --time-varying" / " --state-source S" / " --family F" when given
+        (recorded by `benchmark`, printed by `config`)."""
         flags = " --time-varying" if self.time_varying else ""
         if self.state_source is not None:
             flags += f" --state-source {self.state_source}"
+        if self.family is not None:
+            flags += f" --family {self.family}"
         return self.origin + flags
 
 
@@ -72,7 +76,10 @@ def resolve_config(args: argparse.Namespace) -> ResolvedConfig:
     state_source = getattr(args, "state_source", None)
     if state_source is not None:
         cfg.perception.state_source = state_source
-    return ResolvedConfig(cfg, setting, origin, time_varying, state_source)
+    family = getattr(args, "family", None)
+    if family is not None:
+        cfg.crowd.family = family
+    return ResolvedConfig(cfg, setting, origin, time_varying, state_source, family)
 
 
 def add_config_choice(p: argparse.ArgumentParser) -> None:
@@ -96,6 +103,20 @@ def add_state_source(p: argparse.ArgumentParser) -> None:
     from emonav_drake.params import STATE_SOURCES
 
     p.add_argument("--state-source", choices=STATE_SOURCES, help=STATE_SOURCE_HELP)
+
+
+FAMILY_HELP = (
+    "the scenario family the seeds sample (emonav config --list shows them with one line "
+    "each): paper (the paper's arena), crossing and traffic patterns, a blocker, a group, "
+    "corridors, dense and fast crowds; default: the configuration's crowd.family, paper"
+)
+
+
+def add_family(p: argparse.ArgumentParser) -> None:
+    """`--family NAME` (`CrowdParams.family`, `core/scenario_families.py`)."""
+    from emonav_drake.params import SCENARIO_FAMILIES
+
+    p.add_argument("--family", choices=SCENARIO_FAMILIES, metavar="NAME", help=FAMILY_HELP)
 
 
 def sample(seed: int, resolved: ResolvedConfig) -> Scenario:

@@ -16,7 +16,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from emonav_drake.cli.config import add_config_choice, resolve_config
+from emonav_drake.cli.config import add_config_choice, add_family, resolve_config
 from emonav_drake.params import ConfigError
 
 TIME_VARYING_HELP = "one pedestrian's emotion changes every 2 s (paper §IV-F)"
@@ -43,9 +43,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         help="print the configuration without the comments (the plain YAML)",
     )
     c.add_argument(
-        "--list", action="store_true", help="list the named settings and example scenarios"
+        "--list",
+        action="store_true",
+        help="list the named settings, example scenarios and scenario families",
     )
     add_config_choice(c)
+    add_family(c)
     c.add_argument("--time-varying", action="store_true", help=TIME_VARYING_HELP)
     c.set_defaults(func=cmd_config)
     return c
@@ -65,6 +68,7 @@ def cmd_config(args: argparse.Namespace) -> int:
                 ("--setting", args.setting),
                 ("--config", args.config),
                 ("--time-varying", args.time_varying),
+                ("--family", args.family),
             )
             if value
         ]
@@ -85,6 +89,7 @@ def cmd_config(args: argparse.Namespace) -> int:
 def _list_examples() -> str:
     """The named settings and example scenarios shipped with the package, one per line."""
     from emonav_drake.configs import SETTINGS, setting_path
+    from emonav_drake.core.scenario_families import FAMILIES
     from emonav_drake.scenarios import EXAMPLES, SCENARIO_DIR
 
     def first_comment(path: Path) -> str:
@@ -97,4 +102,6 @@ def _list_examples() -> str:
     lines += [f"  {n:14s} {first_comment(setting_path(n))}" for n in SETTINGS]
     lines.append("example scenarios (emonav sim --scenario NAME):")
     lines += [f"  {n:14s} {first_comment(SCENARIO_DIR / f'{n}.yaml')}" for n in EXAMPLES]
+    lines.append("scenario families (--family NAME; each seed samples one scene):")
+    lines += [f"  {f.name:24s} {f.summary}" for f in FAMILIES.values()]
     return "\n".join(lines) + "\n"

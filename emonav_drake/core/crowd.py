@@ -199,6 +199,16 @@ class Crowd:
         visible = self._visible.copy()
         ped_speed = np.hypot(state.velocities[:, 0], state.velocities[:, 1])
         visible[:-1, -1] = ped_speed > math.hypot(robot_velocity[0], robot_velocity[1])
+        active, centers, radii = self._active, self.static_centers, self.static_radii
+        if standing is not None and standing.any():
+            # A standing pedestrian holds its spot: to the others it is a static disc
+            # (they avoid it fully), and ORCA does not move it.
+            active = active.copy()
+            active[:-1] &= ~standing
+            visible[:, :-1] &= ~standing[None, :]
+            velocities[:-1][standing] = 0.0
+            centers = np.vstack([centers, state.positions[standing]])
+            radii = np.concatenate([radii, self._radii[:-1][standing]])
         new_v = orca_velocities(
             positions,
             velocities,
@@ -207,10 +217,10 @@ class Crowd:
             self._max_speeds,
             self.dt,
             self.orca,
-            obstacle_centers=self.static_centers,
-            obstacle_radii=self.static_radii,
+            obstacle_centers=centers,
+            obstacle_radii=radii,
             visible=visible,
-            active=self._active,
+            active=active,
             check_inputs=False,  # arrays built here, float64/bool, shapes fixed per crowd
         )[:-1]
         substep = state.substep + 1

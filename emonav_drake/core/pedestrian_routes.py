@@ -3,7 +3,7 @@
 The paper's pedestrian walks start → goal → start … at the crowd's preferred speed; the
 crowd (`core/crowd.py`) computes its preferred velocity with vectorised numpy, and this
 module leaves it alone (a *plain* pedestrian). The scenario families need more, given per
-pedestrian in `core/scenario.py::PedestrianSpec`:
+pedestrian in `core/scenario_spec.py::PedestrianSpec`:
 
 * a **route** start → waypoints → goal, walked back in reverse at the goal;
 * **standing**: for good at the goal (`at_goal: stand`), for `stand_time` at each end of
@@ -60,7 +60,7 @@ class RoutePlan:
 
     @classmethod
     def from_specs(cls, pedestrians: list, default_speed: float, dt: float) -> RoutePlan:
-        """The plan of `core/scenario.py::PedestrianSpec`s; `default_speed` [m/s] for a
+        """The plan of `core/scenario_spec.py::PedestrianSpec`s; `default_speed` [m/s] for a
         pedestrian without a speed, `dt` [s] the crowd's period."""
         p = len(pedestrians)
         routes = tuple(

@@ -1,466 +1,71 @@
 """Navigation scenarios: what the paper's environment randomises, as plain data.
 
 A `Scenario` fixes everything random about one episode: pedestrians (start, goal,
-emotion and, in the time-varying mode, an emotion schedule), static discs and the
-robot's start and goal. `sample_scenario(seed, config)` draws one as the paper does
-(§IV-B); the same seed gives the same scenario. Scenarios also load from YAML
-(`load_scenario`), with every field validated: a pedestrian needs `start`, `goal` and
-`emotion`, an obstacle `center` and `radius` (no silent defaults); the robot's start
-and goal must be clear of every obstacle, its start clear of every pedestrian's and its
-goal farther than the goal radius from its start; pedestrians must not start overlapping
-each other nor start or head for a spot inside an obstacle; at most `MAX_PEDESTRIANS`
-pedestrians and `MAX_OBSTACLES` obstacles, and a file's emotion schedules at most
-`MAX_SCHEDULE` entries (refused before the typed load). Every number has its range in
-`param_ranges.py` (`SCENARIO_RANGES`, `PEDESTRIAN_RANGES`, `OBSTACLE_RANGES`), the
-configuration's where a scenario holds the same quantity.
+emotion, behaviour), static discs, walls and the robot's start and goal. The data and its
+validation live in `core/scenario_spec.py`, the paper's sampler in
+`core/paper_scenario.py`, the other scenario families in `core/scenario_families.py`;
+this module gathers them: `sample_scenario(seed, config)` draws the scenario of `seed` in
+the configuration's family (`crowd.family`, "paper" by default), `load_scenario` reads
+one from YAML, `dump_scenario` writes it.
 
 World frame: x towards the robot's goal, y left, metres.
 """
 
-# No `from __future__ import annotations`: Drake's typed YAML loader needs real types.
-import dataclasses as dc
-import math
-from pathlib import Path
-
-import numpy as np
-
-from emonav_drake.config_yaml import (
-    ConfigError,
-    dump_typed_yaml,
-    load_typed_yaml_raw,
-    short_repr,
-    validate_ranges,
+from emonav_drake.core.paper_scenario import (
+    PLACEMENT_TRIES,
+    add_time_varying_emotion,
+    sample_paper_scenario,
 )
-from emonav_drake.param_ranges import (
-    OBSTACLE_RANGES,
-    PEDESTRIAN_RANGES,
-    SCENARIO_RANGES,
-    SEED_RANGE,
-    WALL_RANGES,
+from emonav_drake.core.scenario_families import sample_family
+from emonav_drake.core.scenario_spec import (
+    AT_GOAL,
+    MAX_OBSTACLES,
+    MAX_PEDESTRIANS,
+    MAX_SCHEDULE,
+    MAX_SEED,
+    MAX_WALLS,
+    MAX_WAYPOINTS,
+    PedestrianSpec,
+    Scenario,
+    ScenarioSamplingError,
+    StaticDiscSpec,
+    WallSpec,
+    dump_scenario,
+    load_scenario,
+    point_segment_distance,
 )
-from emonav_drake.params import EMOTION_NAMES, CrowdParams, EmoNavConfig
+from emonav_drake.params import EmoNavConfig
 
-PLACEMENT_TRIES = 1000  # rejection-sampling draws per object
-# The most a scenario may hold: what the sampler can be configured to draw
-# (crowd.max_pedestrians, crowd.max_static <= 20); the crowd's ORCA step is quadratic in it.
-MAX_PEDESTRIANS = 20
-MAX_OBSTACLES = 20
-MAX_WAYPOINTS = 50  # per pedestrian
-AT_GOAL = ("return", "stand")  # what a pedestrian does at its goal
-MAX_WALLS = 40  # a corridor, a room with a door, a maze of a few cells
-MIN_WALL_LENGTH = 0.01  # [m]: a shorter segment is a point, not a wall
-# The most entries an emotion schedule in a file may hold, checked before the typed load
-# (parsing a million took 63 s): at the default period of 2 s an episode of 20 000 s, at
-# the shortest (crowd.emotion_change_period >= 0.1 s) 1000 s; the paper's 50 s episodes
-# need 26. The crowd holds the last entry beyond the schedule.
-MAX_SCHEDULE = 10_000
-# Seeds are 64-bit unsigned integers: a larger one would alias a smaller one (the episode's
-# step-response generator takes `seed % 2**64`).
-MAX_SEED = SEED_RANGE[1]
-
-
-class ScenarioSamplingError(ConfigError):
-    """The configured crowd does not fit: an object found no free spot (the message says which)."""
-
-
-@dc.dataclass
-class PedestrianSpec:
-    """One pedestrian: walks start → waypoints → goal and back … at its preferred speed (ORCA).
-
-    The paper's pedestrian sets only start, goal and emotion: it walks start → goal →
-    start … at the crowd's preferred speed. The other fields make the scenes of the
-    scenario families: a speed of its own, a route through waypoints, standing at the
-    goal for good or for a while at each end, a delayed start, and walking in a group.
-    """
-
-    start: list[float] = dc.field(default_factory=lambda: [0.0, 4.0])  # world [m]
-    goal: list[float] = dc.field(default_factory=lambda: [0.0, -4.0])  # world [m]
-    emotion: str = "neutral"  # happy | neutral | negative
-    # Time-varying mode: emotion_schedule[i] holds during [i·period, (i+1)·period).
-    # Empty: the emotion is constant.
-    emotion_schedule: list[str] = dc.field(default_factory=list)
-    # Preferred (and ORCA maximum) speed [m/s]; None: the crowd's `preferred_speed`.
-    speed: float | None = None
-    # Points walked through between start and goal, in order (and reversed on the way back).
-    waypoints: list[list[float]] = dc.field(default_factory=list)  # world [m]
-    # At the goal: "return" walks the route back (and so on), "stand" stops there for good.
-    at_goal: str = "return"
-    stand_time: float = 0.0  # [s] standing at each end of the route before turning round
-    start_delay: float = 0.0  # [s] standing at the start before walking
-    # Pedestrians with the same group number (>= 0) walk as a group: the first of them in
-    # the list leads (its route, speed and behaviour), the others keep their start offset
-    # from the leader (world frame) while avoiding; their goals and routes are not used.
-    group: int = -1
-
-    _REQUIRED = ("start", "goal", "emotion")  # in YAML (no annotation: not a field)
-    _MAX_ITEMS = {  # in YAML, before the typed load
-        "emotion_schedule": MAX_SCHEDULE,
-        "waypoints": MAX_WAYPOINTS,
-    }
-
-
-@dc.dataclass
-class StaticDiscSpec:
-    """A static obstacle: a disc in the world frame."""
-
-    center: list[float] = dc.field(default_factory=lambda: [0.0, 0.0])  # [m]
-    radius: float = 0.3  # [m]
-
-    _REQUIRED = ("center", "radius")  # in YAML (no annotation: not a field)
-
-
-@dc.dataclass
-class WallSpec:
-    """A wall: the line segment start → end in the world frame, of no thickness.
-
-    Seen by the LiDAR, respected by the pedestrians (an ORCA obstacle, as RVO2's
-    two-vertex obstacles) and a collision for the robot (its disc must not touch it).
-    """
-
-    start: list[float] = dc.field(default_factory=lambda: [0.0, 0.0])  # [m]
-    end: list[float] = dc.field(default_factory=lambda: [1.0, 0.0])  # [m]
-
-    _REQUIRED = ("start", "end")  # in YAML (no annotation: not a field)
-
-
-@dc.dataclass
-class Scenario:
-    """Everything random about one episode."""
-
-    pedestrians: list[PedestrianSpec] = dc.field(default_factory=list)
-    obstacles: list[StaticDiscSpec] = dc.field(default_factory=list)
-    walls: list[WallSpec] = dc.field(default_factory=list)
-    robot_start: list[float] = dc.field(default_factory=lambda: [-4.0, 0.0])
-    robot_goal: list[float] = dc.field(default_factory=lambda: [4.0, 0.0])
-    robot_heading: float = 0.0  # initial heading [rad]
-    emotion_change_period: float = 2.0  # [s], used when a schedule is present
-    seed: int = -1  # the seed it was sampled with, −1 when written by hand
-
-    _MAX_ITEMS = {  # in YAML
-        "pedestrians": MAX_PEDESTRIANS,
-        "obstacles": MAX_OBSTACLES,
-        "walls": MAX_WALLS,
-    }
-
-    def validate(
-        self, robot_radius: float = 0.3, pedestrian_radius: float = 0.3, goal_radius: float = 0.2
-    ) -> "Scenario":
-        """Raise `ConfigError` naming the field if any value is invalid.
-
-        Besides ranges and counts (at most `MAX_PEDESTRIANS` pedestrians and
-        `MAX_OBSTACLES` obstacles): the robot's start and goal must be clear of every
-        obstacle (the robot's disc of `robot_radius` must not overlap it: a start inside
-        one is an instant collision, a goal inside one a certain timeout), its goal
-        farther than `goal_radius` from its start, and it must not start overlapping a
-        pedestrian's start (disc of `pedestrian_radius`). Pedestrians must not start
-        overlapping each other, and their starts and goals must be clear of every obstacle.
-        The checks run in this order (the first failing one is reported): the scenario's
-        own values, the pedestrians' and obstacles' values, the robot's placement, the
-        pedestrians' placement.
-        """
-        self._check_own_values()
-        self._check_item_values()
-        self._check_robot_placement(robot_radius, goal_radius)
-        self._check_pedestrian_placement(robot_radius, pedestrian_radius)
-        return self
-
-    def _check_own_values(self) -> None:
-        """The counts, the seed, the robot's start, goal and heading, the emotion period
-        (`SCENARIO_RANGES`)."""
-        if len(self.pedestrians) > MAX_PEDESTRIANS:
-            raise ConfigError(
-                f"pedestrians: {len(self.pedestrians)} given, at most {MAX_PEDESTRIANS} allowed"
-            )
-        if len(self.obstacles) > MAX_OBSTACLES:
-            raise ConfigError(
-                f"obstacles: {len(self.obstacles)} given, at most {MAX_OBSTACLES} allowed"
-            )
-        if len(self.walls) > MAX_WALLS:
-            raise ConfigError(f"walls: {len(self.walls)} given, at most {MAX_WALLS} allowed")
-        if not (self.seed == -1 or 0 <= self.seed <= MAX_SEED):
-            raise ConfigError(
-                f"seed = {self.seed!r} is invalid: must be -1 (written by hand) or in "
-                "[0, 2**64 - 1]"
-            )
-        validate_ranges(self, SCENARIO_RANGES)
-
-    def _check_item_values(self) -> None:
-        """Each pedestrian's start, goal and emotions; each obstacle's centre and radius
-        (`PEDESTRIAN_RANGES`, `OBSTACLE_RANGES`)."""
-        for i, p in enumerate(self.pedestrians):
-            validate_ranges(p, PEDESTRIAN_RANGES, prefix=f"pedestrians[{i}].")
-            _check_route(p, f"pedestrians[{i}].")
-            for j, e in enumerate([p.emotion, *p.emotion_schedule]):
-                if e not in EMOTION_NAMES:
-                    where = "emotion" if j == 0 else f"emotion_schedule[{j - 1}]"
-                    raise ConfigError(
-                        f"pedestrians[{i}].{where} = {short_repr(e)} is invalid: "
-                        f"must be one of {list(EMOTION_NAMES)}"
-                    )
-        for i, o in enumerate(self.obstacles):
-            validate_ranges(o, OBSTACLE_RANGES, prefix=f"obstacles[{i}].")
-        for i, w in enumerate(self.walls):
-            validate_ranges(w, WALL_RANGES, prefix=f"walls[{i}].")
-            if math.dist(w.start, w.end) < MIN_WALL_LENGTH:
-                raise ConfigError(
-                    f"walls[{i}]: start {w.start!r} and end {w.end!r} are "
-                    f"{math.dist(w.start, w.end):.3g} m apart; a wall must be at least "
-                    f"{MIN_WALL_LENGTH} m long"
-                )
-
-    def _check_robot_placement(self, robot_radius: float, goal_radius: float) -> None:
-        """The robot's start and goal clear of every obstacle, its goal not within
-        `goal_radius` of its start."""
-        for name in ("robot_start", "robot_goal"):
-            point = getattr(self, name)
-            for i, o in enumerate(self.obstacles):
-                gap = math.dist(point, o.center) - o.radius - robot_radius
-                if gap < 0:
-                    raise ConfigError(
-                        f"{name} = {point!r} is inside obstacles[{i}] (center {o.center!r}, "
-                        f"radius {o.radius}): the robot (radius {robot_radius} m) must stand "
-                        f"clear of it ({-gap:.2f} m overlap)"
-                    )
-            for i, w in enumerate(self.walls):
-                gap = point_segment_distance(point, w.start, w.end) - robot_radius
-                if gap < 0:
-                    raise ConfigError(
-                        f"{name} = {point!r} touches walls[{i}] ({w.start!r} → {w.end!r}): "
-                        f"the robot (radius {robot_radius} m) must stand clear of it "
-                        f"({-gap:.2f} m overlap)"
-                    )
-        if math.dist(self.robot_start, self.robot_goal) <= goal_radius:
-            raise ConfigError(
-                f"robot_goal = {self.robot_goal!r} is within the goal radius ({goal_radius} m) "
-                f"of robot_start = {self.robot_start!r}: there would be nothing to navigate"
-            )
-
-    def _check_pedestrian_placement(self, robot_radius: float, pedestrian_radius: float) -> None:
-        """Per pedestrian, in order: its start clear of the robot's start and of the earlier
-        pedestrians' starts, its start and goal clear of every obstacle."""
-        for i, p in enumerate(self.pedestrians):
-            gap = math.dist(self.robot_start, p.start) - pedestrian_radius - robot_radius
-            if gap < 0:
-                raise ConfigError(
-                    f"robot_start = {self.robot_start!r} overlaps pedestrians[{i}].start "
-                    f"= {p.start!r}: the episode would begin in collision"
-                )
-            for j, q in enumerate(self.pedestrians[:i]):
-                if math.dist(p.start, q.start) < 2 * pedestrian_radius:
-                    raise ConfigError(
-                        f"pedestrians[{i}].start = {p.start!r} overlaps pedestrians[{j}].start "
-                        f"= {q.start!r}: pedestrians (radius {pedestrian_radius} m) must start "
-                        f"at least {2 * pedestrian_radius:g} m apart"
-                    )
-            points = [("start", p.start), ("goal", p.goal)]
-            points += [(f"waypoints[{k}]", w) for k, w in enumerate(p.waypoints)]
-            for where, point in points:
-                for k, o in enumerate(self.obstacles):
-                    if math.dist(point, o.center) < o.radius + pedestrian_radius:
-                        raise ConfigError(
-                            f"pedestrians[{i}].{where} = {point!r} is inside obstacles[{k}] "
-                            f"(center {o.center!r}, radius {o.radius}): the pedestrian (radius "
-                            f"{pedestrian_radius} m) must stand clear of it"
-                        )
-                for k, w in enumerate(self.walls):
-                    if point_segment_distance(point, w.start, w.end) < pedestrian_radius:
-                        raise ConfigError(
-                            f"pedestrians[{i}].{where} = {point!r} touches walls[{k}] "
-                            f"({w.start!r} → {w.end!r}): the pedestrian (radius "
-                            f"{pedestrian_radius} m) must stand clear of it"
-                        )
-
-
-def _check_route(p: PedestrianSpec, prefix: str) -> None:
-    """A pedestrian's waypoints are points [x, y] (their ranges: `PEDESTRIAN_RANGES`); its
-    `at_goal` is one of `AT_GOAL`."""
-    for k, w in enumerate(p.waypoints):
-        if len(w) != 2:
-            raise ConfigError(
-                f"{prefix}waypoints[{k}] = {short_repr(w)} is invalid: must be a point [x, y]"
-            )
-    if p.at_goal not in AT_GOAL:
-        raise ConfigError(
-            f"{prefix}at_goal = {short_repr(p.at_goal)} is invalid: must be one of {list(AT_GOAL)}"
-        )
-
-
-def point_segment_distance(point: list[float], a: list[float], b: list[float]) -> float:
-    """Distance [m] from `point` to the segment a → b (all world [m])."""
-    (px, py), (ax, ay), (bx, by) = point, a, b
-    dx, dy = bx - ax, by - ay
-    length2 = dx * dx + dy * dy
-    t = 0.0 if length2 == 0 else min(1.0, max(0.0, ((px - ax) * dx + (py - ay) * dy) / length2))
-    return math.hypot(px - ax - t * dx, py - ay - t * dy)
-
-
-def load_scenario(path: str | Path, config: EmoNavConfig | None = None) -> Scenario:
-    """A scenario from a YAML file (fields as in `Scenario`), validated.
-
-    Absent top-level fields take the documented defaults (no obstacles, no pedestrians,
-    the paper's start (−4, 0) and goal (4, 0)); `robot_heading`, if absent, faces the
-    goal. Inside `pedestrians` and `obstacles` every field but `emotion_schedule` is
-    required. `config` gives the robot's and pedestrians' radii for the overlap checks and
-    the goal radius (the larger of training's and evaluation's) for the start–goal check.
-    """
-    cfg = config or EmoNavConfig()
-    scenario, raw = load_typed_yaml_raw(Scenario, path=path)
-    if "robot_heading" not in raw:
-        (sx, sy), (gx, gy) = scenario.robot_start, scenario.robot_goal
-        scenario.robot_heading = math.atan2(gy - sy, gx - sx) if (sx, sy) != (gx, gy) else 0.0
-    try:
-        goal_radius = max(cfg.episode.goal_radius, cfg.episode.eval_goal_radius)
-        return scenario.validate(cfg.robot.radius, cfg.crowd.pedestrian_radius, goal_radius)
-    except ConfigError as e:
-        raise ConfigError(f"{path}: {e}") from None
-
-
-def add_time_varying_emotion(
-    scenario: Scenario, seed: int, config: EmoNavConfig | None = None
-) -> Scenario:
-    """Give one pedestrian (chosen by `seed`) an emotion that changes every period (§IV-F).
-
-    The same rule as `sample_scenario` in the time-varying mode, for a scenario from a
-    file: the schedule covers `episode.max_steps` walking steps, every entry differs from
-    the previous one. Raises `ConfigError` if the scenario has no pedestrian or already
-    has a schedule.
-    """
-    cfg = config or EmoNavConfig()
-    if not scenario.pedestrians:
-        raise ConfigError("--time-varying: the scenario has no pedestrian whose emotion could vary")
-    if any(p.emotion_schedule for p in scenario.pedestrians):
-        raise ConfigError(
-            "--time-varying: the scenario already has an emotion_schedule; remove the flag "
-            "or the schedule"
-        )
-    _add_emotion_schedule(
-        scenario.pedestrians, np.random.default_rng(seed), cfg, scenario.emotion_change_period
-    )
-    return scenario
-
-
-def _add_emotion_schedule(
-    pedestrians: list, rng: np.random.Generator, cfg: EmoNavConfig, period: float
-) -> None:
-    who = int(rng.integers(len(pedestrians)))
-    horizon = cfg.episode.max_steps * cfg.robot.step_time
-    n = int(math.ceil(horizon / period)) + 1
-    current = EMOTION_NAMES.index(pedestrians[who].emotion)
-    schedule = [EMOTION_NAMES[current]]
-    for _ in range(n - 1):
-        current = (current + int(rng.integers(1, 3))) % 3  # always a different one
-        schedule.append(EMOTION_NAMES[current])
-    pedestrians[who].emotion_schedule = schedule
-
-
-def dump_scenario(scenario: Scenario) -> str:
-    """The scenario as YAML text (loadable by `load_scenario`)."""
-    return dump_typed_yaml(scenario)
+__all__ = [
+    "AT_GOAL",
+    "MAX_OBSTACLES",
+    "MAX_PEDESTRIANS",
+    "MAX_SCHEDULE",
+    "MAX_SEED",
+    "MAX_WALLS",
+    "MAX_WAYPOINTS",
+    "PLACEMENT_TRIES",
+    "PedestrianSpec",
+    "Scenario",
+    "ScenarioSamplingError",
+    "StaticDiscSpec",
+    "WallSpec",
+    "add_time_varying_emotion",
+    "dump_scenario",
+    "load_scenario",
+    "point_segment_distance",
+    "sample_paper_scenario",
+    "sample_scenario",
+]
 
 
 def sample_scenario(seed: int, config: EmoNavConfig | None = None) -> Scenario:
-    """Draw the paper's random scenario (§IV-B) with a seeded generator.
+    """The scenario of `seed` in the configuration's family (`crowd.family`).
 
-    1–4 pedestrians start on a circle of radius U(3.5, 4.5) m around the origin and head
-    for the antipodal point; 1–3 static discs of radius U(0.2, 0.4) m lie in
-    x ∈ [−3, 3], y ∈ [−1.5, 1.5]; each pedestrian's emotion is drawn from
-    `crowd.emotion_probs`. Rejection sampling keeps every pair of objects (including the
-    robot at its start and goal) at least 0.2 m apart at the start, so no episode begins
-    in collision. An object that finds no free spot in `PLACEMENT_TRIES` draws raises
-    `ScenarioSamplingError` (a `ConfigError`): dropping it would silently sample another
-    distribution than the configured counts (never the case with the paper's settings).
-    In the time-varying mode, one pedestrian's emotion changes every
-    `emotion_change_period` seconds to a different one, for the whole episode.
-    The draws, in order: the static discs, the pedestrians, the emotion schedule.
+    The default family, "paper", is `sample_paper_scenario` (the paper's seeds); the others
+    are the samplers of `core/scenario_families.py`.
     """
-    if not 0 <= seed <= MAX_SEED:
-        raise ConfigError(f"seed {seed}: must be in [0, 2**64 - 1]")
     cfg = config or EmoNavConfig()
-    c, robot = cfg.crowd, cfg.robot
-    rng = np.random.default_rng(seed)
-    # Discs already placed: (x, y, radius); the robot at start and goal.
-    placed: list[tuple[float, float, float]] = [
-        (*robot.start, robot.radius),
-        (*robot.goal, robot.radius),
-    ]
-    obstacles = _sample_obstacles(seed, rng, c, placed)
-    pedestrians = _sample_pedestrians(seed, rng, c, placed)
-    if c.time_varying_emotions and pedestrians:
-        _add_emotion_schedule(pedestrians, rng, cfg, c.emotion_change_period)
-
-    return Scenario(
-        pedestrians=pedestrians,
-        obstacles=obstacles,
-        robot_start=list(robot.start),
-        robot_goal=list(robot.goal),
-        robot_heading=math.atan2(robot.goal[1] - robot.start[1], robot.goal[0] - robot.start[0]),
-        emotion_change_period=c.emotion_change_period,
-        seed=int(seed),
-    )
-
-
-_SAMPLING_GAP = 0.2  # [m] between any two sampled objects (and the robot) at the start
-
-
-def _is_free(placed: list[tuple[float, float, float]], x: float, y: float, r: float) -> bool:
-    """Whether a disc (x, y, r) keeps `_SAMPLING_GAP` from every disc in `placed`."""
-    gap = _SAMPLING_GAP
-    return all(math.hypot(x - px, y - py) >= r + pr + gap for px, py, pr in placed)
-
-
-def _sample_obstacles(
-    seed: int, rng: np.random.Generator, c: CrowdParams, placed: list[tuple[float, float, float]]
-) -> list[StaticDiscSpec]:
-    """The static discs of `sample_scenario` (crowd settings `c`), added to `placed`."""
-    gap = _SAMPLING_GAP
-    obstacles: list[StaticDiscSpec] = []
-    wanted = int(rng.integers(c.min_static, c.max_static + 1))
-    for _ in range(wanted):
-        for _attempt in range(PLACEMENT_TRIES):
-            r = float(rng.uniform(c.static_radius_min, c.static_radius_max))
-            x = float(rng.uniform(*c.static_x_range))
-            y = float(rng.uniform(*c.static_y_range))
-            if _is_free(placed, x, y, r):
-                placed.append((x, y, r))
-                obstacles.append(StaticDiscSpec(center=[x, y], radius=r))
-                break
-        else:
-            raise ScenarioSamplingError(
-                f"seed {seed}: placed only {len(obstacles)} of {wanted} static discs: no free "
-                f"spot in {PLACEMENT_TRIES} tries for a disc of radius in "
-                f"[{c.static_radius_min}, {c.static_radius_max}] m inside crowd.static_x_range "
-                f"{c.static_x_range} x crowd.static_y_range {c.static_y_range}, {gap} m clear "
-                "of the robot's start and goal and of the other discs; enlarge the box or "
-                "lower crowd.max_static / crowd.static_radius_max"
-            )
-    return obstacles
-
-
-def _sample_pedestrians(
-    seed: int, rng: np.random.Generator, c: CrowdParams, placed: list[tuple[float, float, float]]
-) -> list[PedestrianSpec]:
-    """The pedestrians of `sample_scenario` (crowd settings `c`): a start on the circle,
-    the antipodal goal, an emotion; their starts and goals added to `placed`."""
-    gap, r_ped = _SAMPLING_GAP, c.pedestrian_radius
-    pedestrians: list[PedestrianSpec] = []
-    probs = np.asarray(c.emotion_probs, dtype=float)
-    wanted = int(rng.integers(c.min_pedestrians, c.max_pedestrians + 1))
-    for _ in range(wanted):
-        for _attempt in range(PLACEMENT_TRIES):
-            radius = float(rng.uniform(c.circle_radius_min, c.circle_radius_max))
-            angle = float(rng.uniform(0.0, 2.0 * math.pi))
-            sx, sy = radius * math.cos(angle), radius * math.sin(angle)
-            if _is_free(placed, sx, sy, r_ped) and _is_free(placed, -sx, -sy, r_ped):
-                placed += [(sx, sy, r_ped), (-sx, -sy, r_ped)]
-                emotion = EMOTION_NAMES[int(rng.choice(3, p=probs))]
-                pedestrians.append(PedestrianSpec(start=[sx, sy], goal=[-sx, -sy], emotion=emotion))
-                break
-        else:
-            raise ScenarioSamplingError(
-                f"seed {seed}: placed only {len(pedestrians)} of {wanted} pedestrians: no free "
-                f"start/goal pair in {PLACEMENT_TRIES} tries on the circle of radius in "
-                f"[crowd.circle_radius_min {c.circle_radius_min}, crowd.circle_radius_max "
-                f"{c.circle_radius_max}] m, {gap} m clear of the robot, the discs and the other "
-                "pedestrians; widen the circle or lower crowd.max_pedestrians"
-            )
-    return pedestrians
+    if cfg.crowd.family == "paper":
+        return sample_paper_scenario(seed, cfg)
+    return sample_family(cfg.crowd.family, seed, cfg)

@@ -52,6 +52,8 @@ def setting_label(config: EmoNavConfig, name: str | None) -> str:
         label += ", time-varying"
     if config.perception.state_source != "truth":
         label += f", {config.perception.state_source} state"
+    if config.crowd.family != "paper":
+        label += f", family {config.crowd.family}"
     return label
 
 
