@@ -10,6 +10,7 @@ import pytest
 
 from emonav_drake.config_yaml import ConfigError
 from emonav_drake.core.crowd import Crowd, CrowdState
+from emonav_drake.core.pedestrian_routes import WAYPOINT_TOLERANCE
 from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec
 from emonav_drake.params import EmoNavConfig
 
@@ -68,14 +69,18 @@ def test_stand_time_at_each_end_and_a_delayed_start():
 
 def test_a_route_passes_through_its_waypoints_and_back():
     ped = _ped((-3, -3), (3, 3), waypoints=[[-3, 3], [3, -3]])
-    xy, _, state = _run(Scenario(pedestrians=[ped]), 40.0)
+    xy, _, state = _run(Scenario(pedestrians=[ped]), 30.0)
     route = [(-3, 3), (3, -3), (3, 3)]
-    passes = [np.linalg.norm(xy[:, 0] - p, axis=1).min() for p in route]
-    assert max(passes) < 0.1
-    first = [np.flatnonzero(np.linalg.norm(xy[:, 0] - p, axis=1) < 0.1)[0] for p in route]
+    # waypoints are passed within WAYPOINT_TOLERANCE (corners cut), the goal is reached
+    near = [WAYPOINT_TOLERANCE, WAYPOINT_TOLERANCE, 0.1]
+    first = [
+        np.flatnonzero(np.linalg.norm(xy[:, 0] - p, axis=1) < d)[0]
+        for p, d in zip(route, near, strict=True)
+    ]
     assert first == sorted(first)  # in order
-    assert first[-1] * 0.1 == pytest.approx(6 + math.hypot(6, 6) + 6, abs=0.3)  # at 1 m/s
-    # 6 + 8.49 + 6 = 20.5 m to the goal, then back: after 40 s it walks back
+    # at 1 m/s, the 20.5 m route less what cutting two corners saves (each < 2 x 0.5 m)
+    assert 6 + math.hypot(6, 6) + 6 - 2.0 < first[-1] * 0.1 <= 6 + math.hypot(6, 6) + 6 + 0.2
+    # about 19 m to the goal, then back: after 30 s it walks back
     assert bool(state.backwards[0])
 
 

@@ -160,6 +160,11 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
             f"{m:>8s}: SR {s['SR']:.3f} [{lo:.3f}, {hi:.3f}] (n={s['episodes']})  NT "
             f"{tables.format_nt(s)} s  DT {s['DT']}  IDT {tables.format_idt(s)}"
         )
+        field = "  ".join(
+            f"{header} {tables.format_mean_ci(s, name, digits)}"
+            for name, (header, digits) in tables.FIELD_COLUMNS.items()
+        )
+        print(f"{'':>8s}  {field}")
     for row in tables.pairwise_comparisons(result.trials, result.settings["planners"]):
         print(tables.pairwise_statement(row))
     print(

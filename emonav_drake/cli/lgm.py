@@ -81,6 +81,8 @@ def cmd_lgm(args: argparse.Namespace) -> int:
             title=f"seed {world.scenario.seed}: t = {world.step_count * cfg.robot.step_time:.1f} s "
             f"(after {world.step_count} DWA steps)",
             emotions=emotions,
+            segments=obs.crowd.wall_segments,
+            segment_margin=obs.crowd.static_discomfort,
         )
     print(f"wrote {args.png} (seed {args.seed}, after {world.step_count} steps)")
     return 0

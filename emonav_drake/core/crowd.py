@@ -24,6 +24,7 @@ import numpy as np
 from emonav_drake.core.orca import OrcaParams, orca_velocities
 from emonav_drake.core.pedestrian_routes import RoutePlan
 from emonav_drake.core.scenario import Scenario
+from emonav_drake.core.walls import wall_discs
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 
 
@@ -219,6 +220,7 @@ class Crowd:
             self.orca,
             obstacle_centers=centers,
             obstacle_radii=radii,
+            obstacle_segments=self.wall_segments,
             visible=visible,
             active=active,
             check_inputs=False,  # arrays built here, float64/bool, shapes fixed per crowd
@@ -249,6 +251,21 @@ class Crowd:
             static_discomfort=self.static_discomfort,
             wall_segments=self.wall_segments,
         )
+
+
+def with_wall_discs(snapshot: CrowdSnapshot) -> CrowdSnapshot:
+    """The snapshot with every wall added to the static discs as a chain of small discs
+    (`core/walls.py::wall_discs`): what the planners that read discs (DWA, MPC, SARL, RGL)
+    are given. Scans, rewards and collisions use the exact segments. Without walls, the
+    snapshot itself."""
+    if len(snapshot.wall_segments) == 0:
+        return snapshot
+    centers, radii = wall_discs(snapshot.wall_segments)
+    return dc.replace(
+        snapshot,
+        static_centers=np.vstack([snapshot.static_centers.reshape(-1, 2), centers]),
+        static_radii=np.concatenate([snapshot.static_radii, radii]),
+    )
 
 
 def _route_progress(state: CrowdState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

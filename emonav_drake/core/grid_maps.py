@@ -10,6 +10,9 @@ caller passes the margins). Each beam marks only the cell of its hit:
 * 127 — the hit of the inflated scan, where the cell is not already 255 (discomfort zone);
 * 0 — everything else. A beam whose range equals ``max_range`` marks nothing.
 
+Walls (line segments, optional) are cast too: in the real scan without thickness, in
+the inflated scan as the band within their discomfort margin (`lgm_frame`).
+
 The robot's own radius plays no part. When the robot stands inside an inflated disc, that
 disc's 127 cells trace, beam by beam, where the beam leaves the discomfort zone.
 
@@ -52,6 +55,7 @@ from emonav_drake.core.lidar import (
     check_ranges_limits,
     robot_frame_centers,
 )
+from emonav_drake.core.walls import as_segments, robot_frame_segments
 
 DEFAULT_GRID_SIZE = 100  # M
 DEFAULT_NUM_FRAMES = 9  # N
@@ -235,6 +239,8 @@ def lgm_frame(
     min_range: float = DEFAULT_MIN_RANGE,
     kind: str = "lgm",
     out: np.ndarray | None = None,
+    segments: object | None = None,
+    segment_margin: float = 0.0,
 ) -> np.ndarray:
     """One grid-map frame seen from a LiDAR: real scan + inflated scan + grid.
 
@@ -250,6 +256,12 @@ def lgm_frame(
         max_range, min_range: LiDAR clipping limits [m] (L = max_range).
         kind: "lgm" (pie map, the paper's) or "ogm" (Cartesian baseline).
         out: optional writeable C-contiguous uint8 (M, M) array to fill in place.
+        segments: optional walls (W, 2, 2) in the world frame [m] (segment k from
+            ``[k, 0]`` to ``[k, 1]``): in the real scan a wall has no thickness; in the
+            inflated scan it is the band within ``segment_margin`` of it (its discomfort
+            zone, like a static disc's; `core/walls.py::cast_segments`). ``None`` or
+            W = 0: the frame of the discs alone, unchanged.
+        segment_margin: the walls' discomfort margin [m], ≥ 0 (the static discs' 0.2 m).
 
     Returns:
         uint8 (M, M) frame, as `lgm_from_ranges` / `ogm_from_ranges` describe.
@@ -273,12 +285,24 @@ def lgm_frame(
         raise ValueError(f"margins must have shape {r.shape} to match radii, got {mg.shape}")
     if not (np.isfinite(mg).all() and (mg >= 0.0).all()):
         raise ValueError(f"margins must be finite and >= 0, got {mg.tolist()}")
+    segs = as_segments(segments)
+    segment_margin = float(segment_margin)
+    if not (math.isfinite(segment_margin) and segment_margin >= 0.0):
+        raise ValueError(f"segment_margin must be finite and >= 0, got {segment_margin}")
     grid = _out_grid(out, m)
     px, py = robot_frame_centers(origin, heading, c)
     scan_radii = np.empty((2, r.size), dtype=np.float64)
     scan_radii[0] = r
     np.add(r, mg, out=scan_radii[1])
-    ranges = cast_robot_frame(px, py, scan_radii, k, max_range, min_range)
+    if len(segs) == 0:
+        ranges = cast_robot_frame(px, py, scan_radii, k, max_range, min_range)
+    else:
+        widths = np.zeros((2, len(segs)))
+        widths[1] = segment_margin
+        local = robot_frame_segments(origin, heading, segs)
+        ranges = cast_robot_frame(
+            px, py, scan_radii, k, max_range, min_range, segments=local, segment_half_widths=widths
+        )
     (_fill_lgm if kind == "lgm" else _fill_ogm)(ranges, m, max_range, grid)
     return grid
 

@@ -71,8 +71,14 @@ def drlvo_image(
     grid_size: int = 100,
     max_range: float = 6.0,
     min_range: float = 0.27,
+    segments: np.ndarray | None = None,
+    segment_margin: float = 0.0,
 ) -> np.ndarray:
-    """uint8 (3, M, M): scan OGM of all discs + pedestrian velocity map (module docstring)."""
+    """uint8 (3, M, M): scan OGM of all discs + pedestrian velocity map (module docstring).
+
+    Optional walls ``segments`` (W, 2, 2) [m, world] and their discomfort margin [m] go
+    into the scan OGM as `core/grid_maps.py::lgm_frame` describes.
+    """
     image = np.empty((3, grid_size, grid_size), np.uint8)
     image[0] = lgm_frame(
         robot_xy,
@@ -85,6 +91,8 @@ def drlvo_image(
         max_range,
         min_range,
         kind="ogm",
+        segments=segments,
+        segment_margin=segment_margin,
     )
     image[1:] = pedestrian_velocity_map(
         robot_xy, heading, ped_positions, ped_velocities, ped_radius, grid_size, max_range

@@ -43,6 +43,11 @@ angular half-width ``asin(r/d)`` around its bearing (plus two beams of margin on
 side), and merges the discs with ``np.minimum.at``, so it costs O(beams actually covered)
 instead of O(K · discs). A disc containing the origin (or with the origin on its circle)
 covers every beam and is cast on all K of them.
+
+**Walls.** `scan_discs` and `cast_robot_frame` also take line segments (walls, no
+thickness, seen from either side; `core/walls.py` casts them): a beam's range is the
+nearest of its disc and wall hits, then clipped as above. Without walls the cast is the
+disc cast alone, arithmetic unchanged.
 """
 
 from __future__ import annotations
@@ -52,6 +57,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from emonav_drake.core.walls import as_segments, cast_segments, robot_frame_segments
 from emonav_drake.params import NUM_BEAMS
 
 DEFAULT_NUM_BEAMS = NUM_BEAMS
@@ -186,8 +192,10 @@ def cast_robot_frame(
     max_range: float,
     min_range: float,
     out: np.ndarray | None = None,
+    segments: np.ndarray | None = None,
+    segment_half_widths: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Cast several scans at once against discs given in the robot frame (no validation).
+    """Cast several scans at once against discs (and walls) in the robot frame (no validation).
 
     Args:
         px, py: disc centres (n,) in the robot frame [m] (x forward, y left).
@@ -195,17 +203,29 @@ def cast_robot_frame(
         num_beams: K.
         max_range, min_range: clipping limits [m].
         out: optional (C, K) float64 array to write into.
+        segments: optional (W, 2, 2) walls in the robot frame [m], each of non-zero length.
+        segment_half_widths: optional (C, W) half-widths ≥ 0 of the walls per scan [m]
+            (`core/walls.py::cast_segments`); default 0 (the walls themselves).
 
     Returns:
         (C, K) float64 ranges [m], clipped to [min_range, max_range]: per beam, the
         smallest positive root over the discs (module docstring), so a disc containing the
-        origin is hit by every beam where the beam leaves it.
+        origin is hit by every beam where the beam leaves it, or the nearer wall hit.
     """
     k = num_beams
     n_scans = radii.shape[0]
     if out is None:
         out = np.empty((n_scans, k), dtype=np.float64)
     out.fill(np.inf)
+    if segments is not None and len(segments):
+        if segment_half_widths is None:
+            segment_half_widths = np.zeros((n_scans, len(segments)))
+        _, cos, sin = beam_table(k)
+        cast_segments(out, segments, segment_half_widths, cos, sin, max_range)
+        if px.size == 0:
+            np.minimum(out, max_range, out=out)
+            np.maximum(out, min_range, out=out)
+            return out
     if px.size == 0:
         np.minimum(out, max_range, out=out)
         return out
@@ -308,8 +328,9 @@ def scan_discs(
     num_beams: int = DEFAULT_NUM_BEAMS,
     max_range: float = DEFAULT_MAX_RANGE,
     min_range: float = DEFAULT_MIN_RANGE,
+    segments: object | None = None,
 ) -> np.ndarray:
-    """One 2-D LiDAR scan of discs.
+    """One 2-D LiDAR scan of discs and walls.
 
     Args:
         origin_xy: LiDAR position (2,) in the world frame [m].
@@ -318,11 +339,15 @@ def scan_discs(
         radii: disc radii (n,) [m], > 0.
         num_beams: K, beams over 360° (see module docstring for the beam angles).
         max_range, min_range: clipping limits [m].
+        segments: optional walls (W, 2, 2) in the world frame [m], segment k from
+            ``[k, 0]`` to ``[k, 1]`` (`CrowdSnapshot.wall_segments`); no thickness, a beam
+            hits either side. ``None`` or W = 0: discs only (the same result as without).
 
     Returns:
         (K,) float64 ranges [m] in ``[min_range, max_range]``; ``max_range`` means no hit.
         A disc containing the origin is hit by every beam where the beam leaves it (the
         smallest positive root; module docstring, also for the origin on the circle).
+        Per beam, the nearer of the disc and wall hits.
     """
     k = check_num_beams(num_beams)
     max_range, min_range = check_ranges_limits(max_range, min_range)
@@ -331,5 +356,9 @@ def scan_discs(
     if not math.isfinite(heading):
         raise ValueError(f"heading must be finite, got {heading}")
     c, r = as_discs(centers, radii)
+    segs = as_segments(segments)
     px, py = robot_frame_centers(origin, heading, c)
-    return cast_robot_frame(px, py, r[None, :], k, max_range, min_range)[0]
+    if len(segs) == 0:
+        return cast_robot_frame(px, py, r[None, :], k, max_range, min_range)[0]
+    local = robot_frame_segments(origin, heading, segs)
+    return cast_robot_frame(px, py, r[None, :], k, max_range, min_range, segments=local)[0]

@@ -24,6 +24,24 @@ turns one scan into discs in the world frame (numpy only, deterministic):
    bounds, a poor fit — the **fallback**: radius ``prior_radius`` (or half the arc's
    chord if that is larger, at most ``max_radius``), centre that far behind the arc's
    middle beam along its line of sight.
+4. **Walls.** A cluster that holds a long straight run of points (a wall) would otherwise
+   become one large fallback circle that slides along the wall as the robot moves. So a
+   cluster longer than ``wall_min_length`` (its bounding box's diagonal) is first split
+   into straight runs (iterative end-point fit: a run is split at its point farthest from
+   the chord between its ends while that point is more than ``wall_tolerance`` off it).
+   Each run at least ``wall_min_length`` long (end to end) is a wall: it is cut into
+   pieces at fixed places along its line — every ``wall_piece_length`` metres of the
+   coordinate ``s = p·d`` of its points p along its direction d (principal axis of the
+   points), counted from the world origin — so a piece covers the same stretch of wall
+   from one scan to the next and its disc stays put (a still object for the tracker).
+   A piece's disc is that whole stretch of the wall line, seen or not: centre at the
+   stretch's middle on the line, radius ``wall_piece_length / 2``; it does not move when
+   the piece is partly hidden or cut by the range (it may overhang a wall's end by less
+   than a piece). The rest of the cluster (consecutive non-wall runs, e.g. a pedestrian next to
+   the wall) goes through step 3 as clusters of their own (dropped below
+   ``min_points``). Pieces are flagged in `Detections.walls`. A disc's arc is never a
+   wall run unless its radius exceeds about ``wall_min_length² / (8·wall_tolerance)``
+   (4 m with the defaults), so scans without such objects are detected as before.
 
 All clusters are fitted at once (sums per cluster with ``np.add.reduceat``, batched 3 × 3
 solves; the refinement stops when every cluster has converged), so a scan costs
@@ -54,10 +72,21 @@ class DetectionParams:
     fit_tolerance: float = 0.03  # largest accepted RMS residual of a fit [m]
     gauss_newton_iterations: int = 10  # most geometric refinement steps after the algebraic fit
     convergence: float = 1e-6  # refinement stops once no centre or radius moves more [m]
+    wall_min_length: float = 1.0  # a straight run of points at least this long is a wall [m]
+    wall_tolerance: float = 0.03  # a straight run's points lie within this of its chord [m]
+    wall_piece_length: float = 0.5  # walls are reported as pieces this long [m]
 
     def validate(self) -> DetectionParams:
         """Raise ValueError naming the field if a value is out of range; returns self."""
-        for name in ("jump_distance", "min_radius", "max_radius", "prior_radius"):
+        for name in (
+            "jump_distance",
+            "min_radius",
+            "max_radius",
+            "prior_radius",
+            "wall_min_length",
+            "wall_tolerance",
+            "wall_piece_length",
+        ):
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0.0):
                 raise ValueError(f"DetectionParams.{name} must be finite and > 0, got {v!r}")
@@ -79,6 +108,11 @@ class DetectionParams:
                 f"DetectionParams.prior_radius ({self.prior_radius}) must lie in "
                 f"[min_radius, max_radius] = [{self.min_radius}, {self.max_radius}]"
             )
+        if not self.wall_piece_length <= 2.0 * self.max_radius:
+            raise ValueError(
+                f"DetectionParams.wall_piece_length ({self.wall_piece_length}) must not "
+                f"exceed 2 * max_radius ({2.0 * self.max_radius}): a piece's disc is bounded"
+            )
         return self
 
 
@@ -89,6 +123,11 @@ class Detections:
     centers: np.ndarray  # (K, 2) disc centres [m]
     radii: np.ndarray  # (K,) disc radii [m]
     points: np.ndarray  # (K,) number of beams in each disc's cluster
+    walls: np.ndarray | None = None  # (K,) bool: a piece of a wall (None: no piece is)
+
+    def __post_init__(self) -> None:
+        if self.walls is None:
+            object.__setattr__(self, "walls", np.zeros(len(self.radii), dtype=bool))
 
     def __len__(self) -> int:
         return int(self.radii.shape[0])
@@ -117,8 +156,9 @@ def detect_objects(
         params: segmentation and fit parameters.
 
     Returns:
-        `Detections`, ordered by the beam index of each cluster's first beam (a cluster
-        across the seam behind the robot counts from its first beam before the seam).
+        `Detections`, ordered by the beam index of each cluster's (or wall piece's) first
+        beam (a cluster across the seam behind the robot counts from its first beam
+        before the seam).
     """
     r = np.asarray(ranges, dtype=np.float64)
     if r.ndim != 1 or r.size == 0:
@@ -170,11 +210,28 @@ def detect_objects(
     order = order[sel]
     counts = counts[big]
     starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
-    centers, radii = _fit_circles(px[order], py[order], starts, counts, (ox, oy), params)
+    split = _split_walls(px[order], py[order], starts, counts, params)
+    if split is None:  # no wall: every cluster is a disc
+        centers, radii = _fit_circles(px[order], py[order], starts, counts, (ox, oy), params)
+        first_beam = beams[order[starts]]
+        walls = np.zeros(counts.size, dtype=bool)
+    else:
+        keep, counts, piece_c, piece_r, piece_n, piece_first = split
+        order_c = order[keep]
+        starts = (np.cumsum(counts) - counts).astype(np.intp)
+        centers, radii = np.zeros((0, 2)), np.zeros(0)
+        if counts.size:
+            centers, radii = _fit_circles(
+                px[order_c], py[order_c], starts, counts, (ox, oy), params
+            )
+        first_beam = np.concatenate([beams[order_c[starts]], beams[order[piece_first]]])
+        centers = np.vstack([centers, piece_c])
+        radii = np.concatenate([radii, piece_r])
+        walls = np.concatenate([np.zeros(counts.size, dtype=bool), np.ones(piece_r.size, bool)])
+        counts = np.concatenate([counts, piece_n])
     # Report clusters by their first beam index (deterministic and independent of `first`).
-    first_beam = beams[order[starts]]
     idx = np.argsort(first_beam, kind="stable")
-    return Detections(centers[idx], radii[idx], counts[idx].astype(np.int64))
+    return Detections(centers[idx], radii[idx], counts[idx].astype(np.int64), walls[idx])
 
 
 def _fit_circles(
@@ -266,3 +323,106 @@ def _fit_circles(
     centers = np.where(ok[:, None], centers, fallback)
     rad = np.where(ok, rad, fr)
     return centers, rad
+
+
+# ------------------------------------------------------------------------------------- walls
+
+
+def _split_walls(
+    x: np.ndarray, y: np.ndarray, starts: np.ndarray, counts: np.ndarray, p: DetectionParams
+) -> tuple | None:
+    """Wall pieces of the clusters laid end to end in `x`, `y` (world [m]; module docstring,
+    step 4), or None if no cluster holds a wall.
+
+    Returns ``(keep, counts, centres (n, 2), radii (n,), points (n,), first (n,))``: the
+    positions in `x` of the points left to the circle fit, cluster after cluster, and
+    those clusters' sizes; the pieces' discs, beam counts and first points' positions.
+    """
+    ends = starts + counts
+    lo_x, hi_x = np.minimum.reduceat(x, starts), np.maximum.reduceat(x, starts)
+    lo_y, hi_y = np.minimum.reduceat(y, starts), np.maximum.reduceat(y, starts)
+    long = np.hypot(hi_x - lo_x, hi_y - lo_y) >= p.wall_min_length
+    if not long.any():
+        return None
+    keep: list[np.ndarray] = []
+    kept: list[int] = []
+    pieces: list[tuple] = []
+    found = False
+    for c in range(counts.size):
+        a, b = int(starts[c]), int(ends[c])
+        runs = _straight_runs(x[a:b], y[a:b], p.wall_tolerance) if long[c] else [(0, b - a - 1)]
+        rest: list[int] = []  # positions of the current stretch of non-wall points
+        for i, j in runs:
+            idx = np.arange(a + i, a + j + 1)
+            if math.hypot(x[a + j] - x[a + i], y[a + j] - y[a + i]) < p.wall_min_length:
+                rest.extend(idx.tolist())
+                continue
+            found = True
+            _flush(rest, keep, kept, p.min_points)
+            rest = []
+            pieces.extend(_pieces(x, y, idx, p))
+        _flush(rest, keep, kept, p.min_points)
+    if not found:
+        return None
+    c_, r_, n_, f_ = zip(*pieces, strict=True)
+    return (
+        np.concatenate(keep) if keep else np.zeros(0, dtype=np.intp),
+        np.asarray(kept, dtype=np.int64),
+        np.asarray(c_, dtype=np.float64).reshape(-1, 2),
+        np.asarray(r_, dtype=np.float64),
+        np.asarray(n_, dtype=np.int64),
+        np.asarray(f_, dtype=np.intp),
+    )
+
+
+def _flush(rest: list[int], keep: list[np.ndarray], kept: list[int], min_points: int) -> None:
+    """Keep a stretch of non-wall points as a cluster if it has ``min_points`` beams."""
+    if len(rest) >= min_points:
+        keep.append(np.asarray(rest, dtype=np.intp))
+        kept.append(len(rest))
+
+
+def _straight_runs(x: np.ndarray, y: np.ndarray, tolerance: float) -> list[tuple[int, int]]:
+    """Iterative end-point fit: inclusive index ranges, in order, that partition the
+    points, each with every point within `tolerance` [m] of the chord between its ends
+    (a split point ends the run before it)."""
+    runs = []
+    stack = [(0, x.size - 1)]
+    while stack:
+        i, j = stack.pop()
+        if j - i < 2:
+            runs.append((i, j))
+            continue
+        dx, dy = x[j] - x[i], y[j] - y[i]
+        chord = math.hypot(dx, dy)
+        u, v = x[i : j + 1] - x[i], y[i : j + 1] - y[i]
+        if chord > 1e-9:
+            off = np.abs(u * dy - v * dx) / chord
+        else:  # a closed ring: the farthest point from the start
+            off = np.hypot(u, v)
+        k = int(np.argmax(off))
+        if off[k] <= tolerance:
+            runs.append((i, j))
+        else:
+            stack.append((i + k + 1, j))
+            stack.append((i, i + k))
+    return sorted(runs)
+
+
+def _pieces(x: np.ndarray, y: np.ndarray, idx: np.ndarray, p: DetectionParams) -> list[tuple]:
+    """The pieces of one wall run (points `idx`): (centre, radius, beams, first point)."""
+    px, py = x[idx], y[idx]
+    mx, my = float(px.mean()), float(py.mean())
+    cov = np.cov(np.vstack([px - mx, py - my]), bias=True)
+    _, vec = np.linalg.eigh(cov)
+    dx, dy = float(vec[0, 1]), float(vec[1, 1])  # principal axis (unit)
+    s = px * dx + py * dy  # coordinate along the wall, from the world origin [m]
+    foot = mx * dx + my * dy
+    bins = np.floor(s / p.wall_piece_length)
+    radius = 0.5 * p.wall_piece_length
+    out = []
+    for b in np.unique(bins).tolist():
+        inside = np.flatnonzero(bins == b)
+        mid = (b + 0.5) * p.wall_piece_length - foot  # the piece's middle, from the mean
+        out.append(((mx + mid * dx, my + mid * dy), radius, inside.size, int(idx[inside[0]])))
+    return out

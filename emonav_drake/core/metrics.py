@@ -6,7 +6,12 @@
 * DT: walking steps spent inside any discomfort zone (static or pedestrian), summed;
 * IDT: the same per kind, [static; happy, neutral, negative] — a step inside the zones
   of two negative pedestrians counts once for "negative";
-* path length [m] and the smallest robot–pedestrian centre distance [m].
+* path length [m] and the smallest robot–pedestrian centre distance [m];
+* the field's metrics (`core/social_metrics.py`, docs/metrics.md): path irregularity,
+  jerk of the commanded motion, smallest pedestrian clearance, share of steps with a low
+  time to collision, intrusion ratio and clearance during intrusions. They are measured
+  when every step of the episode was added with its `StepMotion`; a record without them
+  (one written before they existed) holds None: "not measured", shown as n/a.
 """
 
 from __future__ import annotations
@@ -17,6 +22,12 @@ import math
 import numpy as np
 
 from emonav_drake.core.reward import StepEvaluation
+from emonav_drake.core.social_metrics import (
+    SOCIAL_FIELDS,
+    TTC_THRESHOLD,
+    SocialMetrics,
+    StepMotion,
+)
 
 SUCCESS, COLLISION, TIMEOUT, FALL = "success", "collision", "timeout", "fall"
 
@@ -36,6 +47,13 @@ class EpisodeRecord:
     seed: int = -1
     fall_reason: str = ""  # why the full-order robot fell (outcome "fall" only)
     collided_with: str = ""  # outcome "collision": "static" or the pedestrian's emotion
+    # The field's metrics (core/social_metrics.py); None: not measured (or undefined).
+    path_irregularity: float | None = None  # [rad/m]
+    jerk_mean: float | None = None  # [m/s³], of the commanded velocity
+    min_ped_clearance: float | None = None  # [m], surface to surface
+    low_ttc_ratio: float | None = None  # share of steps with a time to collision < TTC_THRESHOLD
+    intrusion_ratio: float | None = None  # share of steps closer than INTRUSION_DISTANCE
+    intrusion_clearance: float | None = None  # [m], mean smallest clearance in those steps
 
     def to_json(self) -> dict:
         d = dc.asdict(self)
@@ -61,9 +79,20 @@ class EpisodeTracker:
         self.step_time = step_time
         self.record = EpisodeRecord(seed=seed)
         self.done = False
+        # The field's metrics: started by a first step with its motion, dropped for good
+        # (None, `_unmeasured`) when a step comes without one.
+        self.social: SocialMetrics | None = None
+        self._unmeasured = False
 
-    def add(self, ev: StepEvaluation, step_length: float) -> str | None:
-        """Record one step; return the outcome if the episode ended with it, else None."""
+    def add(
+        self, ev: StepEvaluation, step_length: float, motion: StepMotion | None = None
+    ) -> str | None:
+        """Record one step; return the outcome if the episode ended with it, else None.
+
+        `motion` (the robot at both foot switches, the crowd, the command) feeds the
+        field's metrics; without it they stay None for the whole episode. The paper's
+        metrics do not read it.
+        """
         if self.done:
             raise RuntimeError("the episode has already ended")
         r = self.record
@@ -74,6 +103,7 @@ class EpisodeTracker:
         r.discomfort_steps += int(ev.in_discomfort)
         r.idt = [a + b for a, b in zip(r.idt, ev.idt, strict=True)]
         r.total_reward += ev.reward
+        self._add_social(motion)
         if ev.collision:
             r.outcome = COLLISION
             r.collided_with = ev.collided_with
@@ -86,16 +116,64 @@ class EpisodeTracker:
         self.done = True
         return r.outcome
 
+    def _add_social(self, motion: StepMotion | None) -> None:
+        if motion is not None and self.social is None and not self._unmeasured:
+            if self.record.steps == 1:  # the episode's first step
+                self.social = SocialMetrics(self.step_time)
+            else:  # its earlier steps came without motion
+                self._unmeasured = True
+        if motion is None or self._unmeasured:
+            self._unmeasured = True
+            self.social = None
+            values = dict.fromkeys(SOCIAL_FIELDS)
+        else:
+            self.social.add(motion)
+            values = self.social.values()
+        for name, value in values.items():
+            setattr(self.record, name, value)
+
+    def social_state(self) -> dict | None:
+        """The field metrics' accumulator as plain data (None: not measured)."""
+        return None if self.social is None else self.social.to_plain()
+
+    def load_social_state(self, state: dict | None) -> None:
+        """Restore `social_state()`; None after steps means the metrics are not measured
+        (a state saved before they existed)."""
+        self.social = None if state is None else SocialMetrics.from_plain(state)
+        self._unmeasured = state is None and self.record.steps > 0
+        if self._unmeasured:
+            for name in SOCIAL_FIELDS:
+                setattr(self.record, name, None)
+
+
+def mean_interval(values: list[float]) -> tuple[float | None, list[float] | None]:
+    """The mean and its 95 % Student-t interval [lo, hi] (None below 2 values; both None
+    for no value)."""
+    x = np.asarray(values, dtype=float)
+    if x.size == 0:
+        return None, None
+    mean = float(x.mean())
+    if x.size < 2:
+        return mean, None
+    from scipy.stats import t
+
+    half = float(t.ppf(0.975, x.size - 1) * x.std(ddof=1) / math.sqrt(x.size))
+    return mean, [mean - half, mean + half]
+
 
 def summarize(records: list[EpisodeRecord]) -> dict:
-    """SR, collision/timeout rates, NT (mean ± std over successes), DT, IDT and more."""
+    """SR, collision/timeout rates, NT (mean ± std over successes), DT, IDT and more.
+
+    The field's metrics: for each `SOCIAL_FIELDS` name f, `f_mean` over the episodes
+    that measured it, `f_ci` its 95 % t interval and `f_n` their number (0: n/a).
+    """
     n = len(records)
     if n == 0:
         raise ValueError("no episodes to summarise")
     outcomes = [r.outcome for r in records]
     nt = np.array([r.nav_time for r in records if r.outcome == SUCCESS])
     ped = [r.min_ped_distance for r in records if not math.isinf(r.min_ped_distance)]
-    return {
+    out = {
         "episodes": n,
         "SR": outcomes.count(SUCCESS) / n,
         "collision_rate": outcomes.count(COLLISION) / n,
@@ -108,22 +186,49 @@ def summarize(records: list[EpisodeRecord]) -> dict:
         "path_length_mean": float(np.mean([r.path_length for r in records])),
         "min_ped_distance": float(min(ped)) if ped else None,
     }
+    for name in SOCIAL_FIELDS:
+        values = [v for r in records if (v := getattr(r, name)) is not None]
+        mean, ci = mean_interval(values)
+        out |= {f"{name}_mean": mean, f"{name}_ci": ci, f"{name}_n": len(values)}
+    return out
 
 
 def format_summary(s: dict) -> str:
-    """One line in the paper's notation."""
+    """One line in the paper's notation, then (where measured) the field's metrics: means
+    per episode with their 95 % t intervals."""
     nt = "n/a" if s["NT_mean"] is None else f"{s['NT_mean']:.2f} ± {s['NT_std']:.2f}"
     idt = s["IDT"]
     fall = f"fall {s['fall_rate']:.3f}  " if s.get("fall_rate") else ""
-    return (
+    line = (
         f"SR {s['SR']:.3f}  collision {s['collision_rate']:.3f}  timeout "
         f"{s['timeout_rate']:.3f}  {fall}NT {nt} s  DT {s['DT']}  "
         f"IDT [{idt[0]}; {idt[1]}, {idt[2]}, {idt[3]}]  ({s['episodes']} episodes)"
     )
+    if not any(s.get(f"{name}_n") for name in SOCIAL_FIELDS):
+        return line
+
+    def mean(name: str, digits: int, unit: str = "") -> str:
+        m, ci = s.get(f"{name}_mean"), s.get(f"{name}_ci")
+        if m is None:
+            return "n/a"
+        text = f"{m:.{digits}f}"
+        if ci is not None:
+            text += f" [{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]"
+        return f"{text} {unit}" if unit else text
+
+    return (
+        f"{line}  |  irregularity {mean('path_irregularity', 3, 'rad/m')}  jerk "
+        f"{mean('jerk_mean', 3, 'm/s³')}  min clearance {mean('min_ped_clearance', 2, 'm')}  "
+        f"TTC < {TTC_THRESHOLD:g} s {mean('low_ttc_ratio', 3)}  intrusion "
+        f"{mean('intrusion_ratio', 3)} (clearance {mean('intrusion_clearance', 2, 'm')})  "
+        "(means per episode, 95 % t intervals)"
+    )
 
 
 def record_from_json(d: dict) -> EpisodeRecord:
-    """An `EpisodeRecord` back from its `to_json()` (null distance → inf)."""
+    """An `EpisodeRecord` back from its `to_json()` (null distance → inf). A record
+    written before the field's metrics existed lacks them: they read as None (not
+    measured)."""
     d = dict(d)
     if d.get("min_ped_distance") is None:
         d["min_ped_distance"] = math.inf

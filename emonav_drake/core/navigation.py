@@ -35,13 +35,14 @@ import math
 
 import numpy as np
 
-from emonav_drake.core.crowd import Crowd, CrowdSnapshot, CrowdState
+from emonav_drake.core.crowd import Crowd, CrowdSnapshot, CrowdState, with_wall_discs
 from emonav_drake.core.goal_input import goal_state, policy_goal_state
 from emonav_drake.core.lip import LipState, lip_in_step, lip_step, lip_velocity
 from emonav_drake.core.metrics import EpisodeRecord, EpisodeTracker
 from emonav_drake.core.observations import observation_kind
 from emonav_drake.core.reward import StepEvaluation, evaluate_step
 from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec, WallSpec
+from emonav_drake.core.social_metrics import StepMotion
 from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.params import EmoNavConfig, RobotParams
 
@@ -202,7 +203,7 @@ class NavigationWorld:
             robot=self.robot,
             goal_xy=self.goal_xy,
             last_command=self.last_command.copy(),
-            crowd=self.crowd.snapshot(self.crowd_state),
+            crowd=with_wall_discs(self.crowd.snapshot(self.crowd_state)),
             lgm_stack=None if self.frames is None else self.frames.array,
             step=self.step_count,
         )
@@ -236,6 +237,7 @@ class NavigationWorld:
                 "step_time": t.step_time,
                 "done": t.done,
                 "record": dc.asdict(t.record),
+                "social": t.social_state(),
             },
             "frames": None if self.frames is None else self.frames.array,
         }
@@ -273,6 +275,7 @@ class NavigationWorld:
         self.tracker = EpisodeTracker(tr["max_steps"], tr["step_time"])
         self.tracker.record = EpisodeRecord(**tr["record"])
         self.tracker.done = tr["done"]
+        self.tracker.load_social_state(tr.get("social"))
         frames = state["frames"]
         if (frames is None) != (self.frames is None):
             raise ValueError("the saved frame stack does not match the map kind")
@@ -326,7 +329,13 @@ class NavigationWorld:
             self.config.reward,
         )
         self.goal_distance = ev.goal_distance
-        outcome = self.tracker.add(ev, math.hypot(self.robot.x - start.x, self.robot.y - start.y))
+        outcome = self.tracker.add(
+            ev,
+            math.hypot(self.robot.x - start.x, self.robot.y - start.y),
+            motion=StepMotion(
+                start, self.robot, self.crowd.snapshot(crowd), self.goal_xy, r.radius, u
+            ),
+        )
         if self.frames is not None:
             self.frames.push(self._frame())
         return ev, outcome

@@ -192,6 +192,8 @@ def _grid_frame(kind: str) -> Callable[[LipState, CrowdSnapshot, EmoNavConfig], 
             max_range=li.max_range,
             min_range=li.min_range,
             kind=kind,
+            segments=crowd.wall_segments,
+            segment_margin=crowd.static_discomfort,
         )
 
     return frame
@@ -201,7 +203,16 @@ def _scan_frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> 
     centers, radii, _ = obstacle_discs(crowd)
     li = config.lidar
     xy = np.array([robot.x, robot.y])
-    ranges = scan_discs(xy, robot.heading, centers, radii, li.num_beams, li.max_range, li.min_range)
+    ranges = scan_discs(
+        xy,
+        robot.heading,
+        centers,
+        radii,
+        li.num_beams,
+        li.max_range,
+        li.min_range,
+        segments=crowd.wall_segments,
+    )
     return ranges.astype(np.float32)
 
 
@@ -221,6 +232,8 @@ def _drlvo_frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) ->
         li.grid_size,
         li.max_range,
         li.min_range,
+        segments=crowd.wall_segments,
+        segment_margin=crowd.static_discomfort,
     )
 
 

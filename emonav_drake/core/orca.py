@@ -29,6 +29,13 @@ Semantics (RVO2's)
   ``v_i + u``). As in RVO2, agent ``i`` only considers obstacles whose surface is closer than
   ``time_horizon_obst * max_speed_i + radius_i``, sorted by that surface distance. Obstacle
   lines come first in the line list.
+* **Line segments (walls).** ``obstacle_segments`` are RVO2's two-vertex obstacles: a
+  segment blocked on both sides, with RVO2's range rule, order, "already covered" test,
+  legs, foreign legs and collision lines (`core/orca_walls.py`), horizon
+  ``time_horizon_obst`` and full responsibility. An agent's segment lines come first, then
+  its static-disc lines, then its agent lines; segment and disc lines are all obstacle
+  lines (hard in ``linearProgram3``). Without segments the computation is exactly the one
+  without this option.
 * **Linear program.** RVO2's incremental 2-D linear program (``linearProgram1/2``) finds the
   velocity closest to the preferred velocity inside the disc of radius ``max_speed`` that
   satisfies all ORCA half-planes. If it is infeasible, ``linearProgram3`` minimises the
@@ -57,7 +64,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from emonav_drake.core.orca_lines import neighbour_table, orca_lines
-from emonav_drake.core.orca_lp import solve_linear_programs
+from emonav_drake.core.orca_lp import Line, solve_linear_programs
+from emonav_drake.core.orca_walls import segment_lines
 
 __all__ = ["OrcaParams", "orca_velocities"]
 
@@ -106,6 +114,7 @@ def orca_velocities(
     visible: np.ndarray | None = None,
     active: np.ndarray | None = None,
     check_inputs: bool = True,
+    obstacle_segments: np.ndarray | None = None,
 ) -> np.ndarray:
     """Compute the ORCA velocities of ``n`` agents for one synchronous step.
 
@@ -125,7 +134,11 @@ def orca_velocities(
             ones get their given velocity back unchanged. Default: all ``True``.
         check_inputs: validate shapes, finiteness and ranges (default). Callers that
             build well-formed float64/bool arrays themselves every step (the crowd) may
-            pass ``False``: then every array argument must be given, as the right type.
+            pass ``False``: then every array argument must be given, as the right type
+            (``obstacle_segments`` may still be ``None``).
+        obstacle_segments: ``(W, 2, 2)`` line segments (walls), world frame, m: segment k
+            runs from ``[k, 0]`` to ``[k, 1]``, each of non-zero length, blocked on both
+            sides (RVO2's two-vertex obstacles). ``None`` or ``W == 0``: no walls.
 
     Returns:
         ``(n, 2)`` new velocities, world frame, m/s. Active agents' speeds never exceed
@@ -137,7 +150,9 @@ def orca_velocities(
     if not check_inputs:
         pos, vel, rad, pref, vmax = (positions, velocities, radii, pref_velocities, max_speeds)
         obs_c, obs_r, vis, act = obstacle_centers, obstacle_radii, visible, active
+        segs = obstacle_segments
     else:
+        segs = _validated_segments(obstacle_segments)
         (pos, vel, rad, pref, vmax, dt, obs_c, obs_r, vis, act) = _validated_inputs(
             positions,
             velocities,
@@ -158,9 +173,27 @@ def orca_velocities(
 
     table = neighbour_table(agents, pos, rad, vmax, obs_c, obs_r, vis, params)
     lines = orca_lines(table, pos, vel, rad, obs_c, obs_r, dt, params)
-    solved = solve_linear_programs(agents, lines, table.offsets, table.n_obstacle_lines, pref, vmax)
+    offsets, n_obstacle_lines = table.offsets, table.n_obstacle_lines
+    if segs is not None and len(segs):
+        walls = segment_lines(agents, pos, vel, rad, vmax, segs, params.time_horizon_obst)
+        lines, offsets, n_obstacle_lines = _prepend(walls, lines, offsets, n_obstacle_lines)
+    solved = solve_linear_programs(agents, lines, offsets, n_obstacle_lines, pref, vmax)
     new_velocities[agents] = solved
     return new_velocities
+
+
+def _prepend(
+    walls: list[list[Line]], lines: list[Line], offsets: list[int], n_obstacle_lines: list[int]
+) -> tuple[list[Line], list[int], list[int]]:
+    """Put each agent's segment lines before its other lines; they count as obstacle lines."""
+    merged: list[Line] = []
+    new_offsets = [0]
+    for k, own in enumerate(walls):
+        merged.extend(own)
+        merged.extend(lines[offsets[k] : offsets[k + 1]])
+        new_offsets.append(len(merged))
+    counts = [n + len(own) for n, own in zip(n_obstacle_lines, walls, strict=True)]
+    return merged, new_offsets, counts
 
 
 # ---------------------------------------------------------------------------------------------
@@ -179,6 +212,24 @@ def _float_array(name: str, value: object, shape: tuple[int, ...]) -> np.ndarray
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{name} must be finite (no NaN or inf)")
     return array
+
+
+def _validated_segments(segments: object) -> np.ndarray | None:
+    """``obstacle_segments`` as a finite float64 (W, 2, 2) array of non-zero-length
+    segments, or None; ValueError otherwise."""
+    if segments is None:
+        return None
+    segs = np.asarray(segments, dtype=np.float64)
+    if segs.size == 0:
+        return None
+    if segs.ndim != 3 or segs.shape[1:] != (2, 2):
+        raise ValueError(f"obstacle_segments must have shape (W, 2, 2), got {segs.shape}")
+    segs = _float_array("obstacle_segments", segs, segs.shape)
+    length = np.hypot(*(segs[:, 1] - segs[:, 0]).T)
+    if np.any(length <= 0.0):
+        k = int(np.argmin(length))
+        raise ValueError(f"obstacle_segments[{k}] has zero length (both ends {segs[k, 0]})")
+    return segs
 
 
 def _bool_array(name: str, value: object, shape: tuple[int, ...]) -> np.ndarray:

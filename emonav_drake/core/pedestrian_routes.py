@@ -5,7 +5,9 @@ crowd (`core/crowd.py`) computes its preferred velocity with vectorised numpy, a
 module leaves it alone (a *plain* pedestrian). The scenario families need more, given per
 pedestrian in `core/scenario_spec.py::PedestrianSpec`:
 
-* a **route** start → waypoints → goal, walked back in reverse at the goal;
+* a **route** start → waypoints → goal, walked back in reverse at the goal (a waypoint on
+  the way counts as passed within `WAYPOINT_TOLERANCE`, the route's ends within the
+  crowd's goal tolerance);
 * **standing**: for good at the goal (`at_goal: stand`), for `stand_time` at each end of
   the route, and for `start_delay` before walking at all (a standing pedestrian's
   preferred velocity is zero; ORCA may still nudge it aside);
@@ -29,6 +31,7 @@ import numpy as np
 
 FORMATION_GAIN = 1.0  # [1/s]: a follower 0.5 m off its slot walks 0.5 m/s faster towards it
 FOLLOWER_SPEEDUP = 1.5  # a follower may walk this much faster than its speed to keep up
+WAYPOINT_TOLERANCE = 0.5  # [m]: a waypoint on the way counts as passed this close
 WAIT_FOREVER = -1  # `waits` value of a pedestrian that stands for good
 
 
@@ -136,7 +139,9 @@ class RoutePlan:
         """
         standing = np.zeros(len(positions), dtype=bool)
         for i in np.flatnonzero(~self.plain & (self.leaders < 0)):
-            if waits[i] == 0 and math.dist(positions[i], goals[i]) < goal_tolerance:
+            end = targets[i] in (0, len(self.routes[i]) - 1)
+            near = goal_tolerance if end else WAYPOINT_TOLERANCE  # corners are cut
+            if waits[i] == 0 and math.dist(positions[i], goals[i]) < near:
                 self._arrive(i, goals, origins, targets, backwards, waits)
             if waits[i] != 0:
                 standing[i] = True

@@ -3,7 +3,8 @@
     r_k = r_col + r_goal + r_emo
 
 * r_col = −0.6 if d_min^all ≤ r_robot (collision: the robot centre within r_robot of
-  any object's surface), else −0.1 if d_min^static < d_static + r_robot, else 0;
+  any object's surface, or of a wall segment), else −0.1 if d_min^static < d_static +
+  r_robot (static discs' surfaces and walls), else 0;
 * r_goal = 0.5 if the goal distance ≤ d_goal, else 0.3 (d_{k−1} − d_k);
 * r_emo = −0.1 if some pedestrian i has d_i < d_i^emo + r_robot (d_i: robot centre to
   the pedestrian's surface; d_i^emo its emotion's discomfort distance).
@@ -20,6 +21,7 @@ import math
 import numpy as np
 
 from emonav_drake.core.crowd import CrowdSnapshot
+from emonav_drake.core.walls import point_segment_distances
 from emonav_drake.params import EMOTION_NAMES, RewardParams
 
 # Indices of the IDT vector: [static; happy, neutral, negative].
@@ -37,7 +39,7 @@ class StepEvaluation:
     idt: tuple[int, int, int, int]  # 1 where inside a zone of [static, happy, neutral, negative]
     min_ped_distance: float  # smallest robot–pedestrian centre distance [m] (inf if none)
     goal_distance: float  # [m]
-    collided_with: str = ""  # with a collision: "static", or the pedestrian's emotion
+    collided_with: str = ""  # with a collision: "static", "wall", or the pedestrian's emotion
 
 
 def evaluate_step(
@@ -54,14 +56,19 @@ def evaluate_step(
     ped_centre = np.linalg.norm(crowd.positions - robot_xy, axis=1)
     ped_gap = ped_centre - crowd.radius  # robot centre to pedestrian surface
     static_gap = np.linalg.norm(crowd.static_centers - robot_xy, axis=1) - crowd.static_radii
+    walls = crowd.wall_segments
+    if len(walls):  # a wall is a static object of no thickness: its gap is the distance
+        static_gap = np.concatenate([static_gap, point_segment_distances(robot_xy, walls)])
     all_gap = np.concatenate([ped_gap, static_gap])
     collision = bool(all_gap.size and all_gap.min() <= robot_radius)
     collided_with = ""
     if collision:
         nearest = int(np.argmin(all_gap))
-        collided_with = (
-            EMOTION_NAMES[int(crowd.emotions[nearest])] if nearest < len(ped_gap) else "static"
-        )
+        if nearest < len(ped_gap):
+            collided_with = EMOTION_NAMES[int(crowd.emotions[nearest])]
+        else:
+            is_wall = nearest >= len(ped_gap) + len(crowd.static_radii)
+            collided_with = "wall" if is_wall else "static"
     in_static = bool(static_gap.size and static_gap.min() < crowd.static_discomfort + robot_radius)
     in_ped = ped_gap < crowd.discomfort + robot_radius
     reached = goal_distance <= goal_radius

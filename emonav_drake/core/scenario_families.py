@@ -1,6 +1,6 @@
 """Named scenario families: seeded samplers of scenes beyond the paper's arena.
 
-`paper` is the paper's distribution (`core/paper_scenario.py::sample_paper_scenario`, §IV-B): 1–4
+`paper` is the paper's distribution (`core/paper_scenario.py`, §IV-B): 1–4
 pedestrians crossing a circle of radius 3.5–4.5 m at 1 m/s, 1–3 static discs. The other
 families follow the scenario set of Francis et al. (2025, "Principles and guidelines for
 evaluating social robot navigation algorithms") as implemented by social-jym — circle
@@ -285,9 +285,9 @@ assert tuple(FAMILIES) == SCENARIO_FAMILIES, "params.SCENARIO_FAMILIES lists the
 def sample_family(name: str, seed: int, config: EmoNavConfig | None = None) -> Scenario:
     """The scene of `seed` in family `name`, validated and with a reachable goal.
 
-    `paper` is `core/paper_scenario.py::sample_paper_scenario` (the paper's seeds, unchanged). Raises
-    `ConfigError` for an unknown family, `ScenarioSamplingError` if `SCENE_TRIES` draws
-    gave no valid scene.
+    `paper` is `core/paper_scenario.py::sample_paper_scenario` (the paper's seeds,
+    unchanged). Raises `ConfigError` for an unknown family, `ScenarioSamplingError` if
+    `SCENE_TRIES` draws gave no valid scene.
     """
     cfg = config or EmoNavConfig()
     if name not in FAMILIES:

@@ -45,7 +45,7 @@ LEGEND = (
     ("happy pedestrian", _css(nm.EMOTION_RGBA[0])),
     ("neutral pedestrian", _css(nm.EMOTION_RGBA[1])),
     ("negative pedestrian", _css(nm.EMOTION_RGBA[2])),
-    ("static disc", _css(nm.STATIC_RGBA)),
+    ("static disc or wall", _css(nm.STATIC_RGBA)),
     ("robot and its trail", _css(nm.ROBOT_RGBA)),
     ("goal", _css(nm.GOAL_RGBA)),
 )
@@ -61,7 +61,7 @@ FOOTSTEP_LEGEND = (
 # the legend in words, for Meshcat's control panel (no colours there; ~44 characters fit)
 LIVE_LEGEND = (
     "happy green, neutral orange, negative red",
-    "static discs grey, robot blue, goal black",
+    "discs, walls grey, robot blue, goal black",
 )
 
 

@@ -238,6 +238,7 @@ def AddNavigationStack(
         for port in perceivers:
             b.Connect(crowd.GetOutputPort("crowd"), port)
     b.Connect(crowd.GetOutputPort("crowd"), monitor.GetInputPort("crowd"))
+    b.Connect(plan.GetOutputPort("command"), monitor.GetInputPort("command"))  # for the jerk
     b.Connect(maps.GetOutputPort("lgm_stack"), plan.GetInputPort("lgm_stack"))
     return NavigationStack(crowd, maps, plan, monitor, perception, tracker)
 

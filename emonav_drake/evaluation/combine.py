@@ -12,7 +12,9 @@ first difference. The runs may cover different seed ranges (the pairs are tested
 seeds both ran) and may come from different commits (each run's commit is listed in the
 combined settings). A method name
 may appear in two runs only for the same planner and checkpoint; its trials must then
-agree seed for seed (a deterministic planner gives the same trial twice).
+agree seed for seed (a deterministic planner gives the same trial twice) — on the fields
+both records have: a run recorded before the field's metrics (`core/social_metrics.py`)
+agrees with a later one that has them, and the trial that has them is kept.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
+from emonav_drake.core.social_metrics import SOCIAL_FIELDS
 from emonav_drake.evaluation.run_directory import (
     BenchmarkSettingsError,
     comparable,
@@ -27,6 +30,22 @@ from emonav_drake.evaluation.run_directory import (
     trial_key,
 )
 from emonav_drake.evaluation.run_settings import TRIAL_SETTINGS
+
+
+def _measured(t: dict) -> bool:
+    """Whether a trial's record carries the field's metrics (a record from before them
+    lacks every one)."""
+    return any(name in t["record"] for name in SOCIAL_FIELDS)
+
+
+def same_trial(a: dict, b: dict) -> bool:
+    """Two trial lines of one method and seed agree: equal but for the wall time, and
+    but for the field's metrics when one record was written before they existed."""
+    if _measured(a) == _measured(b):
+        return comparable(a) == comparable(b)
+    old, new = (a, b) if _measured(b) else (b, a)
+    trimmed = {k: v for k, v in new["record"].items() if k not in SOCIAL_FIELDS}
+    return comparable(old) == comparable(new | {"record": trimmed})
 
 
 def combine_runs(paths: Sequence[str | Path]) -> tuple[dict, list[dict]]:
@@ -68,11 +87,12 @@ def combine_runs(paths: Sequence[str | Path]) -> tuple[dict, list[dict]]:
                 )
         for t in run_trials:
             key = trial_key(t)
-            if key in trials and comparable(trials[key]) != comparable(t):
+            if key in trials and not same_trial(trials[key], t):
                 raise BenchmarkSettingsError(
                     f"{path}: {key[0]} seed {key[1]} differs from the same trial in an earlier run"
                 )
-            trials.setdefault(key, t)
+            if key not in trials or (_measured(t) and not _measured(trials[key])):
+                trials[key] = t
         lo, hi = min(lo, s["first_seed"]), max(hi, s["first_seed"] + s["trials"])
         pkg = s.get("package", {})
         settings["runs"].append(

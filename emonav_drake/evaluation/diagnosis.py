@@ -248,13 +248,13 @@ def diagnosis_table(rows: list[dict]) -> str:
 
 
 def _cause_order(cause: str) -> tuple[int, str]:
-    order = ["collision: static", "collision: happy", "collision: neutral"]
+    order = ["collision: static", "collision: wall", "collision: happy", "collision: neutral"]
     order += ["collision: negative", "timeout"]
     return (order.index(cause) if cause in order else len(order), cause)
 
 
 def _cause_color(cause: str) -> tuple[float, float, float]:
-    """The world's colours (`core.palette`): emotions as everywhere, static discs grey;
+    """The world's colours (`core.palette`): emotions as everywhere, static discs and walls grey;
     timeouts purple, falls and anything else black."""
     from emonav_drake.core import palette
     from emonav_drake.params import EMOTION_NAMES
@@ -262,7 +262,7 @@ def _cause_color(cause: str) -> tuple[float, float, float]:
     kind = cause.removeprefix("collision: ")
     if kind in EMOTION_NAMES:
         return palette.EMOTION_RGB[EMOTION_NAMES.index(kind)]
-    if kind == "static":
+    if kind in ("static", "wall"):
         return palette.STATIC_RGB
     if cause in palette.OUTCOME_RGB:
         return palette.OUTCOME_RGB[cause]

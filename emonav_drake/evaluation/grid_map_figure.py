@@ -4,7 +4,8 @@ Panel (a) is the scene from above in the world frame, in the shared palette
 (`core/palette.py`, Okabe–Ito): the robot blue with a black heading arrow, pedestrians
 bluish green / orange / vermillion by emotion (happy / neutral / negative) with their
 discomfort zones dashed in the same colour, static discs grey with their dashed d_static
-rings, the LiDAR's hit points dark grey, its range dotted light grey, the goal a black
+rings, walls (if any) as grey lines with their dashed d_static bands, the LiDAR's hit
+points dark grey, its range dotted light grey, the goal a black
 star — or, when the goal lies beyond the panel, a black arrow at the panel's edge
 pointing to it, labelled with its distance. Panels (b)
 and (c) colour the grid values: 0 free (white), 127 discomfort zone (light blue: the hit
@@ -44,6 +45,7 @@ from emonav_drake.core.palette import (
     UNKNOWN_EMOTION_RGB,
     ZONE_EDGE_RGB,
 )
+from emonav_drake.core.walls import as_segments
 from emonav_drake.params import EMOTION_NAMES, NUM_BEAMS
 
 STATIC, PEDESTRIAN = 0, 1
@@ -71,6 +73,8 @@ def render_grid_map_figure(
     title: str | None = None,
     dpi: int = 120,
     emotions: object | None = None,
+    segments: object | None = None,
+    segment_margin: float = 0.2,
 ) -> Path:
     """Write a three-panel PNG: (a) the scene, (b) its LGM, (c) its OGM.
 
@@ -91,6 +95,9 @@ def render_grid_map_figure(
         emotions: optional (n,) emotion codes (0 happy, 1 neutral, 2 negative; ignored for
             static discs) colouring the pedestrians; without them pedestrians are dark grey
             (`palette.UNKNOWN_EMOTION_RGB`).
+        segments: optional walls (W, 2, 2) in the world frame [m] (segment k from
+            ``[k, 0]`` to ``[k, 1]``), scanned with the discs (`core/lidar.py`).
+        segment_margin: the walls' discomfort margin [m] (the static discs' 0.2 m).
 
     Returns:
         The written path.
@@ -105,12 +112,18 @@ def render_grid_map_figure(
     heading = float(heading)
     c, r = as_discs(centers, radii)
     mg, kd, emo = _check_disc_arrays(r, margins, kinds, emotions)
+    walls = as_segments(segments, "segments")
     settings = dict(
-        num_beams=num_beams, grid_size=grid_size, max_range=max_range, min_range=min_range
+        num_beams=num_beams,
+        grid_size=grid_size,
+        max_range=max_range,
+        min_range=min_range,
+        segments=walls,
+        segment_margin=segment_margin,
     )
     lgm = lgm_frame(origin, heading, c, r, mg, kind="lgm", **settings)
     ogm = lgm_frame(origin, heading, c, r, mg, kind="ogm", **settings)
-    ranges = scan_discs(origin, heading, c, r, num_beams, max_range, min_range)
+    ranges = scan_discs(origin, heading, c, r, num_beams, max_range, min_range, segments=walls)
 
     fig, (ax_scene, ax_lgm, ax_ogm), (key_scene, key_grid) = _figure_layout()
     shown_emotions, goal_handle = _draw_scene(
@@ -124,7 +137,8 @@ def render_grid_map_figure(
         max_range,
         robot_radius,
     )
-    _scene_legend(key_scene, kd, emo, shown_emotions, goal_handle, max_range)
+    _draw_walls(ax_scene, walls, float(segment_margin))
+    _scene_legend(key_scene, kd, emo, shown_emotions, goal_handle, max_range, len(walls) > 0)
     _draw_lgm(ax_lgm, lgm, max_range)
     _draw_ogm(ax_ogm, ogm, max_range)
     _grid_legend(key_grid)
@@ -225,6 +239,26 @@ def _draw_scene(
     return shown_emotions, goal_handle
 
 
+def _draw_walls(ax: Axes, walls: np.ndarray, margin: float) -> None:
+    """The walls (W, 2, 2) as grey lines, each with the dashed outline of its band of
+    half-width `margin` [m] (its discomfort zone), in the world frame."""
+    for a, b in walls:
+        ax.plot([a[0], b[0]], [a[1], b[1]], color=STATIC_RGB, lw=3, solid_capstyle="butt")
+        if margin > 0.0:
+            ax.plot(*_band_outline(a, b, margin).T, ls="--", color=STATIC_RGB, lw=1.2)
+
+
+def _band_outline(a: np.ndarray, b: np.ndarray, h: float, n: int = 16) -> np.ndarray:
+    """Closed outline (2n + 1, 2) [m] of the points within `h` of the segment a → b: a
+    half circle round b, the side back to a, a half circle round a."""
+    e = b - a
+    angle = math.atan2(e[1], e[0])
+    half = np.linspace(-math.pi / 2, math.pi / 2, n)
+    round_b = b + h * np.c_[np.cos(angle + half), np.sin(angle + half)]
+    round_a = a + h * np.c_[np.cos(angle + math.pi + half), np.sin(angle + math.pi + half)]
+    return np.vstack([round_b, round_a, round_b[:1]])
+
+
 def _scene_legend(
     key: Axes,
     kd: np.ndarray,
@@ -232,6 +266,7 @@ def _scene_legend(
     shown_emotions: set[int],
     goal_handle: Line2D | None,
     max_range: float,
+    has_walls: bool = False,
 ) -> None:
     """The legend of panel (a), drawn on the axes `key` under it."""
     handles = [
@@ -248,6 +283,8 @@ def _scene_legend(
         handles.append(
             Line2D([], [], ls="none", marker="o", ms=10, color=STATIC_RGB, label="static disc")
         )
+    if has_walls:
+        handles.append(Line2D([], [], color=STATIC_RGB, lw=3, label="wall"))
     handles.append(
         Line2D([], [], ls="--", color=ZONE_EDGE_RGB, label="discomfort zone (radius + margin)")
     )

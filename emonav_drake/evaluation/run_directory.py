@@ -32,6 +32,7 @@ from emonav_drake.atomic_io import (
 )
 from emonav_drake.core.metrics import COLLISION, FALL, SUCCESS, TIMEOUT, EpisodeRecord
 from emonav_drake.core.scenario import MAX_SEED
+from emonav_drake.core.social_metrics import check_social_fields
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.evaluation import tables
 from emonav_drake.evaluation.run_settings import (
@@ -94,7 +95,8 @@ def check_trial(t: dict, config: EmoNavConfig | None = None) -> str | None:
     other, a known outcome, step counts that are integers in [0, steps], lengths and times
     that are finite and >= 0 (`min_ped_distance` may be null: no pedestrian), a finite
     reward, DT between the largest IDT entry and their sum, `collided_with` only on a
-    collision and `fall_reason` only on a fall. With the run's `config`, also what the
+    collision and `fall_reason` only on a fall, the field's metrics absent, null or valid
+    (`core.social_metrics.check_social_fields`). With the run's `config`, also what the
     episode's bookkeeping (`core.metrics.EpisodeTracker`, on either plant) makes of it:
     `nav_time` = `steps` × `robot.step_time`, at most `episode.max_steps` steps, a
     timeout exactly at `episode.max_steps`, at least one step before a success or a
@@ -149,6 +151,9 @@ def check_trial(t: dict, config: EmoNavConfig | None = None) -> str | None:
             return (
                 f"record.{name} = {r[name]!r} with outcome {r['outcome']}: only a {outcome} has one"
             )
+    social = check_social_fields(r)
+    if social is not None:
+        return social
     if r["idt"] and not max(r["idt"]) <= r["discomfort_steps"] <= sum(r["idt"]):
         return (
             f"record.discomfort_steps = {r['discomfort_steps']} does not fit record.idt = "

@@ -11,6 +11,10 @@ interval; methods are compared on the seeds they share with McNemar's exact test
 * Table III style: IDT [static; happy, neutral, negative] and SR per method and setting;
 * social metrics: mean path length, minimum pedestrian distance, collision, timeout and
   (full-order Digit) fall rates, wall time per trial;
+* the field's metrics (`core/social_metrics.py`, docs/metrics.md): path irregularity,
+  jerk, pedestrian clearance, low time-to-collision and intrusion ratios, clearance
+  during intrusions — means per trial with 95 % Student-t intervals, over the trials
+  that measured them (n/a: none did, e.g. a run recorded before they existed);
 * paired comparison: for every pair of methods, the seeds both ran, the discordant counts,
   the exact p-value and whether the difference is significant at α = 0.05.
 """
@@ -24,6 +28,7 @@ import math
 from collections.abc import Iterable, Sequence
 
 from emonav_drake.core.metrics import SUCCESS, record_from_json, summarize
+from emonav_drake.core.social_metrics import INTRUSION_DISTANCE, SOCIAL_FIELDS, TTC_THRESHOLD
 from emonav_drake.diagrams.plants import PLANTS
 
 ALPHA = 0.05
@@ -238,6 +243,39 @@ def social_rows(summary: dict, plant: str) -> tuple[list[str], list[list[object]
     return header, rows
 
 
+# The field's metrics as table columns: record field → (header, decimals).
+FIELD_COLUMNS = {
+    "path_irregularity": ("path irregularity [rad/m]", 3),
+    "jerk_mean": ("jerk [m/s³]", 3),
+    "min_ped_clearance": ("min. ped. clearance [m]", 3),
+    "low_ttc_ratio": (f"TTC < {TTC_THRESHOLD:g} s (share of steps)", 3),
+    "intrusion_ratio": (f"intrusion < {INTRUSION_DISTANCE:g} m (share of steps)", 3),
+    "intrusion_clearance": ("clearance in intrusions [m]", 3),
+}
+
+
+def format_mean_ci(s: dict, name: str, digits: int = 3) -> str:
+    """A field metric's cell: "mean [lo, hi]", with "(n=k)" when only k of the trials
+    measured it; "n/a" when none did."""
+    n, mean, ci = s.get(f"{name}_n", 0), s.get(f"{name}_mean"), s.get(f"{name}_ci")
+    if not n or mean is None:
+        return "n/a"
+    text = f"{mean:.{digits}f}"
+    if ci is not None:
+        text += f" [{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]"
+    return text if n == s["episodes"] else f"{text} (n={n})"
+
+
+def field_rows(summary: dict) -> tuple[list[str], list[list[object]]]:
+    """The field's metrics: Method | trials | one column per metric (mean [95 % CI])."""
+    header = ["Method", "trials", *(h for h, _ in FIELD_COLUMNS.values())]
+    rows = [
+        [m, s["episodes"], *(format_mean_ci(s, k, d) for k, (_, d) in FIELD_COLUMNS.items())]
+        for m, s in summary.items()
+    ]
+    return header, rows
+
+
 def pairwise_rows(pairs: Sequence[dict]) -> tuple[list[str], list[list[object]]]:
     header = [
         "A",
@@ -299,14 +337,21 @@ def table3_csv(summary: dict, setting: str, plant: str, observations: dict | Non
 
 
 def social_csv(summary: dict) -> str:
+    """The social metrics and then the field's: for each, its mean, 95 % interval and
+    number of trials that measured it (empty cells: not measured)."""
     header = ["method", "trials", "path_length_mean", "min_ped_distance", "min_ped_distance_mean"]
     header += ["collision_rate", "timeout_rate", "fall_rate", "wall_seconds_mean"]
-    rows = [
-        [m, s["episodes"], s["path_length_mean"], s["min_ped_distance"]]
-        + [s["min_ped_distance_mean"], s["collision_rate"], s["timeout_rate"], s["fall_rate"]]
-        + [s["wall_seconds_mean"]]
-        for m, s in summary.items()
-    ]
+    for name in SOCIAL_FIELDS:
+        header += [f"{name}_mean", f"{name}_ci_low", f"{name}_ci_high", f"{name}_n"]
+    rows = []
+    for m, s in summary.items():
+        row = [m, s["episodes"], s["path_length_mean"], s["min_ped_distance"]]
+        row += [s["min_ped_distance_mean"], s["collision_rate"], s["timeout_rate"], s["fall_rate"]]
+        row.append(s["wall_seconds_mean"])
+        for name in SOCIAL_FIELDS:
+            ci = s.get(f"{name}_ci") or [None, None]
+            row += [s.get(f"{name}_mean"), *ci, s.get(f"{name}_n", 0)]
+        rows.append(row)
     return csv_text(header, rows)
 
 
@@ -353,6 +398,19 @@ def render_markdown(
         "of the per-trial minima.",
         "",
         markdown_table(*social_rows(summary, plant)),
+        "",
+        "## Field metrics: smoothness, clearance, time to collision, intrusions",
+        "",
+        "Means per trial with their 95 % Student-t interval (n: trials that measured a "
+        "metric, when not all did; n/a: none did). Path irregularity: turning beyond the "
+        "least needed to face the goal, per metre (SocNavBench); jerk: of the commanded "
+        "velocity (Francis et al. 2025); clearance: robot to pedestrian, surface to "
+        f"surface; TTC < {TTC_THRESHOLD:g} s: share of walking steps with a pedestrian's "
+        f"constant-velocity time to collision below {TTC_THRESHOLD:g} s; intrusion: share "
+        f"of steps closer than {INTRUSION_DISTANCE:g} m to a pedestrian and the mean "
+        "clearance in them (CrowdNav++ / HEIGHT). Definitions: docs/metrics.md.",
+        "",
+        markdown_table(*field_rows(summary)),
         "",
         f"## Paired comparison (same seeds, McNemar exact test, α = {ALPHA:g})",
         "",

@@ -17,7 +17,7 @@ t, before the crowd's update at t). After the walking step the replayed crowd is
 to be the world's, bit for bit.
 
 **One scan** (`EpisodeEvaluator.observe`, `ScanTruth`): `core/lidar.py::scan_discs` of
-every pedestrian and static disc from the robot's pose, `detect_objects`,
+every pedestrian, static disc and wall from the robot's pose, `detect_objects`,
 `CrowdTracker.update`. Ground truth: every pedestrian (id = its index), its position and
 velocity. Hypotheses: the confirmed tracks that are not still (`CrowdTracker.is_static`),
 i.e. the pedestrians `CrowdTracker.snapshot` reports. Both go into a
@@ -122,6 +122,8 @@ class ScanTruth:
     ped_velocities: np.ndarray  # (P, 2) [m/s]
     static_centers: np.ndarray  # (S, 2) [m]
     static_radii: np.ndarray  # (S,) [m]
+    # (W, 2, 2) walls, segment k from [k, 0] to [k, 1] [m]: they block beams too
+    wall_segments: np.ndarray = dc.field(default_factory=lambda: np.zeros((0, 2, 2)))
 
 
 def _visible_beams(
@@ -154,12 +156,14 @@ def visibility(
     static_radii: Sequence[float] | np.ndarray,
     config: EmoNavConfig,
     detection: DetectionParams | None = None,
+    wall_segments: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """How much of each pedestrian the scan from (`robot_xy` [m], `heading` [rad]) shows.
 
     Returns (own beams (P,), visible beams (P,), category (P,)): own = beams that hit
     the pedestrian scanned alone; visible = those whose range in the scan of every
-    pedestrian (radius `ped_radius` [m]) and disc equals its own (`SAME_RANGE`);
+    pedestrian (radius `ped_radius` [m]), disc and wall (`wall_segments` (W, 2, 2) [m],
+    optional) equals its own (`SAME_RANGE`);
     category `OUT_OF_RANGE` (centre beyond `lidar.max_range`), `OCCLUDED` (fewer than
     `detection.min_points` visible), `PARTLY_OCCLUDED` (some own beams hidden), `VISIBLE`.
     """
@@ -168,7 +172,16 @@ def visibility(
     centers = np.vstack([peds, np.asarray(static_centers, dtype=float).reshape(-1, 2)])
     radii = np.concatenate([np.full(len(peds), float(ped_radius)), np.asarray(static_radii, float)])
     li = config.lidar
-    full = scan_discs(robot_xy, heading, centers, radii, li.num_beams, li.max_range, li.min_range)
+    full = scan_discs(
+        robot_xy,
+        heading,
+        centers,
+        radii,
+        li.num_beams,
+        li.max_range,
+        li.min_range,
+        segments=wall_segments,
+    )
     own, vis = _visible_beams(robot_xy, heading, peds, radii[: len(peds)], full, config)
     return own, vis, _categories(robot_xy, peds, own, vis, config, detection or DetectionParams())
 
@@ -270,7 +283,14 @@ class EpisodeEvaluator:
         centers = np.vstack([peds, sc])
         radii = np.concatenate([np.full(len(peds), cfg.crowd.pedestrian_radius), sr])
         full = scan_discs(
-            xy, truth.heading, centers, radii, li.num_beams, li.max_range, li.min_range
+            xy,
+            truth.heading,
+            centers,
+            radii,
+            li.num_beams,
+            li.max_range,
+            li.min_range,
+            segments=truth.wall_segments,
         )
         det = detect_objects(full, xy, truth.heading, li.max_range, self.detection)
         self.tracker.update(t, det)
@@ -499,6 +519,7 @@ def run_episode(
                     ped_velocities=crowd.velocities,
                     static_centers=crowd_model.static_centers,
                     static_radii=crowd_model.static_radii,
+                    wall_segments=crowd_model.wall_segments,
                 )
             )
             crowd = crowd_model.step(crowd, xy, lip_velocity(seen))

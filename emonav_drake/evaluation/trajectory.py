@@ -16,7 +16,8 @@ at t_k; the last row is the episode's end::
                    "robot_radius": 0.3, "pedestrian_radius": 0.3,
                    "discomfort": {"happy": 0.2, "neutral": 0.35, "negative": 0.5,
                                   "static": 0.2},
-                   "obstacles": [{"center": [x, y], "radius": r}, ...]},
+                   "obstacles": [{"center": [x, y], "radius": r}, ...],
+                   "walls": [{"start": [x, y], "end": [x, y]}, ...]},  (only with walls)
       "t": [t_0, …, t_K],                       # [s]
       "robot": [[x, y, θ, v], …],               # (K + 1) rows: position [m], heading [rad],
                                                 #   sagittal speed [m/s]
@@ -82,6 +83,8 @@ class Trajectory:
     outcome: str
     step_time: float  # T [s]
     collision: dict | None = None  # see the module docstring
+    # (W, 2, 2) walls: segment k from walls[k, 0] to walls[k, 1] [m]
+    walls: np.ndarray = dc.field(default_factory=lambda: np.zeros((0, 2, 2)))
 
     @property
     def steps(self) -> int:
@@ -127,6 +130,16 @@ class Trajectory:
                     {"center": _round(c, _POS), "radius": round(float(r), _POS)}
                     for c, r in zip(self.obstacle_centers, self.obstacle_radii, strict=True)
                 ],
+                **(
+                    {
+                        "walls": [
+                            {"start": _round(a, _POS), "end": _round(b, _POS)}
+                            for a, b in self.walls
+                        ]
+                    }
+                    if len(self.walls)
+                    else {}
+                ),
             },
             "t": _round(self.t, _TIME),
             "robot": rows.tolist(),
@@ -201,6 +214,7 @@ def build_trajectory(
         seed=int(scenario.seed),
         outcome=record.outcome,
         step_time=float(config.robot.step_time),
+        walls=np.array([[w.start, w.end] for w in scenario.walls], dtype=float).reshape(-1, 2, 2),
     )
     if record.outcome == COLLISION:
         traj.collision = collision_contact(traj)
@@ -261,13 +275,19 @@ def trajectory_from_digit_trace(
 
 def collision_contact(traj: Trajectory) -> dict:
     """What the robot touched at the last instant: the object whose surface is nearest
-    its centre (pedestrian or static disc), and the nearest point of that surface."""
+    its centre (pedestrian, static disc or wall), and the nearest point of that surface."""
     k = traj.steps
     xy = traj.robot[k, :2]
     centers = np.vstack([traj.pedestrians[k], traj.obstacle_centers]).reshape(-1, 2)
     radii = np.concatenate(
         [np.full(len(traj.pedestrians[k]), traj.pedestrian_radius), traj.obstacle_radii]
     )
+    # walls: the nearest point of each segment, a "disc" of radius 0 there
+    for a, b in traj.walls:
+        d = b - a
+        f = float(np.clip(np.dot(xy - a, d) / max(float(np.dot(d, d)), 1e-12), 0.0, 1.0))
+        centers = np.vstack([centers, a + f * d])
+        radii = np.append(radii, 0.0)
     if len(centers) == 0:
         return {"k": k, "t": float(traj.t[k]), "point": xy.tolist(), "with": "", "object": ""}
     offset = xy - centers
@@ -275,11 +295,13 @@ def collision_contact(traj: Trajectory) -> dict:
     i = int(np.argmin(dist - radii))
     direction = offset[i] / max(dist[i], 1e-9)
     point = centers[i] + radii[i] * direction
-    p = len(traj.pedestrians[k])
+    p, s = len(traj.pedestrians[k]), len(traj.obstacle_radii)
     if i < p:
         with_, obj = EMOTION_NAMES[int(traj.emotions[k, i])], f"pedestrian {i}"
-    else:
+    elif i < p + s:
         with_, obj = "static", f"static disc {i - p}"
+    else:
+        with_, obj = "wall", f"wall {i - p - s}"
     return {
         "k": k,
         "t": round(float(traj.t[k]), _TIME),
@@ -336,6 +358,9 @@ def trajectory_from_json(data: dict, source: str = "the JSON") -> Trajectory:
             outcome=str(data["outcome"]),
             step_time=float(data["step_time"]),
             collision=data.get("collision"),
+            walls=np.array(
+                [[w["start"], w["end"]] for w in sc.get("walls", [])], dtype=float
+            ).reshape(-1, 2, 2),
         )
     except KeyError as e:
         raise TrajectoryFileError(

@@ -152,6 +152,8 @@ def _bounds(traj: Trajectory, pad: float = 0.6) -> tuple[float, float, float, fl
     if len(traj.obstacle_radii):
         ring = (traj.obstacle_radii + traj.discomfort.get("static", 0.0))[:, None]
         pts += [traj.obstacle_centers - ring, traj.obstacle_centers + ring]
+    if len(traj.walls):
+        pts.append(traj.walls.reshape(-1, 2))
     allp = np.vstack(pts)
     lo, hi = allp.min(axis=0) - pad, allp.max(axis=0) + pad
     return float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])
@@ -162,6 +164,8 @@ def _draw_static(ax, traj: Trajectory) -> None:
     for c, r in zip(traj.obstacle_centers, traj.obstacle_radii, strict=True):
         ax.add_patch(Circle(c, r, color=STATIC_RGB, zorder=2))
         ax.add_patch(Circle(c, r + ring, fill=False, ls="--", ec=STATIC_RGB, lw=1.0, zorder=2))
+    for a, b in traj.walls:
+        ax.plot([a[0], b[0]], [a[1], b[1]], color=STATIC_RGB, lw=4, solid_capstyle="butt", zorder=2)
     ax.plot(*traj.start, "s", color=ROBOT_RGB, mec=INK_RGB, ms=8, zorder=7)
     ax.add_patch(
         Circle(
@@ -221,7 +225,9 @@ def _mark_end(ax, traj: Trajectory) -> str | None:
         px, py = traj.collision["point"]
         ax.plot(px, py, "X", color=INK_RGB, mec=PAPER_RGB, mew=1.2, ms=14, zorder=9)
         with_ = traj.collision.get("with") or ""
-        what = {"static": "a static disc", "": "an object"}.get(with_, f"a {with_} pedestrian")
+        what = {"static": "a static disc", "wall": "a wall", "": "an object"}.get(
+            with_, f"a {with_} pedestrian"
+        )
         return f"collided with {what} at t = {_fmt_time(float(traj.collision['t']))}"
     if traj.outcome == "fall":
         x, y = traj.robot[-1, :2]
@@ -297,6 +303,8 @@ def _legend_handles(traj: Trajectory, snapshot_note: str, still: bool = True) ->
                 label=f"static disc (zone {traj.discomfort.get('static', 0):g} m)",
             )
         )
+    if len(traj.walls):
+        h.append(Line2D([], [], color=STATIC_RGB, lw=4, label="wall"))
     if traj.outcome == "collision":
         h.append(
             Line2D(

@@ -3,13 +3,18 @@
 Input ports:
     robot_state (4): (x, y, θ, v) of the robot CoM, world frame [m, rad, m/s].
     crowd (abstract `CrowdSnapshot`).
+    command (2, optional): the planner's command (u_v [m/s], u_Δθ [rad]); at t_k, before
+        the planner's update, the command u_{k−1} of the step that ends. It feeds the
+        jerk of the field's metrics only: left unconnected, `jerk_mean` is None.
 Output port:
     status (abstract `EpisodeStatus`): the `EpisodeRecord` (outcome, steps, path length,
         discomfort steps, IDT, …) including the walking step that ends now, and whether
         the episode is over. At t_k it already counts step k (evaluated on the robot at
         its foot switch and the crowd at t_k), before the periodic update stores it.
-Abstract state: the `EpisodeTracker` and the previous foot-switch position, updated at
-t_k = kT (a no-op at k = 0).
+Abstract state: the `EpisodeTracker` and the previous foot-switch position (and robot
+state, for the field's metrics: `core/social_metrics.py`), updated at t_k = kT (a no-op at
+k = 0). The robot at t_0 is taken to be the scenario's start: its position and heading,
+at rest.
 
 `episode_monitor_callback(diagram, monitor)` gives a `Simulator` monitor that stops the
 simulation exactly at the walking step that ends the episode.
@@ -25,9 +30,11 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, EventStatus, LeafSystem, State
 
+from emonav_drake.core.lip import LipState
 from emonav_drake.core.metrics import EpisodeRecord, EpisodeTracker
 from emonav_drake.core.reward import StepEvaluation, evaluate_step
 from emonav_drake.core.scenario import Scenario
+from emonav_drake.core.social_metrics import StepMotion
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
@@ -47,6 +54,7 @@ class _MonitorState:
     position: tuple[float, float]
     goal_distance: float
     last_step: StepEvaluation | None = None
+    robot: LipState | None = None  # at the previous foot switch
 
 
 class EpisodeMonitor(LeafSystem):
@@ -71,10 +79,12 @@ class EpisodeMonitor(LeafSystem):
             tracker=EpisodeTracker(config.episode.max_steps, self._T, seed=scenario.seed),
             position=start,
             goal_distance=float(math.dist(start, self._goal)),
+            robot=LipState(start[0], start[1], float(scenario.robot_heading), 0.0),
         )
         self._state = self.DeclareAbstractState(AbstractValue.Make(init))
         self._robot = self.DeclareVectorInputPort("robot_state", 4)
         self._crowd = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
+        self._command = self.DeclareVectorInputPort("command", 2)
         self.DeclareAbstractOutputPort(
             "status",
             lambda: AbstractValue.Make(EpisodeStatus(EpisodeRecord(), False)),
@@ -96,11 +106,12 @@ class EpisodeMonitor(LeafSystem):
         robot = lip_state_from_vector(self._robot.Eval(context))
         xy = np.array([robot.x, robot.y])
         c = self._config
+        crowd = self._crowd.Eval(context)
         ev = evaluate_step(
             xy,
             self._goal,
             st.goal_distance,
-            self._crowd.Eval(context),
+            crowd,
             c.robot.radius,
             self._goal_radius,
             c.reward,
@@ -110,8 +121,11 @@ class EpisodeMonitor(LeafSystem):
             position=(robot.x, robot.y),
             goal_distance=ev.goal_distance,
             last_step=ev,
+            robot=robot,
         )
-        new.tracker.add(ev, math.dist(st.position, new.position))
+        command = self._command.Eval(context).copy() if self._command.HasValue(context) else None
+        motion = StepMotion(st.robot, robot, crowd, self._goal, c.robot.radius, command)
+        new.tracker.add(ev, math.dist(st.position, new.position), motion=motion)
         return new
 
     def _update(self, context: Context, state: State) -> None:

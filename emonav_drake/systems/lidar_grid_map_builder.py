@@ -8,7 +8,9 @@ Input ports:
     robot_state (4): (x, y, θ, v) of the robot CoM, world frame; the LiDAR sits at the
         CoM and beam angles are measured from θ (docs/lidar_grid_maps.md).
     crowd (abstract `CrowdSnapshot`): discs to scan (pedestrians and static obstacles)
-        with their discomfort margins; for "drlvo" also the pedestrians' velocities.
+        with their discomfort margins, and walls (`wall_segments`, with the static
+        discomfort margin in the maps' inflated scan); for "drlvo" also the pedestrians'
+        velocities.
 Output ports:
     lgm_stack (abstract numpy array): the map observation, robot frame, oldest first —
         the N − 1 frames stored at the previous walking steps followed by the frame seen
@@ -108,7 +110,8 @@ class LidarGridMapBuilder(LeafSystem):
 
     def _calc_scan(self, context: Context, output: BasicVector) -> None:
         robot = lip_state_from_vector(self._robot_in.Eval(context))
-        centers, radii, _ = obstacle_discs(self._crowd_in.Eval(context))
+        crowd = self._crowd_in.Eval(context)
+        centers, radii, _ = obstacle_discs(crowd)
         li = self._config.lidar
         output.SetFromVector(
             scan_discs(
@@ -119,5 +122,6 @@ class LidarGridMapBuilder(LeafSystem):
                 num_beams=li.num_beams,
                 max_range=li.max_range,
                 min_range=li.min_range,
+                segments=crowd.wall_segments,
             )
         )

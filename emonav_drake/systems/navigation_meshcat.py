@@ -41,7 +41,8 @@ What is drawn (all under `/emonav`, world frame W, z up), in the shared palette
     * with `footstep_targets` connected: a foot-sized marker at each planned footstep
       (left sky blue, right reddish purple), following the target while the planner
       re-plans it and pale once `FOOTSTEPS_RECENT` newer steps have started;
-    * static: the static discs (grey) with their d_static rings and the goal (black: a
+    * static: the static discs (grey) with their d_static rings, the walls (grey slabs
+      with their d_static bands on the floor) and the goal (black: a
       dark pad ringed at the goal radius and a 2 m pole topped by a sphere, seen above
       the rays).
 
@@ -104,7 +105,8 @@ TRACK_RING_GAP = 0.05  # [m] between a tracked disc's radius and its ring's inne
 TRACK_RING_WIDTH = 0.07  # [m] the ring's width (a static one's at its nominal radius)
 TRACK_STATIC_NOMINAL = 0.3  # [m] the radius a static ring is drawn for, scaled to the track's
 TRACK_SLOT_GATE = 0.8  # [m] a track stays in its slot when it moved at most this far
-_STATIC_HEIGHT = 0.8  # [m] of a static disc's column
+_STATIC_HEIGHT = 0.8  # [m] of a static disc's column (and of a wall)
+_WALL_THICKNESS = 0.06  # [m] a wall as drawn (it has none in the simulation)
 
 
 def _faded(rgba: Rgba, alpha: float) -> Rgba:
@@ -222,6 +224,8 @@ class NavigationMeshcatVisualizer(LeafSystem):
             )
             m.SetTransform(f"{path}/ring", RigidTransform([0, 0, 0.005]))
             m.SetTransform(path, RigidTransform([o.center[0], o.center[1], 0.0]))
+        for i, w in enumerate(scenario.walls):
+            self._draw_wall(f"{PREFIX}/walls/{i}", w.start, w.end, c.reward.static_discomfort)
         dist = c.reward.emotion_distances()
         radius = c.crowd.pedestrian_radius
         for i, ped in enumerate(scenario.pedestrians):
@@ -242,6 +246,20 @@ class NavigationMeshcatVisualizer(LeafSystem):
                 m.SetProperty(f"{path}/body{e}", "visible", e == first)
                 m.SetProperty(f"{path}/ring{e}", "visible", e == first)
             m.SetTransform(path, RigidTransform([ped.start[0], ped.start[1], 0.0]))
+
+    def _draw_wall(self, path: str, a: list[float], b: list[float], discomfort: float) -> None:
+        """A wall a → b (world [m]) as a grey slab `_WALL_THICKNESS` thick, with its
+        discomfort band (`discomfort` m each side) on the floor."""
+        m = self._meshcat
+        length = float(np.hypot(b[0] - a[0], b[1] - a[1]))
+        m.SetObject(f"{path}/slab", Box(length, _WALL_THICKNESS, _STATIC_HEIGHT), STATIC_RGBA)
+        m.SetTransform(f"{path}/slab", RigidTransform([0, 0, _STATIC_HEIGHT / 2]))
+        band = Box(length + 2 * discomfort, 2 * discomfort, 0.01)
+        m.SetObject(f"{path}/band", band, _faded(STATIC_RGBA, 0.25))
+        m.SetTransform(f"{path}/band", RigidTransform([0, 0, 0.005]))
+        yaw = float(np.arctan2(b[1] - a[1], b[0] - a[0]))
+        middle = [(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, 0.0]
+        m.SetTransform(path, RigidTransform(RotationMatrix.MakeZRotation(yaw), middle))
 
     def _initialize(self, context: Context) -> EventStatus:
         self._reset_drawing()

@@ -44,6 +44,7 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem, State
 
+from emonav_drake.core.crowd import with_wall_discs
 from emonav_drake.core.navigation import PlannerInput, check_command
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.protocol import Planner
@@ -91,7 +92,7 @@ class NavigationPlanner(LeafSystem):
             robot=lip_state_from_vector(self._robot.Eval(context)),
             goal_xy=self._goal,
             last_command=context.get_discrete_state(self._command).get_value().copy(),
-            crowd=self._crowd.Eval(context),
+            crowd=with_wall_discs(self._crowd.Eval(context)),
             lgm_stack=lgm,
             step=round(context.get_time() / self.step_time),
         )
