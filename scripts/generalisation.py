@@ -175,7 +175,7 @@ def _heat_map(plant: str, families: list[str], planners: list[str], sr: dict, in
                         fontsize=8,
                         color=PAPER_RGB if dark else INK_RGB,
                     )
-        ax.set_title(f"{title} on the {plant.upper()} plant, per family (≥ {n} seeds per cell)")
+        ax.set_title(f"{title}\n{plant.upper()} plant, {n} or more seeds per cell", fontsize=10)
         fig.colorbar(im, ax=ax, fraction=0.03, pad=0.01)
         fig.tight_layout()
         path = FIGURES / f"generalisation_{name}_{plant}.png"
