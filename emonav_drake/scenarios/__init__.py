@@ -2,13 +2,16 @@
 
 `emonav sim --scenario NAME` runs one by name (or any file by its path); `emonav config
 --list` lists them. The fields are those of `core.scenario.Scenario` (world frame, metres,
-radians; emotions happy | neutral | negative); see docs/architecture.md.
+radians; emotions happy | neutral | negative); see docs/scenarios.md.
 
 | name | what it tests |
 |---|---|
 | `head_on` | one negative pedestrian walking straight at the robot, a disc beside the path |
 | `crossing` | three pedestrians (happy, neutral, negative) crossing the robot's path |
 | `mood_swing` | one pedestrian whose emotion changes every 2 s (the paper's §IV-F) |
+| `hallway` | walls, a group walking at the robot, a blocker from a doorway, a slow walker |
+
+The scenario families (`--family`, docs/scenarios.md) sample scenes of these kinds by seed.
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ from pathlib import Path
 from emonav_drake.params import ConfigError
 
 SCENARIO_DIR = Path(__file__).resolve().parent
-EXAMPLES = ("head_on", "crossing", "mood_swing")
+EXAMPLES = ("head_on", "crossing", "mood_swing", "hallway")
 
 
 def scenario_path(name_or_path: str | Path) -> Path:
