@@ -106,7 +106,7 @@ def test_shipped_example_scenarios_load_and_run_by_name(tmp_path, capsys):
 
     for name in EXAMPLES:
         sc = load_scenario(scenario_path(name))
-        assert sc.pedestrians and sc.obstacles, name
+        assert sc.pedestrians and (sc.obstacles or sc.walls), name
     assert any(p.emotion_schedule for p in load_scenario(scenario_path("mood_swing")).pedestrians)
     out = tmp_path / "r.json"
     assert main(["sim", "--scenario", "head_on", "--json", str(out)]) == 0
@@ -120,7 +120,7 @@ def test_shipped_example_scenarios_load_and_run_by_name(tmp_path, capsys):
     ]
     assert run["pedestrians"][0] == [pytest.approx(p.start) for p in head_on.pedestrians]
     assert main(["sim", "--scenario", "nowhere"]) == 2
-    assert "head_on, crossing, mood_swing" in capsys.readouterr().err
+    assert "head_on, crossing, mood_swing, hallway" in capsys.readouterr().err
 
 
 def test_sim_and_eval_take_a_named_setting_as_benchmark_does(tmp_path, capsys):
