@@ -465,3 +465,21 @@ def test_tracker_sees_corridor_walls_as_static_objects() -> None:
     assert all(tracker.is_static(tr) for tr in tracks)
     assert all(tr.radius <= DetectionParams().max_radius for tr in tracks)
     assert _min_wall_distance(np.array([tr.x[:2] for tr in tracks]), CORRIDOR) < 1e-6
+
+
+def test_tracker_never_reports_a_wall_piece_as_a_pedestrian() -> None:
+    """From the first scan on, a track on a wall piece is static: the crowd a planner
+    reads from the tracker holds no pedestrian in an empty corridor at any time."""
+    tracker = CrowdTracker()
+    dt = CFG.crowd.dt
+    seen = []
+    for k in range(30):
+        t = k * dt
+        xy = np.array([-2.5 + 0.5 * t, 0.1])
+        tracker.update(
+            t, detect_objects(scan_discs(xy, 0.0, [], [], segments=CORRIDOR), xy, 0.0, 6.0)
+        )
+        snap = tracker.snapshot(np.zeros((0, 2)), np.zeros(0, int), np.zeros(3), 0.3, 0.2, 1)
+        seen.append((len(snap.positions), len(snap.static_radii)))
+    assert all(p == 0 for p, _ in seen)
+    assert seen[-1][1] >= 10

@@ -24,7 +24,8 @@ Kalman filter on ``x = [x, y, vx, vy]`` (world frame, m and m/s):
   seen for more than ``max_coast`` seconds. Until then an unmatched confirmed track
   coasts on its prediction (a pedestrian hidden behind another, or behind a disc).
 * **Still**: a track whose estimated speed stays below ``still_speed`` for
-  ``still_duration`` seconds is a static obstacle (until it moves again).
+  ``still_duration`` seconds is a static obstacle (until it moves again); a track whose
+  last detection was a piece of a wall (`Detections.walls`) is one at once.
 
 `snapshot` turns the confirmed tracks into the `CrowdSnapshot` the planners read. The
 tracker is a pure function of its inputs (no randomness, no clock); `state_dict` /
@@ -97,6 +98,7 @@ class Track:
     confirmed: bool  # has had `confirm_hits` hits
     radius: float  # running mean of the fitted radii [m]
     still_since: float | None  # since when the speed has stayed below `still_speed` [s]
+    wall: bool = False  # its last detection was a piece of a wall: static at once
 
     @property
     def position(self) -> np.ndarray:
@@ -120,6 +122,7 @@ class Track:
             "confirmed": bool(self.confirmed),
             "radius": float(self.radius),
             "still_since": None if self.still_since is None else float(self.still_since),
+            "wall": bool(self.wall),
         }
 
     @classmethod
@@ -139,6 +142,7 @@ class Track:
                 confirmed=bool(d["confirmed"]),
                 radius=float(d["radius"]),
                 still_since=None if still is None else float(still),
+                wall=bool(d.get("wall", False)),
             )
         except (KeyError, TypeError) as e:
             raise ValueError(f"track state is incomplete or mistyped: {e}") from None
@@ -180,8 +184,9 @@ class CrowdTracker:
         return [tr for tr in self._tracks if tr.confirmed]
 
     def is_static(self, track: Track) -> bool:
-        """Whether `track` has been still for `still_duration` by the last update."""
-        return (
+        """Whether `track` is a piece of a wall, or has been still for `still_duration` by
+        the last update."""
+        return track.wall or (
             track.still_since is not None
             and self._time is not None
             and self._time - track.still_since >= self.params.still_duration - 1e-9
@@ -201,6 +206,7 @@ class CrowdTracker:
         if self._time is not None and t < self._time:
             raise ValueError(f"update time {t} is earlier than the last one ({self._time})")
         z, radii = _detection_arrays(detections)
+        walls = np.asarray(detections.walls, dtype=bool).reshape(-1)
         dt = 0.0 if self._time is None else t - self._time
         self._time = t
         p = self.params
@@ -225,6 +231,7 @@ class CrowdTracker:
             tr.misses = 0
             tr.last_seen = t
             tr.radius += (float(radii[j]) - tr.radius) / tr.hits
+            tr.wall = bool(walls[j])
             tr.confirmed = tr.confirmed or tr.hits >= p.confirm_hits
 
         survivors: list[Track] = []
@@ -237,7 +244,7 @@ class CrowdTracker:
         born = np.ones(len(z), dtype=bool)
         born[cols] = False
         for j in np.flatnonzero(born).tolist():
-            survivors.append(self._new_track(t, z[j], float(radii[j])))
+            survivors.append(self._new_track(t, z[j], float(radii[j]), bool(walls[j])))
         for tr in survivors:
             speed = math.hypot(tr.x[2], tr.x[3])
             if speed >= p.still_speed:
@@ -269,7 +276,7 @@ class CrowdTracker:
         keep = gated[rows, cols]
         return rows[keep].astype(np.intp), cols[keep].astype(np.intp)
 
-    def _new_track(self, t: float, z: np.ndarray, radius: float) -> Track:
+    def _new_track(self, t: float, z: np.ndarray, radius: float, wall: bool = False) -> Track:
         p = self.params
         tr = Track(
             id=self._next_id,
@@ -281,6 +288,7 @@ class CrowdTracker:
             confirmed=p.confirm_hits <= 1,
             radius=radius,
             still_since=None,
+            wall=wall,
         )
         self._next_id += 1
         return tr
