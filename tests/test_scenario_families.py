@@ -131,3 +131,27 @@ def test_a_family_scene_walks_through_the_crowd():
     assert math.dist(state.positions[0], b.goal) < 0.3
     assert np.hypot(*state.velocities[0]) < 0.05
     assert dc.is_dataclass(b) and isinstance(b, PedestrianSpec)
+
+
+def test_a_family_benchmark_trial_replays_with_its_sim_command(tmp_path):
+    """`emonav benchmark --family` records the family; `diagnose`'s re-run command names
+    it, and `emonav sim` with that command plays the very trial again."""
+    import json
+    import shlex
+
+    from emonav_drake.cli import main
+    from emonav_drake.evaluation.failures import rerun_command
+
+    run = tmp_path / "run"
+    argv = ["benchmark", "--planners", "dwa", "--plant", "lip", "--trials", "2"]
+    argv += ["--first-seed", "5", "--family", "corridor_head_on", "--out", str(run), "--quiet"]
+    assert main(argv) == 0
+    settings = json.loads((run / "settings.json").read_text())
+    assert settings["setting_label"].endswith(", family corridor_head_on")
+    trial = json.loads((run / "trials.jsonl").read_text().splitlines()[1])
+    command = rerun_command(settings, "dwa", trial["seed"])
+    assert "--family corridor_head_on" in command
+    out = tmp_path / "sim.json"
+    assert main([*shlex.split(command)[1:], "--json", str(out)]) == 0
+    record = json.loads(out.read_text())
+    assert {k: record[k] for k in trial["record"]} == trial["record"]

@@ -54,29 +54,39 @@ def failing_trials(trials: list[dict], methods: list[str]) -> list[dict]:
 
 
 def config_flags(settings: dict) -> list[str] | None:
-    """The `--setting` / `--config` / `--time-varying` flags of the run's `config_source`
-    if they still give its configuration (the same `config_sha256`), else None (the
-    defaults, a setting or the file have changed since: use its `config_yaml`)."""
+    """The `--setting` / `--config` / `--time-varying` / `--state-source` / `--family`
+    flags of the run's `config_source` if they still give its configuration (the same
+    `config_sha256`), else None (the defaults, a setting or the file have changed since:
+    use its `config_yaml`)."""
     from emonav_drake.configs import load_setting
     from emonav_drake.params import dump_config, load_config
     from emonav_drake.provenance import sha256_bytes
 
-    source = str(settings.get("config_source") or "")
-    time_varying = source.endswith(" --time-varying")
-    origin = source.removesuffix(" --time-varying")
-    flag, _, value = origin.partition(" ")
+    words = str(settings.get("config_source") or "").split(" ")
     try:
-        if flag == "--setting":
-            cfg, flags = load_setting(value), ["--setting", value]
-        elif flag == "--config":
-            cfg, flags = load_config(value), ["--config", value]
-        else:  # "defaults", "the default configuration"
-            cfg, flags = load_config(), []
-    except (OSError, ValueError, KeyError):  # ConfigError is a ValueError
+        if words[0] == "--setting":
+            cfg, flags, rest = load_setting(words[1]), words[:2], words[2:]
+        elif words[0] == "--config":
+            cfg, flags, rest = load_config(words[1]), words[:2], words[2:]
+        else:  # "defaults", "the default configuration", then the flags
+            first = next((i for i, w in enumerate(words) if w.startswith("--")), len(words))
+            cfg, flags, rest = load_config(), [], words[first:]
+        while rest:
+            flag = rest.pop(0)
+            if flag == "--time-varying":
+                cfg.crowd.time_varying_emotions = True
+                flags.append(flag)
+            elif flag in ("--state-source", "--family") and rest:
+                value = rest.pop(0)
+                if flag == "--state-source":
+                    cfg.perception.state_source = value
+                else:
+                    cfg.crowd.family = value
+                flags += [flag, value]
+            else:
+                return None
+    except (OSError, ValueError, KeyError, IndexError):  # ConfigError is a ValueError
         return None
-    if time_varying:
-        cfg.crowd.time_varying_emotions = True
-        flags.append("--time-varying")
     return flags if sha256_bytes(dump_config(cfg).encode()) == settings["config_sha256"] else None
 
 
