@@ -328,3 +328,18 @@ def test_the_default_camera_is_the_zed2_at_hd720_and_640x480_stays_selectable(tm
         with Image.open(gif) as im:  # the classification at t = 0, as rendered
             assert im.n_frames == 1 and im.size == size
     capsys.readouterr()
+
+
+def test_a_wall_hides_a_face_from_the_camera():
+    """The face 2 m ahead is found; with a wall 1 m ahead across the view it is not (the
+    camera renders the scenario's walls)."""
+    from emonav_drake.core.scenario import WallSpec
+
+    seen = _one_pedestrian("happy", facing_robot=True)
+    estimate, _, _, _ = _first_frame(seen, VGA)
+    assert len(estimate.boxes) == 1
+    seen.walls = [WallSpec(start=[1.0, -3.0], end=[1.0, 3.0])]
+    hidden, image, _, _ = _first_frame(seen.validate(), VGA)
+    assert len(hidden.boxes) == 0
+    rows, cols = _head_pixels(VGA, 2.0)
+    assert image[rows, cols].std() < 1.0  # the head's pixels show only the flat wall

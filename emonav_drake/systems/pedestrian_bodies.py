@@ -7,9 +7,10 @@ the pedestrian's current (true) emotion is on its head; the other two are parked
 below the ground, so a pedestrian whose emotion changes changes its face at once. Every
 pedestrian faces its walking direction (`core.pedestrian_pose.facing_headings`; when it
 stands, the direction from its start to its goal). The static discs of the scenario are
-anchored cylinders. All geometry has the perception role (what `RgbdSensor` renders);
-heads and faces also the illustration role (what Meshcat draws: the navigation
-visualiser already draws the bodies, coloured by emotion, and the discs).
+anchored cylinders, its walls anchored boxes 2.2 m high. All geometry has the
+perception role (what `RgbdSensor` renders); heads and faces also the illustration role
+(what Meshcat draws: the navigation visualiser already draws the bodies, coloured by
+emotion, the discs and the walls).
 
 Input port:
     crowd (abstract `CrowdSnapshot`): the simulated crowd — positions [m] and velocities
@@ -57,7 +58,9 @@ from emonav_drake.params import EMOTION_NAMES
 FACES_DIR = Path(__file__).resolve().parent.parent / "data" / "faces"
 BODY_RGBA = Rgba(*PEDESTRIAN_CLOTHES_RGB)
 HEAD_RGBA = Rgba(*PEDESTRIAN_HAIR_RGB)  # also the back of the head
-DISC_RGBA = Rgba(*CAMERA_DISC_RGB)
+DISC_RGBA = Rgba(*CAMERA_DISC_RGB)  # the static discs' and the walls' colour
+WALL_HEIGHT = 2.2  # [m]: taller than anyone, so a camera never sees over a wall
+WALL_THICKNESS = 0.06  # [m] as rendered (the simulation's walls have none)
 DISC_HEIGHT = 1.0  # height of a static disc's cylinder [m]
 
 
@@ -148,6 +151,21 @@ class PedestrianBodies(LeafSystem):
                     RigidTransform([*disc.center, DISC_HEIGHT / 2]),
                     Cylinder(disc.radius, DISC_HEIGHT),
                     f"disc_{j}",
+                ),
+            )
+            _roles(scene_graph, src, g, DISC_RGBA, illustrate=False)
+        for j, wall in enumerate(scenario.walls):  # a wall hides what is behind it
+            (ax, ay), (bx, by) = wall.start, wall.end
+            yaw = float(np.arctan2(by - ay, bx - ax))
+            g = scene_graph.RegisterAnchoredGeometry(
+                src,
+                GeometryInstance(
+                    RigidTransform(
+                        RotationMatrix.MakeZRotation(yaw),
+                        [(ax + bx) / 2, (ay + by) / 2, WALL_HEIGHT / 2],
+                    ),
+                    Box(float(np.hypot(bx - ax, by - ay)), WALL_THICKNESS, WALL_HEIGHT),
+                    f"wall_{j}",
                 ),
             )
             _roles(scene_graph, src, g, DISC_RGBA, illustrate=False)
