@@ -384,3 +384,13 @@ def test_compare_joins_a_run_recorded_before_the_metrics_with_a_new_one(tmp_path
     (old / "trials.jsonl").write_text("".join(json.dumps(t) + "\n" for t in lines))
     with pytest.raises(ValueError, match="differs from the same trial"):
         combine_runs([new, old])
+
+
+def test_a_share_s_interval_stays_within_zero_and_one():
+    from emonav_drake.core.metrics import EpisodeRecord, summarize
+
+    recs = [EpisodeRecord(intrusion_ratio=v, low_ttc_ratio=1.0 - v) for v in (0, 0, 0, 0.1)]
+    s = summarize(recs)
+    assert s["intrusion_ratio_ci"][0] == 0.0 < s["intrusion_ratio_ci"][1]
+    assert s["low_ttc_ratio_ci"][1] == 1.0 > s["low_ttc_ratio_ci"][0]
+    assert s["intrusion_ratio_mean"] == pytest.approx(0.025)

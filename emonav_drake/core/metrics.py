@@ -24,6 +24,7 @@ import numpy as np
 from emonav_drake.core.reward import StepEvaluation
 from emonav_drake.core.social_metrics import (
     SOCIAL_FIELDS,
+    SUPPORT,
     TTC_THRESHOLD,
     SocialMetrics,
     StepMotion,
@@ -146,9 +147,11 @@ class EpisodeTracker:
                 setattr(self.record, name, None)
 
 
-def mean_interval(values: list[float]) -> tuple[float | None, list[float] | None]:
+def mean_interval(
+    values: list[float], support: tuple[float | None, float | None] = (None, None)
+) -> tuple[float | None, list[float] | None]:
     """The mean and its 95 % Student-t interval [lo, hi] (None below 2 values; both None
-    for no value)."""
+    for no value), clipped to the values' `support` (a share cannot fall below 0)."""
     x = np.asarray(values, dtype=float)
     if x.size == 0:
         return None, None
@@ -158,14 +161,20 @@ def mean_interval(values: list[float]) -> tuple[float | None, list[float] | None
     from scipy.stats import t
 
     half = float(t.ppf(0.975, x.size - 1) * x.std(ddof=1) / math.sqrt(x.size))
-    return mean, [mean - half, mean + half]
+    lo, hi = mean - half, mean + half
+    if support[0] is not None:
+        lo = max(lo, support[0])
+    if support[1] is not None:
+        hi = min(hi, support[1])
+    return mean, [lo, hi]
 
 
 def summarize(records: list[EpisodeRecord]) -> dict:
     """SR, collision/timeout rates, NT (mean ± std over successes), DT, IDT and more.
 
     The field's metrics: for each `SOCIAL_FIELDS` name f, `f_mean` over the episodes
-    that measured it, `f_ci` its 95 % t interval and `f_n` their number (0: n/a).
+    that measured it, `f_ci` its 95 % t interval (clipped to the metric's `SUPPORT`) and
+    `f_n` their number (0: n/a).
     """
     n = len(records)
     if n == 0:
@@ -188,7 +197,7 @@ def summarize(records: list[EpisodeRecord]) -> dict:
     }
     for name in SOCIAL_FIELDS:
         values = [v for r in records if (v := getattr(r, name)) is not None]
-        mean, ci = mean_interval(values)
+        mean, ci = mean_interval(values, SUPPORT[name])
         out |= {f"{name}_mean": mean, f"{name}_ci": ci, f"{name}_n": len(values)}
     return out
 

@@ -47,6 +47,16 @@ from emonav_drake.core.lip import LipState, wrap_angle
 INTRUSION_DISTANCE = 0.25  # [m] surface to surface: CrowdNav++ / HEIGHT's discomfort distance
 TTC_THRESHOLD = 3.0  # [s]: beyond it pedestrians hardly react to each other (docs/metrics.md)
 
+# Where each metric's values can lie (None: unbounded); its interval is clipped to it.
+SUPPORT: dict[str, tuple[float | None, float | None]] = {
+    "path_irregularity": (0.0, None),
+    "jerk_mean": (0.0, None),
+    "min_ped_clearance": (None, None),
+    "low_ttc_ratio": (0.0, 1.0),
+    "intrusion_ratio": (0.0, 1.0),
+    "intrusion_clearance": (None, INTRUSION_DISTANCE),
+}
+
 # The record fields this module fills (`EpisodeRecord`), in table order.
 SOCIAL_FIELDS = (
     "path_irregularity",
