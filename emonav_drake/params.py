@@ -212,6 +212,7 @@ SCENARIO_FAMILIES = (
     "dense_12",
     "dense_20",
     "fast_pedestrians",
+    "mixed",
 )
 
 # Where the model-based planners' crowd state comes from (`PerceptionParams.state_source`).

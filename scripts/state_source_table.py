@@ -3,11 +3,12 @@
 against the default learned policy, on the same seeds (Wilson intervals; McNemar exact on
 success; DT per trial with the Wilcoxon signed-rank test on the per-seed differences).
 
-    python scripts/state_source_table.py [--setting var_dd] [--seeds 300]
+    python scripts/state_source_table.py [--setting var_dd|no_emotion] [--seeds 300]
 
-A method's truth trials may come from several run directories (`TRUTH`): a run made at
+A method's truth trials may come from several run directories (`SETTINGS`): a run made at
 another commit than the lidar run counts only if its records equal, to the last digit,
-those of a run at the lidar run's commit on the seeds both ran (`CHECK`, seeds 0-29);
+those of a run at the lidar run's commit on the seeds both ran (the setting's check run,
+seeds 0-29);
 any difference, or no seed in common, is an error.
 Prints Markdown (quoted in docs/results.md).
 """
@@ -29,16 +30,33 @@ from emonav_drake.evaluation.tables import (
 
 RESULTS = Path(__file__).resolve().parent.parent / "benchmarks" / "results"
 PLANNERS = ("dwa", "mpc", "sarl", "rgl")
-LIDAR = "digit_state_lidar"
-CHECK = "digit_state_truth_check"  # truth at the lidar run's commit, seeds 0-29
-# truth trials per method: run directories in order (a seed is taken from the first)
-TRUTH = {
-    "dwa": ("digit_state_truth_check", "digit_state_truth_200", "digit_table2_v3"),
-    "mpc": ("digit_state_truth_check", "digit_table2_v4"),
-    "sarl": ("digit_state_truth_check", "digit_state_truth_200", "digit_baselines"),
-    "rgl": ("digit_state_truth_check", "digit_state_truth_200", "digit_rgl"),
+# Per setting: the lidar run; the truth run at the lidar run's commit that checks older
+# truth runs (seeds 0-29); the truth trials per method (run directories in order, a seed
+# taken from the first that has it); the default policy's run and method.
+SETTINGS = {
+    "var_dd": {
+        "lidar": "digit_state_lidar",
+        "check": "digit_state_truth_check",
+        "truth": {
+            "dwa": ("digit_state_truth_check", "digit_state_truth_200", "digit_table2_v3"),
+            "mpc": ("digit_state_truth_check", "digit_table2_v4"),
+            "sarl": ("digit_state_truth_check", "digit_state_truth_200", "digit_baselines"),
+            "rgl": ("digit_state_truth_check", "digit_state_truth_200", "digit_rgl"),
+        },
+        "policy": ("digit_distilled_r2", "distilled_digit_r2"),
+    },
+    "no_emotion": {
+        "lidar": "digit_state_lidar_ne",
+        "check": "digit_state_truth_ne_check",
+        "truth": {
+            "dwa": ("digit_state_truth_ne",),
+            "mpc": ("digit_state_truth_ne_check", "digit_no_emotion_v4"),
+            "sarl": ("digit_state_truth_ne",),
+            "rgl": ("digit_state_truth_ne",),
+        },
+        "policy": ("digit_distilled_r2_ne", "distilled_digit_r2"),
+    },
 }
-POLICY = ("digit_distilled_r2", "distilled_digit_r2")  # the default policy's Var-DD run
 
 
 def records(run: str, method: str) -> dict[int, dict]:
@@ -56,20 +74,25 @@ def commit(run: str) -> str:
     return json.loads((RESULTS / run / "settings.json").read_text())["package"]["commit"]
 
 
-def truth_records(method: str) -> dict[int, dict]:
-    """The method's truth trials from `TRUTH`, each other run checked against `CHECK`."""
-    check = records(CHECK, method)
+def truth_records(setting: dict, method: str) -> dict[int, dict]:
+    """The method's truth trials of `setting`, each run made at another commit than the
+    lidar run checked against the check run."""
+    check_run = setting["check"]
+    check = records(check_run, method)
     out: dict[int, dict] = {}
-    for run in TRUTH[method]:
+    for run in setting["truth"][method]:
         recs = records(run, method)
-        if recs and commit(run) != commit(LIDAR):
+        if recs and commit(run) != commit(setting["lidar"]):
             same = sorted(set(recs) & set(check))
             if not same:
-                raise SystemExit(f"{run}:{method} has no seed in common with {CHECK}: unchecked")
+                raise SystemExit(
+                    f"{run}:{method} has no seed in common with {check_run}: unchecked"
+                )
             diff = [s for s in same if recs[s] != check[s]]
             if diff:
                 raise SystemExit(
-                    f"{run}:{method} differs from {CHECK} at seeds {diff[:5]}: not the same trials"
+                    f"{run}:{method} differs from {check_run} at seeds {diff[:5]}: not the same "
+                    "trials"
                 )
         for seed, rec in recs.items():
             out.setdefault(seed, rec)
@@ -108,8 +131,11 @@ def _p(p: float) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=300, help="seeds 0 … N − 1")
+    ap.add_argument("--setting", choices=SETTINGS, default="var_dd")
     args = ap.parse_args()
-    policy = records(*POLICY)
+    setting = SETTINGS[args.setting]
+    policy_run = setting["policy"]
+    policy = records(*policy_run)
     rows = []
     header = (
         "| method | state (deployable?) | SR [95 % CI] (n) | NT [s] | DT / trial "
@@ -121,11 +147,11 @@ def main() -> None:
     seeds_all = list(range(args.seeds))
     pol = [policy[s] for s in seeds_all if s in policy]
     rows.append(
-        f"| policy (default, `{POLICY[1]}`) | its LiDAR grid maps (yes) | {_sr(pol)} | "
+        f"| policy (default, `{policy_run[1]}`) | its LiDAR grid maps (yes) | {_sr(pol)} | "
         f"{_nt(pol)} | {np.mean([r['discomfort_steps'] for r in pol]):.2f} | — | — |"
     )
     for m in PLANNERS:
-        lidar, truth = records(LIDAR, m), truth_records(m)
+        lidar, truth = records(setting["lidar"], m), truth_records(setting, m)
         for name, recs, label in ((m, truth, "truth (no)"), (m, lidar, "lidar (yes)")):
             seeds = [s for s in seeds_all if s in recs]
             if not seeds:

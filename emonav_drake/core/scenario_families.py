@@ -237,6 +237,20 @@ def _fast(rng: np.random.Generator, cfg: EmoNavConfig) -> Scenario:
     return scene
 
 
+MIXED_PAPER_SHARE = 0.5  # the paper's arena in the mixed family (for training)
+
+
+def _mixed(rng: np.random.Generator, cfg: EmoNavConfig) -> Scenario:
+    """A training distribution that includes the families: the paper's arena with
+    probability `MIXED_PAPER_SHARE`, else one of the other families, uniformly. Every
+    draw comes from the mixed family's own stream, so no scene of it is an evaluation
+    scene of another family (nor a paper seed below 2**63)."""
+    others = [n for n in FAMILIES if n not in ("paper", "mixed")]
+    if rng.random() < MIXED_PAPER_SHARE:
+        return sample_paper_scenario(int(rng.integers(2**63)), cfg)
+    return FAMILIES[others[int(rng.integers(len(others)))]].draw(rng, cfg)
+
+
 FAMILIES: dict[str, Family] = {
     f.name: f
     for f in [
@@ -276,6 +290,7 @@ FAMILIES: dict[str, Family] = {
             "dense_20", "20 pedestrians crossing a circle", lambda rng, cfg: _circle(rng, cfg, 20)
         ),
         Family("fast_pedestrians", "the paper's crowd at 1.3-1.6 m/s", _fast),
+        Family("mixed", "for training: the paper's arena half the time, else any family", _mixed),
     ]
 }
 
