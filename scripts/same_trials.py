@@ -3,7 +3,8 @@
 Reads the `trials.jsonl` of two run directories (`emonav benchmark --out`), takes the
 (method, seed) pairs both hold, and compares their lines without the wall time
 (`run_directory.comparable`): outcome, steps, times, distances, IDT, rewards — every
-number of the record, bit for bit. Prints one line per method and exits 1 on any
+number of the record both runs have, bit for bit (fields only one has, such as metrics
+added since, are named and left out). Prints one line per method and exits 1 on any
 difference (listing the first few).
 
     python scripts/same_trials.py benchmarks/results/lip_table2 runs/after_lip
@@ -42,6 +43,17 @@ def main() -> int:
     if not shared:
         print("no (method, seed) pair in common")
         return 1
+    # Record fields one run has and the other lacks (metrics added since): compared only
+    # where both have them, and named.
+    new = sorted({f for k in shared for f in after[k]["record"]} - _fields(before, shared))
+    gone = sorted(_fields(before, shared) - {f for k in shared for f in after[k]["record"]})
+    if new or gone:
+        print(f"record fields only after: {new or '-'}; only before: {gone or '-'}")
+        for k in shared:
+            for f in new:
+                after[k]["record"].pop(f, None)
+            for f in gone:
+                before[k]["record"].pop(f, None)
     differ = [k for k in shared if before[k] != after[k]]
     per_method = Counter(m for m, _ in shared)
     bad = Counter(m for m, _ in differ)
@@ -56,6 +68,10 @@ def main() -> int:
         print(f"  {k}: record fields differ: {fields}")
     print("IDENTICAL" if not differ else f"{len(differ)} of {len(shared)} trials differ")
     return 0 if not differ else 1
+
+
+def _fields(trials: dict, keys: list) -> set[str]:
+    return {f for k in keys for f in trials[k]["record"]}
 
 
 if __name__ == "__main__":
