@@ -7,6 +7,7 @@ emonav eval --planner dwa --plant lip --episodes 100 --first-seed 0
             [--config F.yaml | --setting NAME] [--json out.json]
 emonav lgm  --seed S --png out.png [--steps K] [--time-varying]
 emonav plot RUN.json --png out.png [--times 0,5,10] [--gif out.gif]
+emonav planners   every planner: what it reads (privileged or deployable), its checkpoint
 emonav SUB-COMMAND --help   for every other one
 
 One module per sub-command in emonav_drake/cli/ (sim.py, eval.py, lgm.py, plot.py, walk.py,
@@ -41,6 +42,7 @@ from emonav_drake.cli import (
     emotion,
     export,
     lgm,
+    planners_cmd,
     plot,
     sim,
     train,
@@ -62,6 +64,7 @@ USER_ERRORS = (ValueError, OSError, NotImplementedError)
 SUBCOMMANDS = (
     sim,
     eval_cmd,
+    planners_cmd,
     lgm,
     train,
     export,
