@@ -115,6 +115,32 @@ def test_the_table3_variants_are_the_default_route_in_a_constant_setting(tmp_pat
     assert not any(tmp_path.iterdir())
 
 
+def test_the_mixed_variant_is_the_mpc_route_on_the_scenario_families(tiny_variants, tmp_path):
+    """Issue 38 item 5: the same route and budget as `emobipednav_digit_mpc`, changed only in
+    the scenes it trains and selects on; the run's world is the mixed family's."""
+    base = load_typed_yaml(DaggerConfig, path=variant("emobipednav_digit_mpc").config)
+    cfg = load_typed_yaml(DaggerConfig, path=variant("emobipednav_mixed").config).validate()
+    assert {k for k, v in vars(cfg).items() if v != getattr(base, k)} == {"family"}
+    assert cfg.family == "mixed" and base.family == "paper"
+    from emonav_drake.learning.dagger_state import STATE_FILE, read_dagger_state
+
+    out = _tiny_run(tiny_variants, "emobipednav_mixed")
+    _, saved, _ = read_dagger_state(out / STATE_FILE)
+    assert saved["env_config"]["crowd"]["family"] == "mixed"
+    _, meta = load_policy(out / "policy.pt")
+    assert meta["provenance"]["config"]["family"] == "mixed"
+    with pytest.raises(ConfigError, match="family"):
+        DaggerConfig(family="hallways").validate()
+    from emonav_drake.learning.dagger import train_dagger
+    from emonav_drake.params import EmoNavConfig
+
+    env = EmoNavConfig()
+    env.crowd.family = "dense_8"
+    with pytest.raises(ConfigError, match="give one"):
+        train_dagger(tmp_path, DaggerConfig(family="mixed"), env)
+    assert not any(tmp_path.iterdir())
+
+
 def test_the_mirrored_batch_is_the_mirrored_world_for_scans():
     # the student's augmentation flips scans beam i <-> K-1-i and the label's turn
     from emonav_drake.core.dwa import DwaPlanner

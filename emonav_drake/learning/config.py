@@ -16,7 +16,7 @@ from emonav_drake.core.observations import observation_kind, observation_kinds
 from emonav_drake.core.sarl_state import VALUE_NETWORKS
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.param_ranges import SEED_RANGE
-from emonav_drake.params import NUM_BEAMS, EpisodeParams
+from emonav_drake.params import NUM_BEAMS, SCENARIO_FAMILIES, EpisodeParams
 
 # The 4-conv encoder (3 x 3, strides 2-1-1-1) needs an input of at least this many cells.
 MIN_ENCODER_INPUT = 15
@@ -55,6 +55,10 @@ class DaggerConfig:
     # "var_dd" (the defaults), "no_emotion" (0.2 m for every emotion), "constant_0.5"
     # (Table III's constant-discomfort-distance rows) or "time_varying".
     setting: str = "var_dd"
+    # The scenario family the route trains and selects in (`docs/scenarios.md`): "paper"
+    # (the paper's arena) or another family, e.g. "mixed" (the paper's arena half the
+    # time, else any family: walls, corridors, standing and grouped pedestrians).
+    family: str = "paper"
     mirror_augment: bool = True  # mirror half of every batch left-right (every kind)
     # The robot of the training world and of the expert's predictions: "" = the paper's LIP;
     # "digit" = the shipped Digit step-response model; or the path of a fitted model JSON
@@ -101,6 +105,7 @@ class DaggerConfig:
         _check_observation(self.grid_kind, self.encoder, self.num_frames)
         _choice("goal_input", self.goal_input, GOAL_INPUTS)
         _choice("setting", self.setting, SETTINGS)
+        _choice("family", self.family, SCENARIO_FAMILIES)
         from emonav_drake.planners.model_aware import EXPERTS, SOFT_EXPERTS
 
         _choice("expert", self.expert, EXPERTS)

@@ -137,6 +137,13 @@ def train_dagger(
         )
     env_cfg = copy.deepcopy(env_cfg or load_setting(cfg.setting))
     env_cfg.lidar.num_frames = cfg.num_frames  # the variant's stack depth
+    if cfg.family != "paper":  # scenes to train and select on
+        if env_cfg.crowd.family not in ("paper", cfg.family):
+            raise ConfigError(
+                f"family = {cfg.family!r} and an environment of family "
+                f"{env_cfg.crowd.family!r}: give one"
+            )
+        env_cfg.crowd.family = cfg.family
     out = Path(out)
     ckpt = out / STATE_FILE
     if resume:

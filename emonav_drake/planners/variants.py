@@ -22,6 +22,7 @@ planner name of `emonav sim|eval|benchmark` (`--planner NAME`, `--planners NAME,
 | `emobipednav_guide` | (ours) | the same route; goal bearing of a guide sub-goal |
 | `emobipednav_dd02` | Table III, DD 0.2 m | the same route, trained with 0.2 m for every emotion |
 | `emobipednav_dd05` | Table III, DD 0.5 m | the same route, trained with 0.5 m for every emotion |
+| `emobipednav_mixed` | (ours) | the MPC route trained on the `mixed` scenario family |
 
 `emobipednav_digit` and `emobipednav_digit_mpc` differ by their training world, not its
 observation: the LIP-trained policy fine-tuned in the Digit-calibrated reduced world
@@ -34,6 +35,9 @@ MPC route with `goal_input: guide`
 (`core/goal_input.py`): a deviation from the paper's observation, measured against it.
 `emobipednav_dd02` and `emobipednav_dd05` are its route trained in the constant settings
 `no_emotion` and `constant_0.5` (`DaggerConfig.setting`), Table III's first two rows.
+`emobipednav_mixed` is `emobipednav_digit_mpc`'s route on the `mixed` scenario family
+(`DaggerConfig.family`; corridors, walls, standing and grouped pedestrians beside the
+paper's arena), measured against that route on the paper's arena alone.
 """
 
 from __future__ import annotations
@@ -133,6 +137,13 @@ VARIANTS: dict[str, PolicyVariant] = {
             "EmoBipedNav, DD 0.5 m (Digit/Digit; Table III)",
             "9 LiDAR grid maps; trained with one discomfort distance, 0.5 m",
             "policies/emobipednav_dd05.pt",
+            route="digit",
+        ),
+        PolicyVariant(
+            "emobipednav_mixed",
+            "EmoBipedNav (Digit/Digit, MPC teacher) on the scenario families (not in the paper)",
+            "9 LiDAR grid maps; trained with Digit's step response on the mixed family",
+            "policies/emobipednav_mixed.pt",
             route="digit",
         ),
     )
