@@ -33,6 +33,7 @@ LAYERS: list[tuple[str, frozenset[str]]] = [
                 "torch_load",
                 "run_lock",
                 "provenance",
+                "progress",
                 "registry",
                 "parallel",
                 "configs",

@@ -26,12 +26,14 @@ from __future__ import annotations
 import argparse
 import contextlib
 import logging
+import os
 import signal
 import sys
 import threading
 import traceback
 from collections.abc import Iterator
 
+from emonav_drake import progress
 from emonav_drake.cli import (
     benchmark,
     calibrate,
@@ -49,12 +51,14 @@ from emonav_drake.cli import (
     walk,
 )
 from emonav_drake.cli import eval as eval_cmd
+from emonav_drake.cli.common import UserHelpFormatter
 from emonav_drake.errors import RunInterrupted
 
 # Exit codes.
 EXIT_USAGE = 2  # a user error: bad flag, file, field or output path
 EXIT_INTERRUPTED = 130  # Ctrl-C (128 + SIGINT)
 EXIT_INTERNAL = 1  # an unexpected exception: a bug
+EXIT_BROKEN_PIPE = 141  # the reader of stdout went away (`emonav planners | head`): 128 + SIGPIPE
 
 # Exceptions that are the user's to fix: the ValueError family (ConfigError, PolicyError,
 # CommandError, ImageReadError, OutputPathError, DeviceError, …) and the file system's.
@@ -80,12 +84,35 @@ SUBCOMMANDS = (
 )
 
 
+# What `emonav --help` says above the sub-commands (for users; the module docstring is
+# for developers).
+DESCRIPTION = """\
+Emotion-aware social navigation for the bipedal robot Digit, as a Drake diagram.
+
+First commands:
+  emonav sim --planner policy --plant digit --seed 0 --record replay.html
+                              one episode on the full-order Digit; open replay.html
+  emonav planners             every planner: what it reads, its checkpoint, the defaults
+  emonav eval --planner mpc --episodes 100
+                              success rate and discomfort over seeds 0-99
+  emonav SUB-COMMAND --help   the flags of a sub-command, with their defaults
+
+Errors are one line `emonav: error: ...` (exit code 2; --debug shows the traceback);
+Ctrl-C stops cleanly (exit code 130: `eval` keeps finished episodes, `train` saves).
+"""
+
+
 def build_parser() -> argparse.ArgumentParser:
-    """The `emonav` parser: every sub-command module's `add_parser`, and `--debug`."""
+    """The `emonav` parser: every sub-command module's `add_parser`, `--version`,
+    `--verbose`, `--quiet` and `--debug`."""
     p = argparse.ArgumentParser(
-        prog="emonav", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+        prog="emonav",
+        description=DESCRIPTION,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("-v", "--verbose", action="store_true")
+    p.add_argument("--version", action="version", version=f"emonav {package_version()}")
+    p.add_argument("-v", "--verbose", action="store_true", help="log what each step does")
+    p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
     p.add_argument(
         "--debug",
         action="store_true",
@@ -94,13 +121,30 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", required=True)
     for module in SUBCOMMANDS:
         module.add_parser(sub)
-    # accepted after the sub-command too (`emonav sim --debug`); SUPPRESS keeps the
-    # sub-parser from overwriting a --debug given before the sub-command
+    # accepted after the sub-command too (`emonav sim --debug`, `emonav eval --quiet`);
+    # SUPPRESS keeps the sub-parser from overwriting a flag given before the sub-command
     for parser in sub.choices.values():
+        parser.formatter_class = UserHelpFormatter
         parser.add_argument(
             "--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS
         )
+        parser.add_argument(
+            "-q", "--quiet", action="store_true", default=argparse.SUPPRESS, help=QUIET_HELP
+        )
     return p
+
+
+QUIET_HELP = "no progress bars (there are none either when stderr is not a terminal)"
+
+
+def package_version() -> str:
+    """The installed package's version (`pyproject.toml`), or "unknown" if not installed."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("emonav_drake")
+    except PackageNotFoundError:
+        return "unknown"
 
 
 # The longest message printed: a value echoed back (a huge list, a long path) is cut.
@@ -168,8 +212,10 @@ def main(argv: list[str] | None = None) -> int:
         level=logging.INFO if args.verbose else logging.WARNING,
         format="%(levelname)s %(name)s: %(message)s",
     )
+    # bars only on a terminal, and not with --quiet: never carriage returns in a pipe or log
+    bars = not args.quiet and sys.stderr.isatty()
     try:
-        with _sigterm_as_interrupt():
+        with _sigterm_as_interrupt(), progress.allowed_while(bars):
             return args.func(args)
     except RunInterrupted as e:
         if debug:
@@ -182,6 +228,9 @@ def main(argv: list[str] | None = None) -> int:
         saved = "" if args.command == "train" else "; no output file was written"
         print(f"emonav: interrupted{saved}", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:  # silently, as other command-line tools; later writes go nowhere
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_BROKEN_PIPE
     except USER_ERRORS as e:
         if debug:
             raise

@@ -9,6 +9,7 @@ import argparse
 from pathlib import Path
 
 from emonav_drake.cli.common import (
+    PLANT_HELP,
     SeedArg,
     add_emotion_flags,
     check_workers,
@@ -20,24 +21,21 @@ from emonav_drake.cli.config import (
     add_state_source,
     resolve_config,
 )
+from emonav_drake.core.metrics import format_idt
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.diagrams.trials import MAX_TRIALS
 from emonav_drake.params import ConfigError
 
 DESCRIPTION = """\
-`emonav benchmark` (methods × seeded trials, resumable, on Ray) and `emonav config`.
+Compare planners on the same seeded trials (the paper's Tables II and III).
 
-emonav benchmark --planners policy,mpc,dwa --plant lip --trials 500 --first-seed 0
-                 [--workers W] [--ray-address ADDR] [--config F | --setting NAME]
-                 [--time-varying] [--emotion-source truth|camera] [--emotion-estimate F]
-                 [--checkpoint NAME=PATH …] --out DIR
-emonav config [--dump] [--setting NAME | --config F] [--time-varying]
-emonav config --list
+  emonav benchmark --planners policy,mpc,dwa --plant lip --trials 500 --out runs/t2
 
-The run directory keeps `settings.json`, `trials.jsonl` (one line per finished trial) and
-the tables (`tables.md`, CSVs); the same command again continues an interrupted run, a
-larger --trials extends it, other settings are refused (exit 2). See
-`emonav_drake/evaluation/benchmark.py` and docs/results.md.
+Every planner runs trial i on seed first-seed + i, in parallel on Ray (a local Ray by
+default, a cluster with --ray-address). The run directory keeps settings.json,
+trials.jsonl (one line per finished trial) and the tables (tables.md, CSV files): the
+same command again continues an interrupted run, a larger --trials extends it, and
+other settings are refused. Success rates come with their 95 % intervals.
 """
 
 TIME_VARYING_HELP = "one pedestrian's emotion changes every 2 s (paper §IV-F)"
@@ -54,11 +52,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     b.add_argument(
         "--planners",
         default="policy,mpc,dwa",
-        help="comma-separated methods: dwa, mpc, mpc_digit and dwa_digit (the MPC and DWA "
-        "planning with Digit's step-response model), policy (the shipped policy), "
-        "a variant, or a name given a --checkpoint (sac: a SAC-trained one)",
+        help="comma-separated planner names (`emonav planners` lists them), or any name "
+        "given a --checkpoint NAME=FILE",
     )
-    b.add_argument("--plant", default="lip", choices=list(PLANTS))
+    b.add_argument("--plant", default="lip", choices=list(PLANTS), help=PLANT_HELP)
     b.add_argument(
         "--trials",
         type=int,
@@ -98,7 +95,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "shipped policy, a variant to its shipped policy",
     )
     b.add_argument("--out", type=Path, required=True, help="run directory (created if missing)")
-    b.add_argument("--quiet", action="store_true", help="no progress bar")
     b.set_defaults(func=cmd_benchmark)
     return b
 
@@ -158,7 +154,7 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
         lo, hi = s["SR_ci"]
         print(
             f"{m:>8s}: SR {s['SR']:.3f} [{lo:.3f}, {hi:.3f}] (n={s['episodes']})  NT "
-            f"{tables.format_nt(s)} s  DT {s['DT']}  IDT {tables.format_idt(s)}"
+            f"{tables.format_nt(s)} s  DT {s['DT']}  {format_idt(s['IDT'])}"
         )
         field = "  ".join(
             f"{header} {tables.format_mean_ci(s, name, digits)}"

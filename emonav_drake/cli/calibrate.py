@@ -21,7 +21,7 @@ emonav calibrate collect --planners dwa,policy --episodes 20 --first-seed 300000
 emonav calibrate fit TRACES [TRACES …] [--held-out 0.25] --out MODEL.json
 emonav digit-rounds --from RUN --rounds 2 --episodes 60 [--workers W] --out DIR [--resume]
 
-See `emonav_drake/learning/calibration.py`.
+How the model is fitted and used: docs/learning.md ("Learning with Digit's dynamics").
 """
 
 

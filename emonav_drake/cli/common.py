@@ -23,6 +23,35 @@ if TYPE_CHECKING:
     import numpy as np
 
 
+PLANNER_HELP = (
+    "the planner that chooses the walking commands; `emonav planners` lists every name with "
+    "what it reads (privileged or deployable) and its checkpoint"
+)
+PLANT_HELP = (
+    "the robot: lip (the reduced-order LIP, fast: training and large benchmarks) or digit "
+    "(the full-order Digit in Drake, about 5x real time)"
+)
+
+
+class UserHelpFormatter(argparse.RawDescriptionHelpFormatter):
+    """argparse's help, the description kept as written and each option's default shown,
+    "(default: X)", unless its help already speaks of the default or it has none worth
+    showing (off switches, None)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        default = action.default
+        if (
+            "default" in text
+            or default is None
+            or default == argparse.SUPPRESS
+            or isinstance(default, bool)
+            or not action.option_strings
+        ):
+            return text
+        return f"{text} (default: %(default)s)" if text else "(default: %(default)s)"
+
+
 def parse_seed(text: str, flag: str) -> int:
     """A seed flag's value: an integer in [0, 2**64 - 1]; else `ConfigError` naming `flag`."""
     from emonav_drake.core.scenario import MAX_SEED

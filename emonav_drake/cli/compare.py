@@ -1,5 +1,5 @@
 """`emonav compare RUN RUN … --out DIR`: benchmark runs made at different times, compared
-as one (`evaluation/combine.py`): the tables of all their methods, McNemar on the seeds
+as one: the tables of all their methods, McNemar on the seeds
 each pair shares.
 """
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import textwrap
 from pathlib import Path
 
 from emonav_drake.cli.config import add_config_choice, add_family, resolve_config
@@ -86,22 +87,39 @@ def cmd_config(args: argparse.Namespace) -> int:
     return 0
 
 
+LIST_WIDTH = 96  # `config --list` wraps its descriptions to this many columns
+
+
 def _list_examples() -> str:
     """The named settings and example scenarios shipped with the package, one per line."""
     from emonav_drake.configs import SETTINGS, setting_path
     from emonav_drake.core.scenario_families import FAMILIES
     from emonav_drake.scenarios import EXAMPLES, SCENARIO_DIR
 
-    def first_comment(path: Path) -> str:
+    def first_sentence(path: Path) -> str:
+        """The first sentence of the file's leading comment (it may span lines)."""
+        words = []
         for line in path.read_text().splitlines():
-            if line.startswith("#"):
-                return line.lstrip("# ").strip()
-        return ""
+            if not line.startswith("#"):
+                break
+            words.append(line.lstrip("# ").strip())
+        text = " ".join(w for w in words if w)
+        end = text.find(". ")
+        return text if end < 0 else text[: end + 1]
+
+    def entry(name: str, width: int, text: str) -> list[str]:
+        indent = " " * (2 + width + 1)
+        return textwrap.wrap(
+            text, LIST_WIDTH, initial_indent=f"  {name:{width}s} ", subsequent_indent=indent
+        )
 
     lines = ["settings (--setting NAME):"]
-    lines += [f"  {n:14s} {first_comment(setting_path(n))}" for n in SETTINGS]
+    for n in SETTINGS:
+        lines += entry(n, 14, first_sentence(setting_path(n)))
     lines.append("example scenarios (emonav sim --scenario NAME):")
-    lines += [f"  {n:14s} {first_comment(SCENARIO_DIR / f'{n}.yaml')}" for n in EXAMPLES]
+    for n in EXAMPLES:
+        lines += entry(n, 14, first_sentence(SCENARIO_DIR / f"{n}.yaml"))
     lines.append("scenario families (--family NAME; each seed samples one scene):")
-    lines += [f"  {f.name:24s} {f.summary}" for f in FAMILIES.values()]
+    for f in FAMILIES.values():
+        lines += entry(f.name, 24, f.summary)
     return "\n".join(lines) + "\n"

@@ -11,6 +11,8 @@ from pathlib import Path
 
 from emonav_drake.atomic_io import write_json
 from emonav_drake.cli.common import (
+    PLANNER_HELP,
+    PLANT_HELP,
     SeedArg,
     add_episode_flags,
     check_outputs,
@@ -33,8 +35,10 @@ MAX_EPISODES = 100_000
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register `emonav eval` on the CLI's sub-parsers."""
     e = subparsers.add_parser("eval", help="evaluate a planner over many seeds (SR, NT, DT, IDT)")
-    e.add_argument("--planner", default="dwa", choices=planner_names())
-    e.add_argument("--plant", default="lip", choices=list(PLANTS))
+    e.add_argument(
+        "--planner", default="dwa", choices=planner_names(), metavar="NAME", help=PLANNER_HELP
+    )
+    e.add_argument("--plant", default="lip", choices=list(PLANTS), help=PLANT_HELP)
     e.add_argument(
         "--episodes",
         type=int,
@@ -72,11 +76,10 @@ def cmd_eval(args: argparse.Namespace) -> int:
     estimate = emotion_estimate_of(args)
     if estimate is not None and not PLANTS[args.plant].emotion_estimates:
         raise ConfigError(f"--plant {args.plant} takes no --emotion-estimate / --emotion-source")
-    from tqdm import tqdm
-
     from emonav_drake.core.metrics import format_summary, summarize
     from emonav_drake.diagrams.evaluation_episode import run_evaluation_episode
     from emonav_drake.planners import configure_for, make_planner
+    from emonav_drake.progress import progress_bar
 
     seeds = range(args.first_seed, args.first_seed + args.episodes)
     # Every scenario first (cheap): a crowd that does not fit fails now, not at episode k;
@@ -89,7 +92,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
         print(f"planner {args.planner}: {planner.describe()}")
     records = []
     interrupted = False
-    with tqdm(total=len(seeds), desc=f"{args.planner}/{args.plant}", unit="ep") as bar:
+    with progress_bar(total=len(seeds), desc=f"{args.planner}/{args.plant}", unit="ep") as bar:
         try:
             for seed in seeds:
                 scenario = sample(seed, resolved)

@@ -20,6 +20,8 @@ from typing import Any
 
 from emonav_drake.atomic_io import atomic_output, write_json
 from emonav_drake.cli.common import (
+    PLANNER_HELP,
+    PLANT_HELP,
     SeedArg,
     add_episode_flags,
     add_meshcat_host,
@@ -31,6 +33,7 @@ from emonav_drake.cli.common import (
     write_steps_csv,
 )
 from emonav_drake.cli.config import resolve_config, resolve_scenario
+from emonav_drake.core.metrics import format_idt
 from emonav_drake.diagrams.plants import DEFAULT_PLANT, PLANTS, Plant, SimRequest, plant_named
 from emonav_drake.params import ConfigError
 from emonav_drake.planners import planner_names
@@ -39,8 +42,10 @@ from emonav_drake.planners import planner_names
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register `emonav sim` on the CLI's sub-parsers."""
     s = subparsers.add_parser("sim", help="run one navigation episode in the Drake diagram")
-    s.add_argument("--planner", default="dwa", choices=planner_names())
-    s.add_argument("--plant", default=DEFAULT_PLANT, choices=list(PLANTS))
+    s.add_argument(
+        "--planner", default="dwa", choices=planner_names(), metavar="NAME", help=PLANNER_HELP
+    )
+    s.add_argument("--plant", default=DEFAULT_PLANT, choices=list(PLANTS), help=PLANT_HELP)
     s.add_argument("--seed", action=SeedArg, default=0, help="scenario seed, in [0, 2**64 - 1]")
     s.add_argument(
         "--scenario",
@@ -90,11 +95,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "system (printed, and added to --json as 'rates' and 'wall_time_share')",
     )
     add_episode_flags(s)
-    s.add_argument(
-        "--quiet",
-        action="store_true",
-        help="no progress bar (there is none either when stderr is not a terminal)",
-    )
     s.set_defaults(func=cmd_sim)
     return s
 
@@ -152,11 +152,11 @@ def cmd_sim(args: argparse.Namespace) -> int:
         out.update(rates.report.to_json())
         print(_format_rates(rates.report))
     print(
-        f"seed {scenario.seed}: {record.outcome} after {record.steps} steps "
+        f"{_scene_label(args, cfg, scenario.seed)}: {record.outcome} after {record.steps} steps "
         f"({record.nav_time:.1f} s simulated, {wall:.2f} s wall), path "
         f"{record.path_length:.2f} m, min pedestrian distance "
         f"{record.min_ped_distance:.2f} m, discomfort steps {record.discomfort_steps}, "
-        f"IDT {record.idt}"
+        f"{format_idt(record.idt)}"
     )
     if args.record:
         print(f"replay written to {Path(args.record).resolve()} (open it in a browser)")
@@ -256,6 +256,15 @@ def _write_sim_outputs(
         print(f"{n} steps written to {args.steps_out}")
 
 
+def _scene_label(args: argparse.Namespace, config: Any, seed: int) -> str:
+    """Which scene ran, for the summary line: "scenario crossing (seed 0)" for --scenario,
+    "family blocker, seed 3" for a family, else "seed 7" (the paper's arena)."""
+    if getattr(args, "scenario", None):
+        return f"scenario {Path(args.scenario).stem} (seed {seed})"
+    family = config.crowd.family
+    return f"seed {seed}" if family == "paper" else f"family {family}, seed {seed}"
+
+
 def show_progress(args: argparse.Namespace) -> bool:
     """Whether a command shows its progress bar: stderr is a terminal and no --quiet (as
     `benchmark`); never in a pipe, a log file or a test's captured output."""
@@ -285,7 +294,10 @@ def _sim_registered_plant(
     record = robot.run(scenario, cfg, planner, grid_kind, goal_radius, estimate)
     out = record.to_json()
     out["seed"] = scenario.seed
-    print(f"seed {scenario.seed} on {robot.label}: {record.outcome} after {record.steps} steps")
+    print(
+        f"{_scene_label(args, cfg, scenario.seed)} on {robot.label}: {record.outcome} "
+        f"after {record.steps} steps"
+    )
     if args.json:
         write_json(args.json, out)
     return 0

@@ -38,7 +38,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         choices=["sac", "dagger", "finetune", "sarl"],
         help="sac (default), dagger (the CPU route), finetune (discrete SAC on a trained "
         "categorical student, --init) or sarl (CrowdNav's SARL: imitation, then value "
-        "learning; learning/sarl_train.py)",
+        "learning)",
     )
     t.add_argument(
         "--init",
@@ -59,8 +59,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         help="YAML training configuration: top-level SacConfig fields for --algo sac, "
         "DaggerConfig fields for --algo dagger, FinetuneConfig fields for --algo finetune, "
         "SarlConfig fields for --algo sarl "
-        "(e.g. emonav_drake/configs/finetune_digit.yaml; see emonav_drake/learning/config.py; "
-        "the navigation environment is the paper's default and not configurable here)",
+        "(e.g. emonav_drake/configs/finetune_digit.yaml; every field is commented in "
+        "emonav_drake/learning/config.py; a DAgger route picks its world with `setting` and "
+        "`family`)",
     )
     t.add_argument(
         "--steps",

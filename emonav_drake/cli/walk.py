@@ -128,7 +128,10 @@ def cmd_walk(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register `emonav walk` on the CLI's sub-parsers."""
-    w = subparsers.add_parser("walk", help="simulate the full-order Digit walking (Drake, 1 kHz)")
+    w = subparsers.add_parser(
+        "walk",
+        help="simulate the full-order Digit walking (plant and controller at 4 ms by default)",
+    )
     w.add_argument(
         "--seconds",
         type=float,
@@ -170,10 +173,5 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     w.add_argument("--record", type=Path, help="write a self-contained HTML replay")
     w.add_argument("--json", type=Path, help="write the result as JSON (NaN written as null)")
     w.add_argument("--steps-out", type=Path, metavar="FILE.csv", help=STEPS_OUT_HELP)
-    w.add_argument(
-        "--quiet",
-        action="store_true",
-        help="no progress bar (there is none either when stderr is not a terminal)",
-    )
     w.set_defaults(func=cmd_walk)
     return w

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses as dc
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -202,6 +203,16 @@ def summarize(records: list[EpisodeRecord]) -> dict:
     return out
 
 
+IDT_KINDS = ("static", "happy", "neutral", "negative")  # the order of every IDT list
+
+
+def format_idt(idt: Sequence[int]) -> str:
+    """IDT for people, each count named: "IDT [static 11; happy 0, neutral 0, negative 4]"
+    (the paper's [static; happy, neutral, negative] with the names written in)."""
+    named = [f"{k} {int(v)}" for k, v in zip(IDT_KINDS, idt, strict=True)]
+    return f"IDT [{named[0]}; {', '.join(named[1:])}]"
+
+
 def format_summary(s: dict) -> str:
     """One line in the paper's notation, then (where measured) the field's metrics: means
     per episode with their 95 % t intervals."""
@@ -211,7 +222,7 @@ def format_summary(s: dict) -> str:
     line = (
         f"SR {s['SR']:.3f}  collision {s['collision_rate']:.3f}  timeout "
         f"{s['timeout_rate']:.3f}  {fall}NT {nt} s  DT {s['DT']}  "
-        f"IDT [{idt[0]}; {idt[1]}, {idt[2]}, {idt[3]}]  ({s['episodes']} episodes)"
+        f"{format_idt(idt)}  ({s['episodes']} episodes)"
     )
     if not any(s.get(f"{name}_n") for name in SOCIAL_FIELDS):
         return line

@@ -33,15 +33,13 @@ ignore it.
 
 `build_navigation_diagram` wires it; `run_episode` simulates one episode walking step
 by walking step and returns its `EpisodeRecord` and a per-step trajectory log.
-`SimulationProgress` is the progress bar over simulated time that the episode runners
-(here, `navigation_digit`, `walking`) show with `progress=True`.
+With `progress=True` it shows `progress.SimulationProgress`, a bar over simulated time.
 """
 
 from __future__ import annotations
 
 import dataclasses as dc
 import logging
-import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -56,6 +54,7 @@ from emonav_drake.diagrams.meshcat_viewing import ReplayCaption, make_meshcat, w
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
+from emonav_drake.progress import SimulationProgress
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.crowd_tracker_system import CrowdTrackerSystem
 from emonav_drake.systems.emotion_estimate_source import AddEmotionEstimateSource
@@ -75,75 +74,6 @@ if TYPE_CHECKING:
     from emonav_drake.diagrams.rates import RateMeasurement
 
 log = logging.getLogger(__name__)
-
-# what the progress bar shows: simulated seconds of the expected total, the real-time factor
-_BAR_FORMAT = (
-    "{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:.1f} s simulated "
-    "[{elapsed}<{remaining}{postfix}]"
-)
-
-
-class SimulationProgress:
-    """A tqdm progress bar over simulated time, on stderr: simulated seconds of `total`
-    [s] and the real-time factor (simulated over wall seconds since the bar was made).
-
-    The runners call `update(t)` after each `Simulator.AdvanceTo` and `close(t, note)`
-    when the simulation ends; an episode that ends before `total` (goal, collision, fall)
-    completes the bar at the time it reached, with `note` (e.g. the outcome) after it.
-    Disabled (`enabled=False`) it writes nothing and costs nothing. It only reads the
-    simulated time it is given, so it cannot change a simulation."""
-
-    def __init__(self, total: float, desc: str, enabled: bool = True) -> None:
-        self._bar = None
-        self._t0 = time.perf_counter()
-        if enabled:
-            import os
-            import sys
-
-            from tqdm import tqdm
-
-            try:  # a terminal that reports no size (0 × 0) would get an empty bar
-                size = os.get_terminal_size(sys.stderr.fileno())
-                sized = size.columns > 0 and size.lines > 0
-            except (OSError, ValueError):
-                sized = False
-            self._bar = tqdm(
-                total=float(total),
-                desc=desc,
-                file=sys.stderr,
-                bar_format=_BAR_FORMAT,
-                dynamic_ncols=sized,
-                ncols=None if sized else 100,
-                nrows=None if sized else 24,
-            )
-
-    @property
-    def enabled(self) -> bool:
-        """Whether a bar is shown (False after `close`)."""
-        return self._bar is not None
-
-    def _postfix(self, t: float, note: str) -> str:
-        wall = time.perf_counter() - self._t0
-        rtf = f"{t / wall:.2f}x real time" if wall > 0 else ""
-        return ", ".join(x for x in (rtf, note) if x)
-
-    def update(self, t: float) -> None:
-        """The simulation has reached time `t` [s]."""
-        if self._bar is None:
-            return
-        self._bar.set_postfix_str(self._postfix(t, ""), refresh=False)
-        self._bar.update(min(t, self._bar.total) - self._bar.n)  # redrawn at tqdm's pace
-
-    def close(self, t: float, note: str = "") -> None:
-        """End the bar at time `t` [s] (the whole bar if the simulation ended early)."""
-        if self._bar is None:
-            return
-        bar, self._bar = self._bar, None
-        if t < bar.total:
-            bar.total = t
-        bar.n = min(t, bar.total)
-        bar.set_postfix_str(self._postfix(t, note), refresh=False)
-        bar.close()  # draws the final state and ends the line
 
 
 @dc.dataclass

@@ -44,11 +44,12 @@ from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
 from emonav_drake.diagrams.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
-from emonav_drake.diagrams.navigation import AddNavigationStack, SimulationProgress
+from emonav_drake.diagrams.navigation import AddNavigationStack
 from emonav_drake.diagrams.rates import RateMeasurement
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
+from emonav_drake.progress import SimulationProgress
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.episode_monitor import EpisodeMonitor
 from emonav_drake.systems.fall_monitor import FALL

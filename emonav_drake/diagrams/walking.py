@@ -33,8 +33,8 @@ from emonav_drake.core.tracking import column as tracking_column
 from emonav_drake.core.tracking import step_tracking
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
 from emonav_drake.diagrams.meshcat_viewing import make_meshcat
-from emonav_drake.diagrams.navigation import SimulationProgress
 from emonav_drake.params import EmoNavConfig, load_config, pendulum_frequency
+from emonav_drake.progress import SimulationProgress
 from emonav_drake.systems.alip_footstep_planner import (
     LOG_COM,
     LOG_COMMAND,

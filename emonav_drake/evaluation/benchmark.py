@@ -91,14 +91,14 @@ class _Progress:
     """tqdm bar with the running SR per method."""
 
     def __init__(self, total: int, done: list[dict], methods: Sequence[str], enabled: bool):
-        from tqdm import tqdm
+        from emonav_drake.progress import progress_bar
 
         self.methods = list(methods)
         self.k = {m: 0 for m in methods}
         self.n = {m: 0 for m in methods}
         for t in done:
             self._count(t)
-        self.bar = tqdm(total=total, initial=len(done), unit="trial", disable=not enabled)
+        self.bar = progress_bar(total=total, initial=len(done), unit="trial", enabled=enabled)
         self._postfix()
 
     def _count(self, t: dict) -> None:

@@ -114,13 +114,12 @@ def diagnose_run(
 ) -> list[dict]:
     """Diagnose every failure of a benchmark run, LIP or Digit (module docstring); write
     diagnosis.{json,md,png}, failures.md and run_config.yaml into `out`."""
-    from tqdm import tqdm
-
     from emonav_drake.atomic_io import write_json, write_text_atomic
     from emonav_drake.diagrams.plants import plant_named
     from emonav_drake.diagrams.trials import TrialRunner
     from emonav_drake.evaluation.run_directory import SETTINGS_FILE, load_run
     from emonav_drake.evaluation.run_settings import spec_from_settings
+    from emonav_drake.progress import progress_bar
 
     settings, trials = load_run(run_dir)
     where = Path(run_dir) / SETTINGS_FILE
@@ -156,7 +155,7 @@ def diagnose_run(
             )
         raise ConfigError(f"{run_dir}: no finished trials of {methods} to diagnose")
     rows = []
-    for t in tqdm(todo, desc="re-simulating", unit="trial", disable=not progress):
+    for t in progress_bar(todo, desc="re-simulating", unit="trial", enabled=progress):
         row = diagnose_trial(runner, t["method"], t["seed"], last, model)
         row["reproduced"] = row["record"]["outcome"] == t["record"]["outcome"] and (
             row["record"]["steps"] == t["record"]["steps"]

@@ -172,7 +172,7 @@ def sweep(
     progress: bool = False,
 ) -> list[dict]:
     """One `CameraRig.shot` per (emotion, distance, bearing, facing), in that nesting."""
-    from tqdm import tqdm
+    from emonav_drake.progress import progress_bar
 
     rig = CameraRig(params)
     grid = [
@@ -180,7 +180,7 @@ def sweep(
     ]
     return [
         rig.shot(d, b, f, e)
-        for e, d, b, f in tqdm(grid, desc="camera sweep", unit="shot", disable=not progress)
+        for e, d, b, f in progress_bar(grid, desc="camera sweep", unit="shot", enabled=progress)
     ]
 
 

@@ -545,9 +545,9 @@ def study(
     planner = make_planner(planner_name, cfg)
     seeds = list(seeds)
     if progress:
-        from tqdm import tqdm
+        from emonav_drake.progress import progress_bar
 
-        seeds = tqdm(seeds, desc="tracking episodes", unit="episode")
+        seeds = progress_bar(seeds, desc="tracking episodes", unit="episode")
     return [run_episode(sample_scenario(s, cfg), cfg, planner, detection, tracking) for s in seeds]
 
 

@@ -81,7 +81,7 @@ def sweep_walking_rates(
     progress: bool = True,
 ) -> list[dict]:
     """Run every (controller, planner, seed) not yet in `out`; append each row to it."""
-    from tqdm import tqdm
+    from emonav_drake.progress import progress_bar
 
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -93,7 +93,7 @@ def sweep_walking_rates(
         for s in seeds
         if _key(c, p, s) not in done
     ]
-    for c, p, s in tqdm(todo, desc="walking rate sweep", unit="walk", disable=not progress):
+    for c, p, s in progress_bar(todo, desc="walking rate sweep", unit="walk", enabled=progress):
         row = run_one(c, p, s, seconds)
         with out.open("a") as f:
             f.write(json.dumps(row) + "\n")

@@ -121,8 +121,6 @@ def collect_traces(
     Returns {"episodes", "steps", "wall_seconds", "steps_per_second_per_worker"} of the
     episodes run now (the throughput of the Digit simulation, per worker).
     """
-    from tqdm import tqdm
-
     from emonav_drake.atomic_io import write_text_atomic
     from emonav_drake.core.scenario import MAX_SEED
     from emonav_drake.diagrams.trials import (
@@ -133,6 +131,7 @@ def collect_traces(
         run_trials,
     )
     from emonav_drake.params import dump_config
+    from emonav_drake.progress import progress_bar
 
     if not 0.0 <= explore <= 1.0:
         raise ConfigError(f"--explore {explore}: must be in [0, 1]")
@@ -153,7 +152,7 @@ def collect_traces(
     seeds = range(first_seed, first_seed + episodes)
     tasks = [(m.name, s) for s in seeds for m in methods if (m.name, s) not in done]
     new: list[dict] = []
-    bar = tqdm(total=len(tasks), desc="Digit episodes", unit="ep", disable=not progress)
+    bar = progress_bar(total=len(tasks), desc="Digit episodes", unit="ep", enabled=progress)
 
     def keep(line: dict) -> None:  # appended as it finishes; sorted once at the end
         new.append(line)

@@ -51,7 +51,6 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from tqdm import tqdm
 
 from emonav_drake.atomic_io import write_text_atomic
 from emonav_drake.configs import load_setting
@@ -88,6 +87,7 @@ from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.model_aware import load_response, route_expert
 from emonav_drake.planners.policy import save_policy
 from emonav_drake.planners.protocol import Planner
+from emonav_drake.progress import progress_bar
 
 log = logging.getLogger(__name__)
 
@@ -277,7 +277,7 @@ def _collect(
     cfg, env_cfg, prog, rng, demos = run.cfg, run.env_cfg, run.prog, run.rng, run.demos
     episodes = cfg.expert_episodes if rnd == 0 else cfg.episodes_per_round
     t0 = time.perf_counter()
-    bar = tqdm(
+    bar = progress_bar(
         total=episodes,
         initial=prog.episode,
         desc=f"round {rnd} rollouts",

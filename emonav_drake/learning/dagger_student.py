@@ -13,7 +13,6 @@ from collections.abc import Callable
 import numpy as np
 import torch
 from torch.nn import functional as F
-from tqdm import tqdm
 
 from emonav_drake.core.observations import mirror_observation, observation_kind
 from emonav_drake.learning.config import DaggerConfig
@@ -21,6 +20,7 @@ from emonav_drake.learning.demonstrations import Demonstrations, command_index
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.networks import CategoricalPolicy
 from emonav_drake.planners.policy import build_encoder, encoder_spec, load_policy
+from emonav_drake.progress import progress_bar
 
 
 class Student:
@@ -149,7 +149,7 @@ class Student:
         targets = demos.target_array()
         frames = demos.store.frames
         self.model.train()
-        bar = tqdm(
+        bar = progress_bar(
             range(done, steps), desc=desc, unit="upd", leave=False, initial=done, total=steps
         )
         for _ in bar:

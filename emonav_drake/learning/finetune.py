@@ -86,6 +86,7 @@ from emonav_drake.planners.policy import (
     save_policy,
     vector_state,
 )
+from emonav_drake.progress import progress_bar
 
 log = logging.getLogger(__name__)
 
@@ -236,12 +237,12 @@ class _Run:
     def train(self, progress: bool, resume_command: str) -> None:
         """The loop: owed updates, then the due evaluation, then the next episode."""
         cfg, prog = self.cfg, self.prog
-        bar = tqdm(
+        bar = progress_bar(
             total=cfg.total_steps,
             initial=min(prog.env_steps, cfg.total_steps),
             desc="finetune",
             unit="step",
-            disable=not progress,
+            enabled=progress,
         )
         self._postfix(bar)
         with InterruptGuard() as guard:

@@ -62,6 +62,7 @@ from emonav_drake.learning.sac_curve import (
 )
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import encoder_spec, save_policy, vector_state
+from emonav_drake.progress import progress_bar
 
 if TYPE_CHECKING:
     from emonav_drake.learning.digit_env import EmoNavDigitEnv
@@ -237,8 +238,8 @@ def _train(
     truncate_curve(run.curve, run.curve_rows)  # drop rows of evaluations after the checkpoint
     writer = open_tensorboard(out)
     end = cfg.total_steps if stop_at is None else min(stop_at, cfg.total_steps)
-    bar = tqdm(
-        total=cfg.total_steps, initial=run.step, desc="SAC", unit="step", disable=not progress
+    bar = progress_bar(
+        total=cfg.total_steps, initial=run.step, desc="SAC", unit="step", enabled=progress
     )
     with InterruptGuard() as guard:
         try:

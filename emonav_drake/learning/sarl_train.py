@@ -58,6 +58,7 @@ from emonav_drake.learning.run_state import (
 )
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.sarl import action_values, command_grid, save_sarl, value_network
+from emonav_drake.progress import progress_bar
 
 log = logging.getLogger(__name__)
 STATE_FILE = "sarl_state.pt"
@@ -322,12 +323,12 @@ def _imitate(run: SarlRun, out: Path, guard: InterruptGuard, progress: bool, com
     if prog.phase == "il_collect":
         expert = _expert(cfg, run.env_cfg)
         t0 = time.perf_counter()
-        bar = tqdm(
+        bar = progress_bar(
             total=cfg.il_episodes,
             initial=prog.il_episode,
             desc="SARL imitation",
             unit="ep",
-            disable=not progress,
+            enabled=progress,
         )
         while prog.il_episode < cfg.il_episodes and not guard.requested:
             undo = rng_state(run.rng)
@@ -354,12 +355,12 @@ def _imitate(run: SarlRun, out: Path, guard: InterruptGuard, progress: bool, com
     if prog.phase == "il_train" and not guard.requested:
         t0 = time.perf_counter()
         per_epoch = max(1, run.memory.size // cfg.batch_size)
-        bar = tqdm(
+        bar = progress_bar(
             total=cfg.il_epochs,
             initial=prog.il_epoch,
             desc="SARL imitation training",
             unit="epoch",
-            disable=not progress,
+            enabled=progress,
         )
         while prog.il_epoch < cfg.il_epochs and not guard.requested:
             loss = run.train_batches(per_epoch)
@@ -380,12 +381,12 @@ def _learn(run: SarlRun, out: Path, guard: InterruptGuard, progress: bool, comma
     cfg, prog = run.cfg, run.prog
     if prog.phase != "rl":
         return
-    bar = tqdm(
+    bar = progress_bar(
         total=cfg.rl_episodes,
         initial=prog.rl_episode,
         desc="SARL value learning",
         unit="ep",
-        disable=not progress,
+        enabled=progress,
     )
     while prog.rl_episode < cfg.rl_episodes and not guard.requested:
         t0 = time.perf_counter()
