@@ -155,6 +155,8 @@ METHOD_RGB: dict[str, RGB] = {
             strict=True,
         )
     ),
+    # the default policy before the distilled one (shown beside it in older runs)
+    "emobipednav_digit_mpc": (0.416, 0.239, 0.604),  # dark purple, #6a3d9a
 }
 
 # Model against measurement (`scripts/plot_step_response.py`, tracking notebook)
@@ -210,13 +212,15 @@ def method_label(name: str, checkpoint: str | None = None) -> str:
 
 
 def method_colours(labels: list[str]) -> list[RGB]:
-    """One colour per method label, in order: `METHOD_RGB` for the known ones, the others
-    `METHOD_CYCLE` in turn (skipping colours the known ones use)."""
-    taken = {METHOD_RGB[m] for m in labels if m in METHOD_RGB}
+    """One colour per method label, in order: `METHOD_RGB` for the known ones (a label
+    "NAME (note)" as NAME), the others `METHOD_CYCLE` in turn (skipping colours the known
+    ones use)."""
+    keys = [m.split(" (")[0] for m in labels]  # "policy (default)" is drawn as "policy"
+    taken = {METHOD_RGB[m] for m in keys if m in METHOD_RGB}
     spare = [c for c in (*METHOD_CYCLE, *SERIES_RGB) if c not in taken and c not in EMOTION_RGB]
     spare = list(dict.fromkeys(spare))  # each colour once: no two methods share one
     out, i = [], 0
-    for m in labels:
+    for m in keys:
         if m in METHOD_RGB:
             out.append(METHOD_RGB[m])
         else:

@@ -79,7 +79,7 @@ def plot_summary(
     summary = tables.summarize_methods(trials, methods)
     names = list(summary)
     shown = [(labels or {}).get(m) or palette.method_label(m) for m in names]
-    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8), gridspec_kw={"width_ratios": [1, 1, 2]})
+    fig, axes = plt.subplots(1, 3, figsize=(14.5, 3.8), gridspec_kw={"width_ratios": [1, 1, 2]})
     x = np.arange(len(names))
     colors = palette.method_colours(shown)
 
@@ -134,7 +134,8 @@ def plot_summary(
     ax.set_xticks(np.arange(4), IDT_LABELS)
     ax.set_ylabel("steps per trial")
     ax.set_title("IDT per trial [static; happy, neutral, negative] (95 % t interval)")
-    ax.legend(loc="upper center", ncol=2 if len(names) > 4 else 1, fontsize=8)
+    # beside the axes, never over the bars
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     for ax in axes:
         ax.set_ylim(bottom=0)
         ax.grid(axis="y", alpha=0.3)
