@@ -151,8 +151,10 @@ def main() -> None:
         z = {"zorder": 3 if name == stages[0][0] else 2} if compared else {}
         ax.errorbar(xs, sr, yerr=err, fmt="o-", color=colour, capsize=3, label=name, **z)
         for x, s, label in zip(xs, sr, labels, strict=True):
-            ax.annotate(label, (x, s), textcoords="offset points", xytext=(0, dy), fontsize=7,
-                        ha="center", color=palette.TEXT_RGB)  # fmt: skip
+            # beside the point, clear of its vertical error bar, over the lines it crosses
+            ax.annotate(label, (x, s), textcoords="offset points", xytext=(5, dy // 2),
+                        fontsize=7, ha="left", va="center", color=palette.TEXT_RGB, zorder=5,
+                        bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none"})  # fmt: skip
     if args.digit_rounds:
         xs, sr, n, labels = _digit_rounds(args.digit_rounds, args.start, stages[0][1][0][-1])
         labels[0] = args.start_label
