@@ -185,19 +185,24 @@ def _pedestrian_segments(traj: Trajectory, i: int, upto: int | None = None):
     return segments, colors
 
 
-def _label(ax, xy, text: str, above: bool, color, z: int) -> None:
-    """A small time label inside a disc: in its upper half, or its lower half (so that two
-    snapshots of the same body at one place keep readable labels)."""
+TIME_LABEL_SIZE = 8  # [pt] the "t s" labels of the snapshots
+
+
+def _label(ax, xy, text: str, above: bool, color, z: int, gap: float = 0.03) -> None:
+    """A time label `gap` [m] above or below `xy` (inside a disc for a small gap; two
+    snapshots of one body at one place keep readable labels), on a light ground so that
+    paths, rings and markers under it do not hide it."""
     x, y = xy
     ax.text(
         x,
-        y + (0.03 if above else -0.03),
+        y + (gap if above else -gap),
         text,
         ha="center",
         va="bottom" if above else "top",
-        fontsize=6.5,
+        fontsize=TIME_LABEL_SIZE,
         color=color,
         zorder=z,
+        bbox={"boxstyle": "round,pad=0.12", "fc": (*PAPER_RGB, 0.75), "ec": "none"},
     )
 
 
@@ -215,8 +220,8 @@ def _draw_robot(ax, traj: Trajectory, k: int, label: str | None):
     r = traj.robot_radius
     ax.add_patch(Circle((x, y), r, fc=(*ROBOT_RGB, 0.30), ec=ROBOT_RGB, lw=1.6, zorder=5))
     ax.plot([x, x + r * math.cos(th)], [y, y + r * math.sin(th)], color=INK_RGB, lw=1.2, zorder=5)
-    if label:
-        _label(ax, (x, y), label, False, ROBOT_DARK_RGB, 9)
+    if label:  # under the disc: the start and goal markers at its centre stay visible
+        _label(ax, (x, y), label, False, ROBOT_DARK_RGB, 10, gap=r + 0.04)
 
 
 def _mark_end(ax, traj: Trajectory) -> str | None:
@@ -438,7 +443,7 @@ def render_trajectory_animation(
     path: str | Path,
     traj: Trajectory,
     fps: float | None = None,
-    dpi: int = 80,
+    dpi: int = 110,
 ) -> Path:
     """Write the episode frame by frame (one frame per walking instant t_k, plus a still
     second at the end) as a GIF or MP4 (`animation_writer`).
@@ -459,10 +464,10 @@ def render_trajectory_animation(
     key.legend(
         handles=_legend_handles(traj, "now", still=False),
         loc="upper left",
-        fontsize=7,
+        fontsize=9,
         frameon=False,
     )
-    title = ax.set_title("", fontsize=9)
+    title = ax.set_title("", fontsize=10)
 
     p = traj.pedestrians.shape[1]
     rp, rr = traj.pedestrian_radius, traj.robot_radius
