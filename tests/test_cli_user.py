@@ -96,3 +96,23 @@ def test_config_list_descriptions_are_whole_sentences(capsys):
     assert len(entries) >= 7
     for entry in entries:
         assert entry[-1].rstrip().endswith((".", ")")), entry
+
+
+def test_replay_caption_names_the_planner_and_a_file_only_if_chosen(tmp_path):
+    import shutil
+
+    from emonav_drake.core.scenario import sample_scenario
+    from emonav_drake.diagrams.meshcat_viewing import ReplayCaption
+    from emonav_drake.params import EmoNavConfig
+    from emonav_drake.planners import make_planner, planner_kind
+
+    cfg = EmoNavConfig()
+    scenario = sample_scenario(3, cfg)
+    shipped = make_planner("policy", cfg)
+    cap = ReplayCaption.for_episode(shipped, "Digit", scenario)
+    assert cap.title() == "emonav: policy on Digit, seed 3"
+    mine = tmp_path / "my_run.pt"
+    shutil.copy(planner_kind("policy").default_checkpoint(), mine)
+    cap = ReplayCaption.for_episode(make_planner("policy", cfg, mine), "LIP", scenario)
+    assert cap.title() == "emonav: policy (my_run.pt) on LIP, seed 3"
+    assert ReplayCaption.for_episode(make_planner("mpc", cfg), "LIP", scenario).planner == "mpc"

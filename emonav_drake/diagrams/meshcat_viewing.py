@@ -231,10 +231,15 @@ class ReplayCaption:
         """The caption of an episode: `planner` a `Planner` (its `name`), `plant` the
         robot's caption name (`Plant.caption_name`), `scenario` a `Scenario` (its `seed`),
         `record` its `EpisodeRecord` once it has ended; `footsteps` as the plant's."""
+        from emonav_drake.planners import is_default_checkpoint
+
         name = getattr(planner, "name", type(planner).__name__)
         path = getattr(planner, "path", None)  # a learned policy: its checkpoint file
+        shown = name  # the planner's name; its file only when the user chose one
+        if path is not None and not is_default_checkpoint(name, path):
+            shown = f"{name} ({Path(path).name})"
         cap = cls(
-            planner=name if path is None else f"{name} ({Path(path).name})",
+            planner=shown,
             plant=plant,
             seed=getattr(scenario, "seed", None),
             rays=rays,

@@ -39,6 +39,7 @@ from emonav_drake.planners.variants import VARIANTS, shipped_checkpoint
 __all__ = [
     "PlannerKind",
     "configure_for",
+    "is_default_checkpoint",
     "is_learned",
     "is_registered",
     "make_planner",
@@ -254,7 +255,22 @@ def make_planner(
     kind = planner_kind(name)
     if kind.learned and checkpoint is None:
         checkpoint = kind.default_checkpoint() if kind.default_checkpoint else None
-    return kind.build(config, checkpoint, device)
+    planner = kind.build(config, checkpoint, device)
+    planner.name = name  # what captions and logs call it: the name it was asked for
+    return planner
+
+
+def is_default_checkpoint(name: str, path: str | Path) -> bool:
+    """Whether `path` is the checkpoint planner `name` runs without `--checkpoint`."""
+    if not is_registered(name):
+        return False
+    kind = planner_kind(name)
+    if not kind.learned or kind.default_checkpoint is None:
+        return False
+    try:
+        return Path(kind.default_checkpoint()).resolve() == Path(path).resolve()
+    except ConfigError:  # no shipped checkpoint: any file is one the user chose
+        return False
 
 
 def observation_of(planner) -> str:
