@@ -3,14 +3,15 @@
 against the default learned policy, on the same seeds (Wilson intervals; McNemar exact on
 success; DT per trial with the Wilcoxon signed-rank test on the per-seed differences).
 
-    python scripts/state_source_table.py [--setting var_dd|no_emotion] [--seeds 300]
+    python scripts/state_source_table.py [--setting var_dd|no_emotion] [--seeds 300] [--write]
 
 A method's truth trials may come from several run directories (`SETTINGS`): a run made at
 another commit than the lidar run counts only if its records equal, to the last digit,
 those of a run at the lidar run's commit on the seeds both ran (the setting's check run,
 seeds 0-29);
 any difference, or no seed in common, is an error.
-Prints Markdown (quoted in docs/results.md).
+Prints Markdown; with --write also writes it to the lidar run's `state_source_table.md`,
+which docs/results.md quotes (`tests/test_docs_agree.py` checks the quote).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from emonav_drake.evaluation.tables import (
 
 RESULTS = Path(__file__).resolve().parent.parent / "benchmarks" / "results"
 PLANNERS = ("dwa", "mpc", "sarl", "rgl")
+TABLE_FILE = "state_source_table.md"  # in the lidar run's directory, with --write
 # Per setting: the lidar run; the truth run at the lidar run's commit that checks older
 # truth runs (seeds 0-29); the truth trials per method (run directories in order, a seed
 # taken from the first that has it); the default policy's run and method.
@@ -132,6 +134,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=300, help="seeds 0 … N − 1")
     ap.add_argument("--setting", choices=SETTINGS, default="var_dd")
+    ap.add_argument(
+        "--write", action="store_true", help=f"also write the lidar run's {TABLE_FILE}"
+    )
     args = ap.parse_args()
     setting = SETTINGS[args.setting]
     policy_run = setting["policy"]
@@ -168,7 +173,16 @@ def main() -> None:
             rows.append(
                 f"| {name} | {label} | {_sr(rs)} | {_nt(rs)} | {dt:.2f} | {vs_truth} | {vs_pol} |"
             )
-    print("\n".join(rows))
+    text = "\n".join(rows)
+    print(text)
+    if args.write:
+        from emonav_drake.atomic_io import write_text_atomic
+
+        out = RESULTS / setting["lidar"] / TABLE_FILE
+        cmd = "python scripts/state_source_table.py"
+        cmd += f" --setting {args.setting} --seeds {args.seeds} --write"
+        write_text_atomic(out, f"Written by `{cmd}`.\n\n{text}\n")
+        print(f"wrote {out}")
 
 
 if __name__ == "__main__":
