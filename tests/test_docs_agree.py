@@ -106,3 +106,23 @@ def test_an_unclosed_block_is_not_a_block(tmp_path):
     doc = tmp_path / "doc.md"
     doc.write_text("<!-- from run/tables.md: Table II -->\n| a |\n")
     assert quoted_blocks(doc) == []
+
+
+def test_the_results_page_opens_with_the_shipped_default():
+    """The first table of docs/results.md is quoted from a run (checked above) whose first
+    row is the default policy, and that run ran the file shipped as the default."""
+    import hashlib
+    import json
+
+    from emonav_drake.planners.policy import DEFAULT_POLICY
+
+    page = ROOT / "docs" / "results.md"
+    first = quoted_blocks(page)[0]
+    text = page.read_text()
+    assert text.index("<!-- from ") < text.index("\n| ")  # no table before the quoted one
+    rows = [r for r in section_of(ROOT / first.split(":")[0], "table").splitlines()]
+    assert rows[2].startswith("| policy (default, `distilled_digit_r2`)"), rows[2]
+    for run in ("digit_distilled_r2", "lip_distilled_r2"):
+        settings = json.loads((ROOT / "benchmarks/results" / run / "settings.json").read_text())
+        ran = settings["methods"]["distilled_digit_r2"]["checkpoint_sha256"]
+        assert ran == hashlib.sha256(DEFAULT_POLICY.read_bytes()).hexdigest(), run
