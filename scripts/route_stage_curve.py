@@ -154,7 +154,7 @@ def main() -> None:
             # beside the point, clear of its vertical error bar, over the lines it crosses
             ax.annotate(label, (x, s), textcoords="offset points", xytext=(5, dy // 2),
                         fontsize=7, ha="left", va="center", color=palette.TEXT_RGB, zorder=5,
-                        bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none"})  # fmt: skip
+                        bbox={"boxstyle": "round,pad=0.15", "fc": palette.PAPER_RGB, "ec": "none"})  # fmt: skip
     if args.digit_rounds:
         xs, sr, n, labels = _digit_rounds(args.digit_rounds, args.start, stages[0][1][0][-1])
         labels[0] = args.start_label

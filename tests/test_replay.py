@@ -40,6 +40,7 @@ from emonav_drake.diagrams.navigation import build_navigation_diagram
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.systems.navigation_meshcat import (
     FOOTSTEPS_RECENT,
+    OVERVIEW_MIN_HFOV,
     PREFIX,
     RAY_STRIDE,
     TRAIL_RECENT_STEPS,
@@ -248,8 +249,9 @@ def test_replay_opens_on_the_whole_arena(lip_replay):
     up = np.cross(right, fwd)
     assert eye[2] > 5.0 and math.degrees(math.asin(-fwd[2])) > 35  # above, looking down
     # the crowd's circle (pedestrians start and aim on it), with their heads, and the
-    # robot's start and goal: inside the view of a square window (the narrowest a
-    # browser is likely to be; a wide one sees more on the sides)
+    # robot's start and goal: inside the view of a square and of a 16:10 window, the
+    # vertical field of view widened in the square one as the replay's script does
+    # (horizontal at least OVERVIEW_MIN_HFOV) — and filling most of the landscape one
     r = cfg.crowd.circle_radius_max
     points = [
         [r * math.cos(a), r * math.sin(a), z]
@@ -257,11 +259,18 @@ def test_replay_opens_on_the_whole_arena(lip_replay):
         for z in (0, 1.7)
     ]
     points += [[*cfg.robot.start, 0], [*cfg.robot.goal, 0]]
-    for point in points:
-        d = np.asarray(point) - eye
-        depth = d @ fwd
-        assert depth > 0 and abs(d @ right) / depth < math.tan(fov / 2), point
-        assert abs(d @ up) / depth < math.tan(fov / 2), point
+    for aspect in (1.0, 1.6):
+        tan_h = max(math.tan(fov / 2) * aspect, math.tan(math.radians(OVERVIEW_MIN_HFOV) / 2))
+        tan_v = tan_h / aspect
+        fill = 0.0
+        for point in points:
+            d = np.asarray(point) - eye
+            depth = d @ fwd
+            assert depth > 0 and abs(d @ right) / depth < tan_h, (aspect, point)
+            assert abs(d @ up) / depth < tan_v, (aspect, point)
+            fill = max(fill, abs(d @ up) / depth / tan_v)
+        if aspect > 1:
+            assert fill > 0.85  # no wide band of empty floor above or below the arena
 
 
 def test_replay_caption_names_planner_plant_seed_and_the_legend(lip_replay):

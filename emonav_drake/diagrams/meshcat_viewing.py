@@ -47,6 +47,7 @@ LEGEND = (
     ("negative pedestrian", _css(nm.EMOTION_RGBA[2])),
     ("static disc or wall", _css(nm.STATIC_RGBA)),
     ("robot and its trail", _css(nm.ROBOT_RGBA)),
+    ("start (square pad)", palette.css(palette.ROBOT_RGB, nm.START_RGBA.a())),
     ("goal", _css(nm.GOAL_RGBA)),
 )
 RAYS_LEGEND = ("LiDAR rays (per walking step)", _css(nm.RAY_RGBA))

@@ -84,6 +84,7 @@ TRAIL_RGBA = _rgba(palette.TRAIL_RGB)
 GOAL_RGBA = _rgba(palette.GOAL_RGB)
 GOAL_RADIUS_RGBA = _rgba(palette.GOAL_RADIUS_RGB)
 RAY_RGBA = _rgba(palette.LIDAR_RAY_RGB, 0.8)
+START_RGBA = _rgba(palette.ROBOT_RGB, 0.45)  # the start pad: the robot's colour, see-through
 FOOT_RGBA = tuple(_rgba(rgb, 0.9) for rgb in palette.FOOTSTEP_RGB)  # left, right
 TRACK_RGBA = _rgba(palette.TRACK_RGB)  # a tracked pedestrian: ring and velocity arrow
 TRACK_STATIC_RGBA = _rgba(palette.TRACK_STATIC_RGB)  # a tracked static disc: ring
@@ -94,8 +95,9 @@ RAY_STRIDE = 15  # draw every RAY_STRIDE-th LiDAR beam
 OVERVIEW_FOV = 45.0  # vertical field of view of the overview camera [deg]
 # the arena fits a horizontal field of view of this much [deg]; a replay widens the
 # vertical one in windows narrower than that (`meshcat_viewing.replay_html`)
-OVERVIEW_MIN_HFOV = 50.0
+OVERVIEW_MIN_HFOV = 55.0
 _GOAL_POLE = 2.0  # [m]
+_START_PAD = 0.5  # [m] side of the start's square pad
 TRACK_SLOTS = 24  # tracked pedestrians drawn at most (a pool of slots, shown or hidden)
 TRACK_STATIC_SLOTS = 8  # tracked static discs drawn at most
 TRACK_ARROW_HORIZON = 1.0  # a track's velocity arrow: the distance it covers in this [s]
@@ -199,6 +201,9 @@ class NavigationMeshcatVisualizer(LeafSystem):
                 f"{PREFIX}/robot",
                 RigidTransform(RotationMatrix.MakeZRotation(scenario.robot_heading), [x0, y0, 0.0]),
             )
+        x0, y0 = scenario.robot_start  # the start: a square pad in the robot's colour
+        m.SetObject(f"{PREFIX}/start", Box(_START_PAD, _START_PAD, 0.02), START_RGBA)
+        m.SetTransform(f"{PREFIX}/start", RigidTransform([x0, y0, 0.01]))
         goal = scenario.robot_goal
         m.SetObject(
             f"{PREFIX}/goal/pad", Cylinder(self._goal_radius, 0.02), _faded(GOAL_RGBA, 0.35)
@@ -531,7 +536,9 @@ def set_overview_camera(meshcat: Meshcat, config: EmoNavConfig) -> None:
     centre = 0.5 * (start + goal)
     span = max(float(np.linalg.norm(goal - start)), 2.0 * config.crowd.circle_radius_max)
     meshcat.SetCamera(Meshcat.PerspectiveCamera(fov=OVERVIEW_FOV, near=0.05, far=200.0))
+    # close enough that the crowd's circle, heads included, fills ~95 % of the height of
+    # a landscape window (a narrower window widens the view: `OVERVIEW_MIN_HFOV`)
     meshcat.SetCameraPose(
-        [centre[0], centre[1] - 1.0 * span, 1.2 * span],
-        [centre[0], centre[1] - 0.05 * span, 0.0],
+        [centre[0], centre[1] - 0.8 * span, 0.95 * span],
+        [centre[0], centre[1] - 0.03 * span, 0.0],
     )
