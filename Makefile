@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint format bench clean
+.PHONY: demo test lint format bench docs docs-build clean
 
 $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV) || python3 -m venv $(VENV)
@@ -17,9 +17,10 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)  ## the shipped learned policy walks the full-order Digit through a crowd (seed 0)
 	$(VENV)/bin/emonav sim --planner policy --plant digit --seed 0 --record demo_replay.html --json demo_result.json
 
-test: $(STAMP)  ## lint + the whole test suite
+test: $(STAMP)  ## lint + the documentation site's strict build + the whole test suite
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/ruff format --check .
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir site
 	$(VENV)/bin/pytest -q
 
 lint: $(STAMP)
@@ -33,5 +34,12 @@ format: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/bench_foundation.py
 
+# The documentation site (mkdocs.yml): served on this machine only, rebuilt on every change.
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs serve --dev-addr 127.0.0.1:8000
+
+docs-build: $(STAMP)  ## the site in site/, every warning an error
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir site
+
 clean:
-	rm -rf $(VENV) .pytest_cache
+	rm -rf $(VENV) .pytest_cache site

@@ -152,9 +152,10 @@ def main() -> None:
         ax.errorbar(xs, sr, yerr=err, fmt="o-", color=colour, capsize=3, label=name, **z)
         for x, s, label in zip(xs, sr, labels, strict=True):
             # beside the point, clear of its vertical error bar, over the lines it crosses
+            ground = {"boxstyle": "round,pad=0.15", "fc": palette.PAPER_RGB, "ec": "none"}
             ax.annotate(label, (x, s), textcoords="offset points", xytext=(5, dy // 2),
                         fontsize=7, ha="left", va="center", color=palette.TEXT_RGB, zorder=5,
-                        bbox={"boxstyle": "round,pad=0.15", "fc": palette.PAPER_RGB, "ec": "none"})  # fmt: skip
+                        bbox=ground)  # fmt: skip
     if args.digit_rounds:
         xs, sr, n, labels = _digit_rounds(args.digit_rounds, args.start, stages[0][1][0][-1])
         labels[0] = args.start_label

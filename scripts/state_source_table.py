@@ -134,9 +134,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=300, help="seeds 0 … N − 1")
     ap.add_argument("--setting", choices=SETTINGS, default="var_dd")
-    ap.add_argument(
-        "--write", action="store_true", help=f"also write the lidar run's {TABLE_FILE}"
-    )
+    ap.add_argument("--write", action="store_true", help=f"also write the lidar run's {TABLE_FILE}")
     args = ap.parse_args()
     setting = SETTINGS[args.setting]
     policy_run = setting["policy"]
