@@ -207,7 +207,7 @@ def test_the_shipped_value_planner_runs_by_name_on_both_plants(sim_on_both_plant
     through `emonav sim` on each plant, twice each with the same seed, to the same record."""
     import emonav_drake.planners as planners
 
-    _, meta = load_sarl(getattr(planners, f"{name.upper()}_CHECKPOINT"))
+    _, meta = load_sarl(planners.VALUE_CHECKPOINTS[name])
     assert meta.get("network", "sarl") == name
     assert meta["provenance"]["route"] == "sarl"
     assert meta["provenance"]["selection_seeds"] == [600_000, 600_199]
@@ -220,7 +220,7 @@ def test_the_shipped_value_planner_runs_by_name_on_both_plants(sim_on_both_plant
 def test_sarl_without_a_checkpoint_says_how_to_train(tmp_path, capsys, monkeypatch, name):
     import emonav_drake.planners as planners
 
-    monkeypatch.setattr(planners, f"{name.upper()}_CHECKPOINT", tmp_path / "not_shipped.pt")
+    monkeypatch.setitem(planners.VALUE_CHECKPOINTS, name, tmp_path / "not_shipped.pt")
     assert main(["sim", "--planner", name, "--json", str(tmp_path / "r.json")]) == 2
     err = capsys.readouterr().err
     assert "emonav train --algo sarl" in err and name in err

@@ -24,7 +24,6 @@ from emonav_drake.cli.config import (
 from emonav_drake.core.metrics import format_idt
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.diagrams.trials import MAX_TRIALS
-from emonav_drake.params import ConfigError
 
 DESCRIPTION = """\
 Compare planners on the same seeded trials (the paper's Tables II and III).
@@ -124,8 +123,6 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
     if args.workers is not None:
         check_workers(args.workers, args.ray_address)
     estimate_yaml = _emotion_estimate_yaml(args)
-    if estimate_yaml is not None and not PLANTS[args.plant].emotion_estimates:
-        raise ConfigError(f"--plant {args.plant} takes no --emotion-estimate / --emotion-source")
     methods = parse_methods(args.planners, args.checkpoint or [])
     resolved = resolve_config(args)
     workers = args.workers

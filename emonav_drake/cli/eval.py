@@ -74,8 +74,6 @@ def cmd_eval(args: argparse.Namespace) -> int:
     resolved = resolve_config(args)
     cfg = resolved.config
     estimate = emotion_estimate_of(args)
-    if estimate is not None and not PLANTS[args.plant].emotion_estimates:
-        raise ConfigError(f"--plant {args.plant} takes no --emotion-estimate / --emotion-source")
     from emonav_drake.core.metrics import format_summary, summarize
     from emonav_drake.diagrams.evaluation_episode import run_evaluation_episode
     from emonav_drake.planners import configure_for, make_planner

@@ -177,16 +177,14 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
 
 def _check_plant_flags(args: argparse.Namespace, robot: Plant) -> None:
-    """Refuse --rays / --emotion-estimate on a plant with a `simulate` that lacks them (a
-    plant without one is checked by `_sim_registered_plant`)."""
+    """Refuse --rays on a plant with a `simulate` that cannot draw them (a plant without
+    one is checked by `_sim_registered_plant`)."""
     if robot.simulate is None:
         return
-    estimate = args.emotion_estimate or args.emotion_source != "truth"
-    if (estimate and not robot.emotion_estimates) or (args.rays and not robot.rays):
-        able = [p for p in PLANTS if PLANTS[p].rays and PLANTS[p].emotion_estimates]
+    if args.rays and not robot.rays:
+        able = [p for p in PLANTS if PLANTS[p].rays]
         raise ConfigError(
-            f"--plant {robot.name}: --rays and --emotion-estimate are available "
-            f"with --plant {' or '.join(able)} only in this version"
+            f"--plant {robot.name}: --rays is available with --plant {' or '.join(able)} only"
         )
 
 
@@ -286,8 +284,6 @@ def _sim_registered_plant(
     if given:
         able = " or ".join(p for p in PLANTS if PLANTS[p].simulate is not None)
         raise ConfigError(f"--plant {args.plant}: {', '.join(given)} need --plant {able}")
-    if estimate is not None and not robot.emotion_estimates:
-        raise ConfigError(f"--plant {args.plant} takes no --emotion-estimate")
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
     cfg, grid_kind = configure_for(planner, cfg)
     goal_radius = cfg.episode.eval_goal_radius

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
-from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
 
@@ -27,12 +27,10 @@ def run_evaluation_episode(
     Args:
         plant: "lip" or "digit".
         scenario, config, planner, grid_kind: as `run_episode`.
-        emotion_estimate: perceived emotions (LIP plant only).
+        emotion_estimate: perceived emotions (None: the ground truth).
     """
     from emonav_drake.diagrams.plants import plant_named
 
     robot = plant_named(plant, "plant =")
-    if emotion_estimate is not None and not robot.emotion_estimates:
-        raise ConfigError("--emotion-estimate is available with --plant lip only")
     goal_radius = config.episode.eval_goal_radius
     return robot.run(scenario, config, planner, grid_kind, goal_radius, emotion_estimate)

@@ -88,7 +88,6 @@ class Plant:
         label: for tables and captions.
         run: simulates one episode and returns its record (`EpisodeRunner`).
         can_fall: "fall" is one of its outcomes (the tables then show a fall rate).
-        emotion_estimates: accepts a perceived-emotion model (`--emotion-estimate`).
         footsteps: its replay draws the footsteps.
         caption: its name in the Meshcat caption (`label` when None).
         rays: `emonav sim --rays` can draw its LiDAR rays.
@@ -104,7 +103,6 @@ class Plant:
     label: str
     run: EpisodeRunner
     can_fall: bool
-    emotion_estimates: bool
     footsteps: bool
     caption: str | None = None
     rays: bool = False
@@ -221,7 +219,6 @@ PLANTS.add(
         "LIP",
         _run_lip,
         can_fall=False,
-        emotion_estimates=True,
         footsteps=False,
         rays=True,
         run_logged=_run_lip_logged,
@@ -235,7 +232,6 @@ PLANTS.add(
         "Digit (full order)",
         _run_digit,
         can_fall=True,
-        emotion_estimates=True,
         footsteps=True,
         caption="Digit",
         run_traced=_run_digit_traced,

@@ -226,7 +226,7 @@ def _check_run_args(
     emotion_estimate_yaml: str | None,
 ) -> int | None:
     """The plant and the run's numbers checked (`ConfigError`); the number of workers to use."""
-    robot = plant_named(plant)
+    plant_named(plant)  # an unknown plant is refused here
     if not 1 <= trials <= MAX_TRIALS:
         raise ConfigError(
             f"--trials {trials}: must be in [1, {MAX_TRIALS}] (trials per method; every "
@@ -243,8 +243,6 @@ def _check_run_args(
         raise ConfigError(f"--workers {workers}: must be >= 1")
     if workers is None and not ray_address:
         workers = os.cpu_count() or 1
-    if emotion_estimate_yaml is not None and not robot.emotion_estimates:
-        raise ConfigError(f"--plant {plant} takes no --emotion-estimate / --emotion-source")
     return workers
 
 

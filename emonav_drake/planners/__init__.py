@@ -44,7 +44,6 @@ __all__ = [
     "is_registered",
     "make_planner",
     "model_planner_names",
-    "observation_of",
     "planner_kind",
     "planner_names",
     "register",
@@ -149,14 +148,17 @@ def _sarl(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
     return SarlPlanner(checkpoint, config, device=device)
 
 
-SARL_CHECKPOINT = Path(__file__).resolve().parent.parent / "data" / "policies" / "sarl.pt"
-RGL_CHECKPOINT = SARL_CHECKPOINT.with_name("rgl.pt")
+# The shipped value networks of the crowd-state planners, by planner name.
+VALUE_CHECKPOINTS = {
+    name: Path(__file__).resolve().parent.parent / "data" / "policies" / f"{name}.pt"
+    for name in ("sarl", "rgl")
+}
 
 
 def _value_checkpoint(name: str, train_flags: str) -> Path:
-    """The shipped checkpoint of value-network planner `name` (the module's
-    `<NAME>_CHECKPOINT`), or a `ConfigError` with the command that trains it."""
-    path = globals()[f"{name.upper()}_CHECKPOINT"]
+    """The shipped checkpoint of value-network planner `name` (`VALUE_CHECKPOINTS`), or a
+    `ConfigError` with the command that trains it."""
+    path = VALUE_CHECKPOINTS[name]
     if not path.is_file():
         raise ConfigError(
             f"{name} has no shipped checkpoint in this version: train it with `emonav train "
@@ -271,13 +273,6 @@ def is_default_checkpoint(name: str, path: str | Path) -> bool:
         return Path(kind.default_checkpoint()).resolve() == Path(path).resolve()
     except ConfigError:  # no shipped checkpoint: any file is one the user chose
         return False
-
-
-def observation_of(planner) -> str:
-    """What a planner observes: "state" (the privileged crowd state: DWA, MPC) or the map
-    observation kind of a learned policy ("lgm", "ogm", "scan", "drlvo")."""
-    kind = getattr(planner, "grid_kind", None)
-    return kind if kind is not None and hasattr(planner, "expected_shape") else "state"
 
 
 def configure_for(planner, config: EmoNavConfig) -> tuple[EmoNavConfig, str]:

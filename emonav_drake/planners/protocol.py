@@ -26,7 +26,7 @@ class Planner(Protocol):
     """
 
     name: str
-    # Learned policies also declare the map observation they read (`planners.observation_of`):
+    # Learned policies also declare the map observation they read:
     #   grid_kind: "lgm", "ogm", "scan" or "drlvo"; expected_shape / expected_dtype: the
     #   stack the diagram's `LidarGridMapBuilder` must produce (`planners.configure_for`).
     # Planners without them read the privileged crowd state (`PlannerInput.crowd`).
