@@ -1,13 +1,17 @@
 """The generalisation study: every planner we ship on every scenario family.
 
     python scripts/generalisation.py run [--plant lip] [--trials 200] [--families a,b]
-    python scripts/generalisation.py table [--plant lip]
+        [--planners a,b] [--study NAME]
+    python scripts/generalisation.py table [--plant lip] [--study NAME]
 
 `run` benchmarks `PLANNERS` on each family in turn (`emonav benchmark --family F`), one
 run directory per family under `benchmarks/results/families_<plant>/F`, seeds 0 … N − 1
 of the family's own stream (never used to train or tune anything: every training and
 selection used the paper's family). A run resumes where it stopped (the benchmark's own
 resume), so the whole study can be stopped and started again.
+
+`--study NAME` keeps another set of planners apart, under `families_<plant>_NAME/F`
+(e.g. `--study mixed`: the policy trained on the mixed family and its control).
 
 `table` reads those run directories and prints a Markdown table (success rate with its
 Wilson 95 % interval and n per planner × family, the intrusion ratio beside it) and draws
@@ -39,14 +43,14 @@ EVALUATED = tuple(f for f in SCENARIO_FAMILIES if f != "mixed")
 PLANNERS = ("policy", "policy_shield", "guide_shield", "mpc", "dwa", "sarl", "lidar_sac")
 
 
-def run_dir(plant: str, family: str) -> Path:
-    return RESULTS / f"families_{plant}" / family
+def run_dir(plant: str, family: str, study: str = "") -> Path:
+    return RESULTS / (f"families_{plant}_{study}" if study else f"families_{plant}") / family
 
 
 def cmd_run(args: argparse.Namespace) -> int:
     families = args.families.split(",") if args.families else list(EVALUATED)
     for family in families:
-        out = run_dir(args.plant, family)
+        out = run_dir(args.plant, family, args.study)
         out.parent.mkdir(parents=True, exist_ok=True)
         command = [
             sys.executable,
@@ -69,6 +73,8 @@ def cmd_run(args: argparse.Namespace) -> int:
             str(out),
             "--quiet",
         ]
+        for spec in args.checkpoint or []:
+            command += ["--checkpoint", spec]
         print(f"[{family}] {' '.join(command[2:])}", flush=True)
         rc = subprocess.call(command)
         if rc != 0:
@@ -77,15 +83,15 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
-def collect(plant: str) -> tuple[list[str], list[str], dict, dict]:
+def collect(plant: str, study: str = "") -> tuple[list[str], list[str], dict, dict]:
     """(families, planners, SR cells, intrusion cells) of the run directories that exist:
     SR cell = (successes, n), intrusion cell = mean intrusion ratio (None if unmeasured)."""
-    families = [f for f in EVALUATED if (run_dir(plant, f) / "trials.jsonl").exists()]
+    families = [f for f in EVALUATED if (run_dir(plant, f, study) / "trials.jsonl").exists()]
     planners: list[str] = []
     sr: dict[tuple[str, str], tuple[int, int]] = {}
     intrusion: dict[tuple[str, str], float | None] = {}
     for family in families:
-        trials = read_trials(run_dir(plant, family) / "trials.jsonl")
+        trials = read_trials(run_dir(plant, family, study) / "trials.jsonl")
         by: dict[str, list[dict]] = {}
         for t in trials:
             by.setdefault(t["method"], []).append(t["record"])
@@ -98,20 +104,21 @@ def collect(plant: str) -> tuple[list[str], list[str], dict, dict]:
     return families, planners, sr, intrusion
 
 
-def commits(plant: str, families: list[str]) -> set[str]:
+def commits(plant: str, families: list[str], study: str = "") -> set[str]:
     out = set()
     for f in families:
-        s = json.loads((run_dir(plant, f) / "settings.json").read_text())
+        s = json.loads((run_dir(plant, f, study) / "settings.json").read_text())
         out.add(s["package"]["commit"][:10] + ("+dirty" if s["package"]["dirty"] else ""))
     return out
 
 
 def cmd_table(args: argparse.Namespace) -> int:
-    families, planners, sr, intrusion = collect(args.plant)
+    families, planners, sr, intrusion = collect(args.plant, args.study)
     if not families:
-        print(f"no run directory under {RESULTS / f'families_{args.plant}'}")
+        print(f"no run directory under {run_dir(args.plant, '', args.study)}")
         return 1
-    print(f"plant {args.plant}; commits {', '.join(sorted(commits(args.plant, families)))}\n")
+    done = commits(args.plant, families, args.study)
+    print(f"plant {args.plant}; commits {', '.join(sorted(done))}\n")
     print("| family | " + " | ".join(planners) + " |")
     print("|---|" + "---|" * len(planners))
     for f in families:
@@ -126,7 +133,8 @@ def cmd_table(args: argparse.Namespace) -> int:
             ir_text = "" if ir is None else f"; IR {ir:.3f}"
             cells.append(f"{k / n:.2f} [{lo:.2f}, {hi:.2f}] ({n}){ir_text}")
         print(f"| {f} | " + " | ".join(cells) + " |")
-    _heat_map(args.plant, families, planners, sr, intrusion)
+    if not args.study:  # the figures are the main study's
+        _heat_map(args.plant, families, planners, sr, intrusion)
     return 0
 
 
@@ -195,9 +203,12 @@ def main() -> int:
     r.add_argument("--families", help="comma-separated (default: every family)")
     r.add_argument("--planners", default=",".join(PLANNERS))
     r.add_argument("--workers", type=int, default=2)
+    r.add_argument("--study", default="", help="a separate set of runs: families_<plant>_NAME")
+    r.add_argument("--checkpoint", action="append", metavar="NAME=PATH", help="as benchmark's")
     r.set_defaults(func=cmd_run)
     t = sub.add_parser("table")
     t.add_argument("--plant", default="lip", choices=("lip", "digit"))
+    t.add_argument("--study", default="", help="the runs of `run --study NAME`")
     t.set_defaults(func=cmd_table)
     args = ap.parse_args()
     return args.func(args)
