@@ -131,10 +131,38 @@ def build_parser() -> argparse.ArgumentParser:
         parser.add_argument(
             "-q", "--quiet", action="store_true", default=argparse.SUPPRESS, help=QUIET_HELP
         )
+    for name in PLANNER_MODULE_COMMANDS:
+        sub.choices[name].add_argument(
+            "--planner-module",
+            dest="planner_modules",
+            action="append",
+            default=[],
+            metavar="MODULE",
+            help=PLANNER_MODULE_HELP,
+        )
     return p
 
 
 QUIET_HELP = "no progress bars (there are none either when stderr is not a terminal)"
+# The sub-commands that build planners by name, and so take `--planner-module`.
+PLANNER_MODULE_COMMANDS = ("sim", "eval", "benchmark", "train", "planners")
+PLANNER_MODULE_HELP = (
+    "a module of your own that registers planners (a .py file or a dotted module name; "
+    "repeatable): its planners become names for --planner / --planners and, with train, "
+    "for a DAgger route's expert (docs/howto/planner.md)"
+)
+
+
+def planner_modules_in(argv: list[str]) -> list[str]:
+    """The values of every `--planner-module X` / `--planner-module=X` in `argv`: imported
+    before the parser is built, so that their planners are valid choices."""
+    found = []
+    for i, a in enumerate(argv):
+        if a == "--planner-module" and i + 1 < len(argv):
+            found.append(argv[i + 1])
+        elif a.startswith("--planner-module="):
+            found.append(a.split("=", 1)[1])
+    return found
 
 
 def package_version() -> str:
@@ -201,6 +229,9 @@ def main(argv: list[str] | None = None) -> int:
     """
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
     try:
+        from emonav_drake.planners.plugins import import_planner_modules
+
+        import_planner_modules(planner_modules_in(argv))  # their names: valid choices
         args = build_parser().parse_args(argv)
     except USER_ERRORS as e:  # a flag value refused while parsing (the seed flags)
         if "--debug" in argv:

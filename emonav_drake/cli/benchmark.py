@@ -130,6 +130,8 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
         import os
 
         workers = os.cpu_count() or 1
+    from emonav_drake.planners.plugins import import_planner_modules
+
     result = run_benchmark(
         args.out,
         methods,
@@ -143,6 +145,7 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
         config_source=resolved.source,
         emotion_estimate_yaml=estimate_yaml,
         progress=not args.quiet,
+        planner_modules=import_planner_modules(args.planner_modules),
     )
     from emonav_drake.evaluation import tables
 

@@ -213,6 +213,13 @@ def _training_config(args: argparse.Namespace):
         cfg.total_steps = args.steps
     if args.plant is not None:
         cfg.plant = args.plant
+    if args.planner_modules:
+        if args.algo != "dagger":
+            raise ConfigError("--planner-module applies to --algo dagger (a planner as expert)")
+        from emonav_drake.planners.plugins import import_planner_modules
+
+        recorded = import_planner_modules(args.planner_modules)
+        cfg.planner_modules = list(dict.fromkeys([*cfg.planner_modules, *recorded]))
     if args.envs is not None:
         from emonav_drake.learning.config import _SAC_RANGES
 

@@ -54,6 +54,9 @@ class BenchmarkSpec:
     plant: str
     config_yaml: str
     emotion_estimate_yaml: str | None = None
+    # planner modules from outside the package (`planners/plugins.py`): each worker imports
+    # them before building a planner
+    planner_modules: list[str] = dc.field(default_factory=list)
 
     def method(self, name: str) -> MethodSpec:
         for m in self.methods:
@@ -158,7 +161,10 @@ class TrialRunner:
     """
 
     def __init__(self, spec: BenchmarkSpec, blobs: dict[str, bytes] | None = None) -> None:
+        from emonav_drake.planners.plugins import import_planner_modules
+
         self.spec = spec
+        import_planner_modules(spec.planner_modules)  # a user's planners, in this worker too
         self.config = load_config(data=spec.config_yaml)
         self.estimate = None
         if spec.emotion_estimate_yaml is not None:

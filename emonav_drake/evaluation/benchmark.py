@@ -135,6 +135,7 @@ def run_benchmark(
     emotion_estimate_yaml: str | None = None,
     progress: bool = True,
     on_trial: Callable[[dict, int], None] | None = None,
+    planner_modules: Sequence[str] = (),
 ) -> BenchmarkResult:
     """Run (or continue) the benchmark in the run directory `out`; see the module.
 
@@ -143,6 +144,9 @@ def run_benchmark(
             that many workers; None with `ray_address`: one worker per CPU of the cluster.
         on_trial: called with every new trial line and the number written by this call,
             after it is on disk (tests raise `KeyboardInterrupt` from it to simulate Ctrl-C).
+        planner_modules: planner modules from outside the package, as recorded by
+            `planners.plugins.import_planner_module` (a .py path or a module name): recorded
+            in the settings and imported by every worker.
     Raises:
         BenchmarkSettingsError: `out` holds another benchmark.
         RunInterrupted: after Ctrl-C / SIGTERM: the finished trials are kept and the
@@ -159,7 +163,7 @@ def run_benchmark(
     # the same YAML text drives every engine (the driver's and the workers' configs are equal)
     config = load_config(data=dump_config(config))
     _check_scenarios(config, first_seed, trials, config_source)
-    spec = _probed_spec(methods, plant, config, emotion_estimate_yaml)
+    spec = _probed_spec(methods, plant, config, emotion_estimate_yaml, list(planner_modules))
     settings = make_settings(
         spec.methods,
         plant,
@@ -169,6 +173,7 @@ def run_benchmark(
         setting,
         config_source,
         emotion_estimate_yaml,
+        spec.planner_modules,
     )
     made = _missing_folders(out)
     rd = RunDirectory(out)
@@ -251,9 +256,12 @@ def _probed_spec(
     plant: str,
     config: EmoNavConfig,
     emotion_estimate_yaml: str | None,
+    planner_modules: list[str],
 ) -> BenchmarkSpec:
     """The benchmark's spec, every method's observation filled in by building its planner."""
-    spec = BenchmarkSpec(list(methods), plant, dump_config(config), emotion_estimate_yaml)
+    spec = BenchmarkSpec(
+        list(methods), plant, dump_config(config), emotion_estimate_yaml, planner_modules
+    )
     probe = TrialRunner(spec)  # builds every planner now: a bad checkpoint fails before work
     for m in spec.methods:
         m.observation = probe.observation(m.name)

@@ -66,10 +66,13 @@ def make_settings(
     setting: str | None = None,
     config_source: str = "defaults",
     emotion_estimate_yaml: str | None = None,
+    planner_modules: Sequence[str] = (),
 ) -> dict:
-    """The `settings.json` of a run."""
+    """The `settings.json` of a run (`planner_modules` only when there are any, so a run
+    of the package's own planners keeps the settings it always had)."""
     cfg_yaml = dump_config(config)
-    return {
+    extra = {"planner_modules": list(planner_modules)} if planner_modules else {}
+    return extra | {
         "format": FORMAT,
         "planners": [m.name for m in methods],
         "methods": {m.name: dc.asdict(m) for m in methods},
@@ -226,6 +229,7 @@ def spec_from_settings(settings: dict) -> BenchmarkSpec:
         plant=settings["plant"],
         config_yaml=settings["config_yaml"],
         emotion_estimate_yaml=settings["emotion_estimate_yaml"],
+        planner_modules=list(settings.get("planner_modules", [])),
     )
 
 
@@ -253,6 +257,7 @@ def settings_difference(old: dict, new: dict) -> str | None:
     if set(old["planners"]) != set(new["planners"]):
         return f"planners are {','.join(old['planners'])} there, {','.join(new['planners'])} here"
     simple = [TRIAL_SETTINGS[0], ("first_seed", "first seed"), *TRIAL_SETTINGS[1:]]
+    simple.append(("planner_modules", "planner modules (--planner-module)"))
     for key, what in simple:
         if old.get(key) != new.get(key):
             extra = ""

@@ -74,6 +74,8 @@ class DaggerConfig:
     # "shield" (`expert_policy` behind the LGM shield) or "mpc_nearby" (`expert_policy`
     # choosing within `expert_cells` grid steps of the MPC's command, the MPC planning with
     # `response` and widened by `expert_clearance`; `planners/mpc_nearby.py`).
+    # Or any registered planner's name (`emonav planners`), e.g. one from `planner_modules`:
+    # built by `planners.make_planner` with its default checkpoint, labelled as "mpc" is.
     expert: str = "dwa"
     expert_margin: float = 0.05  # the DWA expert's collision margin (`dwa.safety_margin`) [m]
     # The MPC expert's extra clearance [m], added to its collision and discomfort margins
@@ -94,6 +96,9 @@ class DaggerConfig:
     # on those next to the MPC's) by cross-entropy, not its argmax alone, so near-ties and
     # the allowed set are both in the label.
     soft_labels: bool = False
+    # Planner modules from outside the package (`planners/plugins.py`: .py paths or module
+    # names) imported before the expert is built; `emonav train --planner-module` adds to it.
+    planner_modules: list[str] = dc.field(default_factory=list)
     heading_noise_prob: float = 0.5  # fraction of training episodes starting off course
     heading_noise: float = 1.5  # their initial heading error, uniform in ± this [rad]
     device: str = "cpu"
@@ -106,9 +111,17 @@ class DaggerConfig:
         _choice("goal_input", self.goal_input, GOAL_INPUTS)
         _choice("setting", self.setting, SETTINGS)
         _choice("family", self.family, SCENARIO_FAMILIES)
+        from emonav_drake.planners import is_registered, planner_names
         from emonav_drake.planners.model_aware import EXPERTS, SOFT_EXPERTS
+        from emonav_drake.planners.plugins import import_planner_modules
 
-        _choice("expert", self.expert, EXPERTS)
+        import_planner_modules(self.planner_modules)
+        if self.expert not in EXPERTS and not is_registered(self.expert):
+            raise ConfigError(
+                f"expert = {self.expert!r} is invalid: one of {list(EXPERTS)} or a registered "
+                f"planner ({', '.join(planner_names())}; a module of your own in "
+                "planner_modules)"
+            )
         if self.expert in SOFT_EXPERTS and not (self.expert_policy or self.init_policy):
             raise ConfigError(
                 f"expert = {self.expert} needs expert_policy (or init_policy) to wrap"

@@ -85,6 +85,7 @@ from emonav_drake.learning.run_state import (
 )
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.model_aware import load_response, route_expert
+from emonav_drake.planners.plugins import import_planner_modules
 from emonav_drake.planners.policy import save_policy
 from emonav_drake.planners.protocol import Planner
 from emonav_drake.progress import progress_bar
@@ -213,6 +214,7 @@ def _start(
     torch.set_num_threads(cfg.threads)
     torch.manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
+    import_planner_modules(cfg.planner_modules)  # an expert of the user's own
     expert = route_expert(
         env_cfg,
         cfg.expert,

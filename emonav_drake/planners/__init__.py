@@ -15,6 +15,9 @@ workers can build by name; the built-in ones are registered below, one line each
 * learned planners (a policy checkpoint, `planners/policy.py`): `policy` (any trained
   checkpoint, by default the shipped policy), `sac` (a SAC-trained actor, checkpoint
   required), and every variant of `planners/variants.py` (its shipped policy by default).
+
+Planners from outside the package register themselves the same way, from an installed
+plug-in or a module named with `--planner-module` (`planners/plugins.py`).
 """
 
 from __future__ import annotations
@@ -300,3 +303,10 @@ def configure_for(planner, config: EmoNavConfig) -> tuple[EmoNavConfig, str]:
     for field, value in lidar.items():
         setattr(out.lidar, field, value)
     return out, kind
+
+
+# Last: the installed plug-ins' planners (`planners/plugins.py`), after every built-in one
+# (a plug-in cannot take a built-in planner's name: `register` refuses it).
+from emonav_drake.planners.plugins import load_entry_points  # noqa: E402
+
+load_entry_points()
