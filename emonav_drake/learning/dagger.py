@@ -84,7 +84,8 @@ from emonav_drake.learning.run_state import (
     set_rng_state,
 )
 from emonav_drake.params import ConfigError, EmoNavConfig
-from emonav_drake.planners.model_aware import load_response, route_expert
+from emonav_drake.planners import make_planner
+from emonav_drake.planners.model_aware import EXPERTS, load_response, route_expert
 from emonav_drake.planners.plugins import import_planner_modules
 from emonav_drake.planners.policy import save_policy
 from emonav_drake.planners.protocol import Planner
@@ -215,16 +216,19 @@ def _start(
     torch.manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
     import_planner_modules(cfg.planner_modules)  # an expert of the user's own
-    expert = route_expert(
-        env_cfg,
-        cfg.expert,
-        cfg.expert_margin,
-        cfg.response,
-        cfg.expert_clearance,
-        cfg.expert_policy or cfg.init_policy,
-        cfg.expert_cells,
-        cfg.expert_shield,
-    )
+    if cfg.expert in EXPERTS:
+        expert = route_expert(
+            env_cfg,
+            cfg.expert,
+            cfg.expert_margin,
+            cfg.response,
+            cfg.expert_clearance,
+            cfg.expert_policy or cfg.init_policy,
+            cfg.expert_cells,
+            cfg.expert_shield,
+        )
+    else:  # any registered planner, built as `emonav sim` builds it
+        expert = make_planner(cfg.expert, env_cfg)
     response = load_response(cfg.response)
     commands = DwaPlanner(env_cfg).candidates.copy()  # the student's grid: the DWA's
     student = Student(cfg, env_cfg, commands)

@@ -107,11 +107,7 @@ def route_expert(
 
         return MpcPlanner(_widened(config, clearance))
     if kind != "dwa":
-        from emonav_drake.planners import is_registered, make_planner
-
-        if not is_registered(kind):
-            raise ConfigError(f"expert = {kind!r} is invalid: must be one of {list(EXPERTS)}")
-        return make_planner(kind, config)  # any registered planner, as `emonav sim` builds it
+        raise ConfigError(f"expert = {kind!r} is invalid: must be one of {list(EXPERTS)}")
     return model_aware_expert(config, margin, response)
 
 
