@@ -17,18 +17,19 @@ import pytest
 from emonav_drake.core.crowd_tracker import TrackerParams
 from emonav_drake.core.lidar import beam_step
 from emonav_drake.core.lidar_objects import DetectionParams
-from emonav_drake.evaluation.tracking_study import (
-    MATCH_DISTANCE,
+from emonav_drake.evaluation.scan_visibility import (
     OCCLUDED,
     OUT_OF_RANGE,
     PARTLY_OCCLUDED,
     VISIBLE,
+    visibility,
+)
+from emonav_drake.evaluation.tracking_report import summarise, tables_md
+from emonav_drake.evaluation.tracking_study import (
+    MATCH_DISTANCE,
     EpisodeEvaluator,
     ScanTruth,
     study,
-    summarise,
-    tables_md,
-    visibility,
 )
 from emonav_drake.params import EmoNavConfig
 

@@ -327,7 +327,7 @@ def test_lidar_system_scans_walls() -> None:
 
 
 def test_tracking_study_counts_a_pedestrian_behind_a_wall_as_occluded() -> None:
-    from emonav_drake.evaluation.tracking_study import OCCLUDED, VISIBLE, visibility
+    from emonav_drake.evaluation.scan_visibility import OCCLUDED, VISIBLE, visibility
 
     robot, peds = np.zeros(2), np.array([[3.0, 0.0]])
     args = (robot, 0.0, peds, 0.3, np.zeros((0, 2)), [], CFG)
