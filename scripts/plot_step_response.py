@@ -4,7 +4,7 @@ predict, on the held-out episodes of the shipped calibration (docs/learning.md).
     python scripts/plot_step_response.py [--traces F] [--model M] [--out PNG]
 
 Colours: `core/palette.py` (Digit black, the LIP reddish purple, the fitted model blue,
-commands grey); a trace's method is named as in every figure (`palette.method_label`).
+commands grey); a trace's method is named as in every figure (`method_label`).
 """
 
 from __future__ import annotations
@@ -19,7 +19,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from emonav_drake.core import palette  # noqa: E402
 from emonav_drake.core import step_response as sr  # noqa: E402
 from emonav_drake.core.palette import (  # noqa: E402
     COMMAND_RGB,
@@ -28,6 +27,7 @@ from emonav_drake.core.palette import (  # noqa: E402
     LIP_RGB,
     MEASURED_RGB,
 )
+from emonav_drake.evaluation.method_names import method_label  # noqa: E402
 from emonav_drake.params import EmoNavConfig  # noqa: E402
 from emonav_drake.planners.model_aware import DIGIT_RESPONSE, read_response  # noqa: E402
 
@@ -105,7 +105,7 @@ def main() -> None:
     ax.set(xlabel="turn error per step [rad]", ylabel="steps", title="held-out turn errors")
     ax.legend(fontsize=8)
     fig.suptitle(
-        f"Digit's response to navigation commands ({palette.method_label(episode['method'])} "
+        f"Digit's response to navigation commands ({method_label(episode['method'])} "
         f"episode, seed "
         f"{episode['seed']}, held out of the fit)"
     )

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from emonav_drake.core import palette
+from emonav_drake.evaluation.method_names import method_label
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "emonav_drake"
@@ -391,16 +392,16 @@ def test_methods_are_named_and_coloured_as_in_every_figure():
     from emonav_drake.evaluation.benchmark_plots import run_labels
 
     lip_trained = "/x/emonav_drake/data/policy_lgm.pt"
-    assert palette.method_label("sac") == "emobipednav"  # an old run's shipped policy
-    assert palette.method_label("sac", lip_trained) == "emobipednav"
-    assert palette.method_label("policy", lip_trained) == "emobipednav"  # the default then
-    assert palette.method_label("sac", "runs/sac/actor.pt") == "sac"  # a SAC-trained actor
+    assert method_label("sac") == "emobipednav"  # an old run's shipped policy
+    assert method_label("sac", lip_trained) == "emobipednav"
+    assert method_label("policy", lip_trained) == "emobipednav"  # the default then
+    assert method_label("sac", "runs/sac/actor.pt") == "sac"  # a SAC-trained actor
     former = "/x/emonav_drake/data/policies/emobipednav_digit_mpc.pt"
-    assert palette.method_label("policy", former) == "emobipednav_digit_mpc"  # the default then
+    assert method_label("policy", former) == "emobipednav_digit_mpc"  # the default then
     default = "/x/emonav_drake/data/policies/emobipednav_distilled_digit.pt"
-    assert palette.method_label("policy", default) == "policy"  # today's default
-    assert palette.method_label("policy") == "policy"
-    assert palette.method_label("dwa") == "dwa"
+    assert method_label("policy", default) == "policy"  # today's default
+    assert method_label("policy") == "policy"
+    assert method_label("dwa") == "dwa"
     settings = json.loads((ROOT / "benchmarks/results/lip_table2/settings.json").read_text())
     assert run_labels(settings) == {"sac": "emobipednav", "mpc": "mpc", "dwa": "dwa"}
     v3 = json.loads((ROOT / "benchmarks/results/digit_table2_v3/settings.json").read_text())

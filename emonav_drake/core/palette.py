@@ -37,8 +37,6 @@ benchmark, model against measurement, series of seeds) have their own entries be
 
 from __future__ import annotations
 
-from pathlib import PurePath
-
 RGB = tuple[float, float, float]
 
 
@@ -181,34 +179,6 @@ SERIES_RGB: tuple[RGB, ...] = tuple(
         "black",
     )
 )
-
-
-# --- names of methods -------------------------------------------------------------------
-
-# The LIP-trained EmoBipedNav (`--planner emobipednav`) was the default policy until the
-# Digit route's student replaced it: runs made before call it "policy", and runs made
-# before the planner rename "sac" (it is a DAgger student). Figures name it by its file.
-SHIPPED_POLICY_FILE = "policy_lgm.pt"
-LIP_TRAINED_LABEL = "emobipednav"
-# The files earlier defaults were run from as "policy", and the variant each is: the MPC
-# route's student was the default until the distilled route's Digit round replaced it.
-FORMER_DEFAULTS = {
-    SHIPPED_POLICY_FILE: LIP_TRAINED_LABEL,
-    "emobipednav_digit_mpc.pt": "emobipednav_digit_mpc",
-}
-
-
-def method_label(name: str, checkpoint: str | None = None) -> str:
-    """The name a figure gives a benchmark method: a "policy" or "sac" that ran the file of
-    an earlier default is that policy's variant name (`FORMER_DEFAULTS`: the LIP-trained
-    "emobipednav", the MPC route's "emobipednav_digit_mpc"; an old run's "sac" without a
-    recorded checkpoint is the LIP-trained policy too); today's default `policy` and a
-    SAC-trained actor of `--planner sac` keep their names."""
-    if name not in ("sac", "policy"):
-        return name
-    if checkpoint is None:
-        return LIP_TRAINED_LABEL if name == "sac" else name
-    return FORMER_DEFAULTS.get(PurePath(checkpoint).name, name)
 
 
 def method_colours(labels: list[str]) -> list[RGB]:

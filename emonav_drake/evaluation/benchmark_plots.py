@@ -8,7 +8,7 @@ intervals and the trajectories of chosen trials.
   the path), the static discs with their discomfort rings, start and goal.
 * `run_labels(settings)`: the name each method of a run is shown under (the LIP-trained
   policy is "emobipednav", also in old runs that call it "policy" or "sac":
-  `palette.method_label`).
+  `method_label`).
 
 Colours: the shared palette (`core/palette.py`): the scene's roles as in every view, the
 methods `palette.METHOD_RGB` (never an emotion's colour).
@@ -32,6 +32,7 @@ from emonav_drake.core.palette import (
     STATIC_RGB,
 )
 from emonav_drake.evaluation import tables
+from emonav_drake.evaluation.method_names import method_label
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 
 EMOTION_COLORS = dict(zip(EMOTION_NAMES, EMOTION_RGB, strict=True))  # the shared palette
@@ -39,13 +40,12 @@ IDT_LABELS = ("static", "happy", "neutral", "negative")
 
 
 def run_labels(settings: dict) -> dict[str, str]:
-    """Method → the label a figure shows for it (`palette.method_label`, judged by the
+    """Method → the label a figure shows for it (`method_label`, judged by the
     method's checkpoint in the run's `settings.json`); a label two methods would share
     leaves both under their own names."""
     methods = settings.get("methods", {})
     labels = {
-        m: palette.method_label(m, (methods.get(m) or {}).get("checkpoint"))
-        for m in settings["planners"]
+        m: method_label(m, (methods.get(m) or {}).get("checkpoint")) for m in settings["planners"]
     }
     taken = list(labels.values())
     return {m: lab if taken.count(lab) == 1 else m for m, lab in labels.items()}
@@ -72,13 +72,13 @@ def plot_summary(
     Args:
         trials: the run's trials (`load_run`).
         methods: the methods to show, in order (default: all, in the trials' order).
-        labels: method → shown name (`run_labels`); default `palette.method_label`.
+        labels: method → shown name (`run_labels`); default `method_label`.
     """
     import matplotlib.pyplot as plt
 
     summary = tables.summarize_methods(trials, methods)
     names = list(summary)
-    shown = [(labels or {}).get(m) or palette.method_label(m) for m in names]
+    shown = [(labels or {}).get(m) or method_label(m) for m in names]
     fig, axes = plt.subplots(1, 3, figsize=(14.5, 3.8), gridspec_kw={"width_ratios": [1, 1, 2]})
     x = np.arange(len(names))
     colors = palette.method_colours(shown)
