@@ -41,6 +41,7 @@ FIGURES = ROOT / "docs" / "figures"
 # every family but the training mixture
 EVALUATED = tuple(f for f in SCENARIO_FAMILIES if f != "mixed")
 PLANNERS = ("policy", "policy_shield", "guide_shield", "mpc", "dwa", "sarl", "lidar_sac")
+TABLE_FILE = "table.md"  # `table --write`: beside the families' run directories
 
 
 def run_dir(plant: str, family: str, study: str = "") -> Path:
@@ -119,8 +120,7 @@ def cmd_table(args: argparse.Namespace) -> int:
         return 1
     done = commits(args.plant, families, args.study)
     print(f"plant {args.plant}; commits {', '.join(sorted(done))}\n")
-    print("| family | " + " | ".join(planners) + " |")
-    print("|---|" + "---|" * len(planners))
+    rows = ["| family | " + " | ".join(planners) + " |", "|---|" + "---|" * len(planners)]
     for f in families:
         cells = []
         for m in planners:
@@ -132,7 +132,18 @@ def cmd_table(args: argparse.Namespace) -> int:
             ir = intrusion.get((m, f))
             ir_text = "" if ir is None else f"; IR {ir:.3f}"
             cells.append(f"{k / n:.2f} [{lo:.2f}, {hi:.2f}] ({n}){ir_text}")
-        print(f"| {f} | " + " | ".join(cells) + " |")
+        rows.append(f"| {f} | " + " | ".join(cells) + " |")
+    text = "\n".join(rows)
+    print(text)
+    if args.write:  # quoted by docs/results.md (tests/test_docs_agree.py checks the quote)
+        from emonav_drake.atomic_io import write_text_atomic
+
+        out = run_dir(args.plant, "", args.study) / TABLE_FILE
+        cmd = f"python scripts/generalisation.py table --plant {args.plant}"
+        cmd += f" --study {args.study}" if args.study else ""
+        head = f"Written by `{cmd} --write`; commits {', '.join(sorted(done))}."
+        write_text_atomic(out, f"{head}\n\n{text}\n")
+        print(f"wrote {out.relative_to(ROOT)}")
     if not args.study:  # the figures are the main study's
         _heat_map(args.plant, families, planners, sr, intrusion)
     return 0
@@ -209,6 +220,7 @@ def main() -> int:
     t = sub.add_parser("table")
     t.add_argument("--plant", default="lip", choices=("lip", "digit"))
     t.add_argument("--study", default="", help="the runs of `run --study NAME`")
+    t.add_argument("--write", action="store_true", help=f"also write {TABLE_FILE} there")
     t.set_defaults(func=cmd_table)
     args = ap.parse_args()
     return args.func(args)
