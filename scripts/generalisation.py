@@ -174,7 +174,8 @@ def _heat_map(plant: str, families: list[str], planners: list[str], sr: dict, in
             None,
         ),
     ):
-        fig, ax = plt.subplots(figsize=(1.0 + 0.62 * len(families), 1.4 + 0.45 * len(planners)))
+        size = (max(6.0, 1.0 + 0.62 * len(families)), max(3.4, 1.4 + 0.45 * len(planners)))
+        fig, ax = plt.subplots(figsize=size)
         im = ax.imshow(values, cmap=cmap, vmin=0.0, vmax=vmax, aspect="auto")
         ax.set_xticks(range(len(families)), families, rotation=40, ha="right")
         ax.set_yticks(range(len(planners)), planners)
