@@ -248,13 +248,11 @@ class SarlRun:
 
 
 def _expert(cfg: SarlConfig, env_cfg: EmoNavConfig):
-    if cfg.expert == "mpc":
-        from emonav_drake.core.mpc import MpcPlanner
+    """The imitation stage's expert (`SarlConfig.expert`: "mpc" or "dwa"), built by the
+    planner registry as `emonav sim --planner` builds it."""
+    from emonav_drake.planners import make_planner
 
-        return MpcPlanner(env_cfg)
-    from emonav_drake.core.dwa import DwaPlanner
-
-    return DwaPlanner(env_cfg)
+    return make_planner(cfg.expert, env_cfg)
 
 
 def _selection_key(s: dict) -> list:

@@ -100,11 +100,10 @@ def _sac(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
 def _shielded(name: str, response: str, config: EmoNavConfig, checkpoint, device: str):
     from emonav_drake.planners.model_aware import load_response
     from emonav_drake.planners.policy import PolicyPlanner
-    from emonav_drake.planners.shield import ShieldedPolicy, default_shield_params
+    from emonav_drake.planners.shield import ShieldedPolicy
 
     policy = PolicyPlanner(checkpoint, device=device, robot_radius=config.robot.radius)
-    params = default_shield_params(response)
-    planner = ShieldedPolicy(policy, config, response=load_response(response), params=params)
+    planner = ShieldedPolicy.registered(policy, config, load_response(response))
     planner.name = name
     return planner
 

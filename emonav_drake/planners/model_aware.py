@@ -81,27 +81,18 @@ def route_expert(
     `response`, its margins widened by `clearance`; with `shielded`, only among the
     commands the policy's LGM shield admits; `planners/mpc_nearby.py`)."""
     if kind == "mpc_nearby":
-        from emonav_drake.planners.policy import PolicyPlanner
-        from emonav_drake.planners.variants import resolve_policy_file
-
         if not policy:
             raise ConfigError("expert = 'mpc_nearby' needs the policy it steers (expert_policy)")
-        wrapped = PolicyPlanner(
-            resolve_policy_file(policy, "expert_policy"), robot_radius=config.robot.radius
-        )
+        wrapped = _expert_policy(policy, config)
         return mpc_nearby_expert(config, wrapped, response, clearance, cells, shielded)
     if kind == "shield":
-        from emonav_drake.planners.policy import PolicyPlanner
-        from emonav_drake.planners.shield import ShieldedPolicy, default_shield_params
-        from emonav_drake.planners.variants import resolve_policy_file
+        from emonav_drake.planners.shield import ShieldedPolicy
 
         if not policy:
             raise ConfigError("expert = 'shield' needs the policy it shields (expert_policy)")
-        wrapped = PolicyPlanner(
-            resolve_policy_file(policy, "expert_policy"), robot_radius=config.robot.radius
+        return ShieldedPolicy.registered(
+            _expert_policy(policy, config), config, load_response(response)
         )
-        model = load_response(response)
-        return ShieldedPolicy(wrapped, config, model, default_shield_params(model))
     if kind == "mpc":
         from emonav_drake.core.mpc import MpcPlanner
 
@@ -125,14 +116,23 @@ def mpc_nearby_expert(
     shield admits (the registered shields' settings for `response`). `planners/mpc_nearby.py`."""
     from emonav_drake.core.mpc import MpcPlanner
     from emonav_drake.planners.mpc_nearby import MpcNearbyPolicy
-    from emonav_drake.planners.shield import ShieldedPolicy, default_shield_params
+    from emonav_drake.planners.shield import ShieldedPolicy
 
     model = load_response(response)
     mpc = MpcPlanner(_widened(config, clearance), model)
-    guard = None
-    if shielded:
-        guard = ShieldedPolicy(policy, config, model, default_shield_params(model))
+    guard = ShieldedPolicy.registered(policy, config, model) if shielded else None
     return MpcNearbyPolicy(policy, mpc, cells, guard)
+
+
+def _expert_policy(spec: str, config: EmoNavConfig):
+    """The categorical policy an expert wraps: "shipped", a shipped variant's name or a path
+    (`variants.resolve_policy_file`), on the configuration's robot radius."""
+    from emonav_drake.planners.policy import PolicyPlanner
+    from emonav_drake.planners.variants import resolve_policy_file
+
+    return PolicyPlanner(
+        resolve_policy_file(spec, "expert_policy"), robot_radius=config.robot.radius
+    )
 
 
 def _widened(config: EmoNavConfig, clearance: float) -> EmoNavConfig:

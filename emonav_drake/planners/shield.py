@@ -85,6 +85,18 @@ class ShieldedPolicy(WrappedPolicy):
 
     name = "policy_shield"
 
+    @classmethod
+    def registered(
+        cls,
+        policy: PolicyPlanner,
+        config: EmoNavConfig,
+        response: StepResponseModel | None = None,
+    ) -> ShieldedPolicy:
+        """`policy` behind the shield with the registered shields' settings for `response`
+        (`default_shield_params`): the one way the package builds a shield (the
+        `*_shield` planners, the "shield" DAgger expert, the shielded MPC-nearby expert)."""
+        return cls(policy, config, response, default_shield_params(response))
+
     def __init__(
         self,
         policy: PolicyPlanner,
