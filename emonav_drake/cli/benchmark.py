@@ -144,7 +144,7 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
         setting=resolved.setting,
         config_source=resolved.source,
         emotion_estimate_yaml=estimate_yaml,
-        progress=not args.quiet,
+        progress=True,  # drawn only where `emonav` allows bars (cli.main)
         planner_modules=import_planner_modules(args.planner_modules),
     )
     from emonav_drake.evaluation import tables

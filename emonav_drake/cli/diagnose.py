@@ -13,7 +13,6 @@ cause on both plants, and on Digit the tracking errors against the planner's LIP
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from emonav_drake.params import ConfigError
@@ -77,8 +76,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     methods = args.methods.split(",") if args.methods else None
     rows = None
     if args.out is not None:
-        progress = sys.stderr.isatty()  # its bar as `sim`'s: on a terminal only
-        rows = diagnose_run(args.run, args.out, methods, args.last, args.reference, progress)
+        # its bar where `emonav` allows bars (cli.main: a terminal, no --quiet)
+        rows = diagnose_run(args.run, args.out, methods, args.last, args.reference, True)
     if args.failures:
         settings, trials = load_run(args.run)
         chosen = check_methods(settings, methods)

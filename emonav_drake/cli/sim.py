@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -139,7 +138,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
         realtime_rate=1.0 if args.meshcat else 0.0,
         rates=rates,
         per_step=bool(args.json or args.steps_out),
-        progress=show_progress(args),
+        progress=True,  # drawn only where `emonav` allows bars: a terminal, no --quiet
         camera_frames=[] if args.camera_gif is not None else None,
     )
     t0 = time.perf_counter()
@@ -261,12 +260,6 @@ def _scene_label(args: argparse.Namespace, config: Any, seed: int) -> str:
         return f"scenario {Path(args.scenario).stem} (seed {seed})"
     family = config.crowd.family
     return f"seed {seed}" if family == "paper" else f"family {family}, seed {seed}"
-
-
-def show_progress(args: argparse.Namespace) -> bool:
-    """Whether a command shows its progress bar: stderr is a terminal and no --quiet (as
-    `benchmark`); never in a pipe, a log file or a test's captured output."""
-    return not getattr(args, "quiet", False) and sys.stderr.isatty()
 
 
 def _sim_registered_plant(

@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
-import sys
 from pathlib import Path
 
 from emonav_drake.atomic_io import (
@@ -63,12 +62,6 @@ def _validate_walk_args(args: argparse.Namespace, max_speed: float) -> None:
     check_distinct({"--json": args.json, "--record": args.record, "--steps-out": args.steps_out})
 
 
-def show_progress(args: argparse.Namespace) -> bool:
-    """Whether the walk shows its progress bar: stderr is a terminal and no --quiet (as
-    `sim` and `benchmark`)."""
-    return not args.quiet and sys.stderr.isatty()
-
-
 def _fmt(value: float, digits: int) -> str:
     return f"{value:.{digits}f}" if math.isfinite(value) else "n/a"
 
@@ -100,7 +93,7 @@ def cmd_walk(args: argparse.Namespace) -> int:
             record_html=record,
             realtime_rate=1.0 if args.meshcat else 0.0,
             speed=args.speed,
-            progress=show_progress(args),
+            progress=True,  # drawn only where `emonav` allows bars (cli.main)
         )
     out = result.to_json()
     rms = result.tracking_rms

@@ -97,25 +97,21 @@ def _sac(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
     return planner
 
 
-def _shielded(name: str, response: str, config: EmoNavConfig, checkpoint, device: str):
+def _shielded(response: str, config: EmoNavConfig, checkpoint, device: str):
     from emonav_drake.planners.model_aware import load_response
     from emonav_drake.planners.policy import PolicyPlanner
     from emonav_drake.planners.shield import ShieldedPolicy
 
     policy = PolicyPlanner(checkpoint, device=device, robot_radius=config.robot.radius)
-    planner = ShieldedPolicy.registered(policy, config, load_response(response))
-    planner.name = name
-    return planner
+    return ShieldedPolicy.registered(policy, config, load_response(response))
 
 
-def _mpc_nearby(name: str, shielded: bool, config: EmoNavConfig, checkpoint, device: str):
+def _mpc_nearby(shielded: bool, config: EmoNavConfig, checkpoint, device: str):
     from emonav_drake.planners.model_aware import mpc_nearby_expert
     from emonav_drake.planners.policy import PolicyPlanner
 
     policy = PolicyPlanner(checkpoint, device=device, robot_radius=config.robot.radius)
-    planner = mpc_nearby_expert(config, policy, "digit", shielded=shielded)
-    planner.name = name
-    return planner
+    return mpc_nearby_expert(config, policy, "digit", shielded=shielded)
 
 
 # A policy steered by the MPC (`planners/mpc_nearby.py`, the "mpc_nearby" DAgger expert):
@@ -190,7 +186,7 @@ for _name, (_default, _what) in SHIELDED.items():
         register(
             PlannerKind(
                 _name + _suffix,
-                functools.partial(_shielded, _name + _suffix, _response),
+                functools.partial(_shielded, _response),
                 True,
                 _default_policy
                 if _default == "policy"
@@ -203,7 +199,7 @@ for _name, (_shielded_too, _what) in MPC_STEERED.items():
     register(
         PlannerKind(
             _name,
-            functools.partial(_mpc_nearby, _name, _shielded_too),
+            functools.partial(_mpc_nearby, _shielded_too),
             True,
             _default_policy,
             f"a categorical policy (default: shipped) choosing {_what} (privileged teacher)",

@@ -77,9 +77,7 @@ def import_planner_module(spec: str) -> str:
                 loader_spec.loader.exec_module(module)
             except Exception as e:
                 del sys.modules[name]
-                raise ConfigError(
-                    f"--planner-module {spec}: importing it failed: {type(e).__name__}: {e}"
-                ) from e
+                raise _import_failed(spec, e) from e
         return str(path)
     try:
         importlib.import_module(spec)
@@ -89,10 +87,13 @@ def import_planner_module(spec: str) -> str:
             "PYTHONPATH or the path of a .py file"
         ) from None
     except Exception as e:
-        raise ConfigError(
-            f"--planner-module {spec}: importing it failed: {type(e).__name__}: {e}"
-        ) from e
+        raise _import_failed(spec, e) from e
     return spec
+
+
+def _import_failed(spec: str, e: Exception) -> ConfigError:
+    """The error of a planner module whose own code raised `e` while it was imported."""
+    return ConfigError(f"--planner-module {spec}: importing it failed: {type(e).__name__}: {e}")
 
 
 def import_planner_modules(specs: list[str] | tuple[str, ...]) -> list[str]:
