@@ -20,6 +20,7 @@ raw data before the typed load. Values quoted in messages are cut (`short_repr`)
 import dataclasses as dc
 import math
 import reprlib
+import types
 import typing
 from pathlib import Path
 from typing import Any
@@ -152,9 +153,29 @@ def _check_scalar(name: str, value: Any, kind: type) -> None:
         raise ConfigError(f"{name} = {short_repr(value)} is invalid: expected {_TYPE_NAMES[kind]}")
 
 
+def _union_member(name: str, value: Any, kinds: tuple) -> Any:
+    """The dataclass of a `Union` field that a YAML value names by its tag (`!Name {...}`;
+    untagged: the first), or `ConfigError` listing the tags."""
+    tag = value.get("_tag") if isinstance(value, dict) else None
+    if tag is None:
+        return kinds[0]
+    for kind in kinds:
+        if tag == f"!{kind.__name__}":
+            return kind
+    tags = ", ".join(f"!{k.__name__}" for k in kinds)
+    raise ConfigError(f"{name}: unknown tag {short_repr(tag)}; choose one of {tags}")
+
+
 def _check_yaml_value(name: str, value: Any, kind: Any, max_items: int = MAX_LIST_ITEMS) -> None:
     origin = typing.get_origin(kind)
-    if dc.is_dataclass(kind):
+    if origin in (typing.Union, types.UnionType) and all(
+        dc.is_dataclass(k) for k in typing.get_args(kind)
+    ):
+        member = _union_member(name, value, typing.get_args(kind))
+        if isinstance(value, dict):
+            value = {k: v for k, v in value.items() if k != "_tag"}
+        _check_yaml_mapping(member, value, name)
+    elif dc.is_dataclass(kind):
         _check_yaml_mapping(kind, value, name)
     elif origin is list:
         (item,) = typing.get_args(kind)
@@ -179,7 +200,10 @@ def _check_yaml_mapping(schema: type, data: Any, prefix: str) -> None:
     fields = {f.name: f for f in dc.fields(schema)}
     max_items = getattr(schema, "_MAX_ITEMS", {})
     dot = f"{prefix}." if prefix else ""
+    moved = getattr(schema, "_MOVED", {})
     for key, value in data.items():
+        if key in moved and key not in fields:
+            raise ConfigError(f"{dot}{key}: no longer a field: {moved[key]}")
         if key not in fields:
             name = key if isinstance(key, str) and len(key) <= 80 else short_repr(key)
             raise ConfigError(
@@ -380,6 +404,23 @@ def load_typed_yaml(
     type or a missing required field is reported with the dotted field name.
     """
     return load_typed_yaml_raw(schema, path=path, data=data, defaults=defaults)[0]
+
+
+def to_plain(obj: Any) -> dict:
+    """A dataclass as plain data (dicts, lists, scalars) for a saved state or a record: as
+    `dataclasses.asdict`, but a `Union` field's value keeps its class as `_tag` (as in
+    YAML), so `from_plain` restores the same object."""
+    from pydrake.common.yaml import yaml_load_data
+
+    return yaml_load_data(dump_typed_yaml(obj))
+
+
+def from_plain(schema: type, data: dict) -> Any:
+    """The dataclass `schema` from `to_plain`'s data (`ConfigError` naming the field of
+    anything wrong, as `load_typed_yaml`)."""
+    from pydrake.common.yaml import yaml_dump
+
+    return load_typed_yaml(schema, data=yaml_dump(data))
 
 
 def dump_typed_yaml(obj: Any) -> str:

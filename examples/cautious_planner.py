@@ -6,7 +6,8 @@ Register it by naming this file on the command line (no edit of emonav_drake):
     emonav benchmark --planner-module examples/cautious_planner.py --planners cautious,dwa \
         --trials 20 --out runs/cautious
     emonav train --algo dagger --planner-module examples/cautious_planner.py \
-        --config my_route.yaml --out runs/student      # my_route.yaml: `expert: cautious`
+        --config my_route.yaml --out runs/student
+        # my_route.yaml: `expert: !PlannerSpec {name: cautious}`
 
 or install it as a plug-in: a package whose pyproject.toml has
 `[project.entry-points."emonav_drake.planners"]` with `cautious = "my_package.cautious"`.
@@ -14,6 +15,8 @@ See docs/howto/planner.md.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -25,14 +28,15 @@ SLOW_RADIUS = 1.5  # [m] centre to centre: closer to a pedestrian than this, hal
 
 
 class Cautious:
-    """Heads for the goal at full speed, half speed within `SLOW_RADIUS` of a pedestrian.
+    """Heads for the goal at full speed, half speed within `slow_radius` of a pedestrian.
 
     It reads the crowd state (`PlannerInput.crowd`: the simulator's, or with
     `--state-source lidar` the LiDAR tracker's) and keeps no memory between steps."""
 
     name = "cautious"
 
-    def __init__(self, config: EmoNavConfig) -> None:
+    def __init__(self, config: EmoNavConfig, slow_radius: float = SLOW_RADIUS) -> None:
+        self.slow_radius = slow_radius
         self.max_speed = config.robot.max_speed
         self.max_turn = config.robot.max_heading_change
 
@@ -43,7 +47,8 @@ class Cautious:
         _, bearing = obs.goal_state()  # goal distance [m] and bearing [rad], robot frame
         robot = np.array([obs.robot.x, obs.robot.y])
         peds = np.asarray(obs.crowd.positions).reshape(-1, 2)  # world frame [m]
-        near = len(peds) > 0 and float(np.linalg.norm(peds - robot, axis=1).min()) < SLOW_RADIUS
+        nearest = float(np.linalg.norm(peds - robot, axis=1).min()) if len(peds) else np.inf
+        near = nearest < self.slow_radius
         speed = self.max_speed * (0.5 if near else 1.0)
         turn = float(np.clip(bearing, -self.max_turn, self.max_turn))
         return np.array([speed, turn]), memory
@@ -55,9 +60,15 @@ class Cautious:
         return self.plan_with_memory(obs, None)[0]
 
 
-def build(config: EmoNavConfig, checkpoint: object, device: str) -> Cautious:
-    """The registry's builder: a model planner takes no checkpoint."""
-    return Cautious(config)
+@dataclass
+class CautiousSpec:
+    """The registry's spec: `build(config, device)` makes the planner. A spec with a
+    `checkpoint` field would run a learned checkpoint (`--checkpoint`); this one has none."""
+
+    slow_radius: float = SLOW_RADIUS  # [m]
+
+    def build(self, config: EmoNavConfig, device: str = "cpu") -> Cautious:
+        return Cautious(config, self.slow_radius)
 
 
-register(PlannerKind("cautious", build, summary="goal-seeking, half speed near pedestrians"))
+register(PlannerKind("cautious", CautiousSpec(), "goal-seeking, half speed near pedestrians"))

@@ -43,8 +43,9 @@ def _dagger(work: Path) -> str:
     from emonav_drake.learning.config import DaggerConfig
     from emonav_drake.learning.dagger import train_dagger
     from emonav_drake.planners.policy import load_policy
+    from emonav_drake.planners.specs import MpcSpec
 
-    cfg = DaggerConfig(expert="mpc", seed=0)
+    cfg = DaggerConfig(expert=MpcSpec(), seed=0)
     cfg.expert_episodes, cfg.episodes_per_round, cfg.rounds = 2, 1, 1
     cfg.grad_steps_first, cfg.grad_steps_per_round, cfg.batch_size = 4, 2, 8
     cfg.eval_episodes, cfg.hidden = 1, 16

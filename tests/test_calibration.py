@@ -106,12 +106,13 @@ def test_the_routes_expert_is_a_planner_by_name():
     from emonav_drake.diagrams.trials import parse_methods
     from emonav_drake.learning.config import DaggerConfig
     from emonav_drake.params import EmoNavConfig
-    from emonav_drake.planners import make_planner
+    from emonav_drake.planners import DWA_DIGIT, make_planner
     from emonav_drake.planners.variants import variant
 
     route = load_typed_yaml(DaggerConfig, path=variant("emobipednav_digit").config)
+    assert route.expert == DWA_DIGIT  # the registered planner is the route's teacher
     expert = make_planner("dwa_digit", EmoNavConfig())
-    assert expert.config.dwa.safety_margin == route.expert_margin == 0.1
+    assert expert.config.dwa.safety_margin == route.expert.margin == 0.1
     assert expert.response is not None and expert.response.to_plain() == (
         load_response("digit").to_plain()
     )

@@ -16,6 +16,7 @@ from emonav_drake.learning.digit_dagger import (
 from emonav_drake.learning.run_state import read_run_state
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import PolicyPlanner
+from emonav_drake.planners.specs import MpcNearbySpec, MpcSpec, ShieldSpec, describe_spec
 from emonav_drake.planners.variants import CONFIG_DIR as ROUTES
 
 
@@ -27,8 +28,8 @@ def test_a_tiny_digit_round_writes_a_loadable_policy(tmp_path, route):
     cfg.expert_episodes, cfg.episodes_per_round, cfg.rounds = 2, 1, 1
     cfg.grad_steps_first, cfg.grad_steps_per_round, cfg.batch_size = 2, 2, 8
     cfg.eval_episodes = 1
-    if cfg.expert == "mpc":
-        cfg.expert_clearance = 0.1  # a widened teacher labels on Digit too
+    if isinstance(cfg.expert, MpcSpec):
+        cfg.expert = MpcSpec(clearance=0.1)  # a widened teacher labels on Digit too
     source = tmp_path / "calibrated"
     train_dagger(source, cfg.validate(), command="test")
     short = EmoNavConfig()
@@ -38,14 +39,14 @@ def test_a_tiny_digit_round_writes_a_loadable_policy(tmp_path, route):
     planner = PolicyPlanner(policy)
     prov = planner.meta["provenance"]
     assert prov["route"] == "dagger+digit" and prov["round"] == 0
-    assert prov["config"]["expert"] == cfg.expert  # the calibrated run's teacher labels
-    assert prov["config"]["expert_clearance"] == cfg.expert_clearance
+    # the calibrated run's teacher labels, a shield wrapping the run's initial policy
+    assert prov["config"]["expert"] == describe_spec(cfg.teacher())
     (entry,) = prov["history"]
     assert entry["episodes"] == 2 and entry["seeds"] == [4_000_000, 4_000_001]
     assert entry["digit_samples"] >= 6  # 3 planner instants (at least) per episode
     assert entry["digit_steps_per_second_per_worker"] > 0
-    if cfg.expert == "shield":  # the policy it shields: the calibrated run's initial one
-        assert prov["config"]["expert_policy"] == cfg.init_policy
+    if isinstance(cfg.expert, ShieldSpec):  # the policy it shields: the run's initial one
+        assert cfg.teacher().checkpoint == cfg.init_policy
         state, _ = read_run_state(tmp_path / "digit" / "digit_rounds.pt", DIGIT_ROUNDS_FORMAT)
         targets = state["demos"]["targets"]  # soft labels on Digit too
         assert len(targets) == entry["digit_samples"]
@@ -95,7 +96,10 @@ def test_resuming_the_rounds_from_a_damaged_state_names_it_and_the_changed_setti
 
 @pytest.mark.parametrize(
     "expert",
-    [dict(expert="shield"), dict(expert="mpc_nearby", expert_shield=True)],
+    [
+        ShieldSpec(checkpoint="emobipednav_digit_mpc", response="digit"),
+        MpcNearbySpec(checkpoint="emobipednav_digit_mpc", response="digit", shielded=True),
+    ],
     ids=["shield", "mpc_nearby_shield"],
 )
 def test_a_digit_round_collected_on_ray_equals_the_serial_one(expert):
@@ -107,7 +111,7 @@ def test_a_digit_round_collected_on_ray_equals_the_serial_one(expert):
 
     short = EmoNavConfig()
     short.episode.max_steps = 3
-    cfg = DigitRoundsConfig(episodes=2, beta=0.5, expert_policy="emobipednav_digit_mpc", **expert)
+    cfg = DigitRoundsConfig(episodes=2, beta=0.5, expert=expert)
     serial = collect_round(DEFAULT_POLICY, cfg, 0, 1, None, short)
     ray = collect_round(DEFAULT_POLICY, cfg, 0, 2, None, short)
     assert [e["seed"] for e in ray] == [e["seed"] for e in serial] == [4_000_000, 4_000_001]

@@ -95,11 +95,21 @@ class SectorPlanner(StraightPlanner):
         return command, memory
 
 
+class ToySpec:
+    """A planner spec of the user's own: the registry builds `planner(config)`."""
+
+    def __init__(self, planner: type) -> None:
+        self.planner = planner
+
+    def build(self, config, device="cpu"):
+        return self.planner(config)
+
+
 @pytest.fixture
 def toys():
     register_observation(SECTOR_KIND)
-    register(PlannerKind("toy_straight", lambda cfg, ckpt, dev: StraightPlanner(cfg)))
-    register(PlannerKind("toy_sectors", lambda cfg, ckpt, dev: SectorPlanner(cfg)))
+    register(PlannerKind("toy_straight", ToySpec(StraightPlanner)))
+    register(PlannerKind("toy_sectors", ToySpec(SectorPlanner)))
     yield
     unregister("toy_straight")
     unregister("toy_sectors")

@@ -15,9 +15,10 @@ from emonav_drake.learning.demonstrations import Demonstrations, FrameStore, com
 from emonav_drake.learning.sac import SacAgent
 from emonav_drake.learning.sac_trainer import train_sac
 from emonav_drake.params import EmoNavConfig
-from emonav_drake.planners.model_aware import load_response, route_expert
+from emonav_drake.planners.model_aware import load_response
 from emonav_drake.planners.networks import Actor, Critic, LgmEncoder
 from emonav_drake.planners.policy import PolicyError, PolicyPlanner, load_policy, save_policy
+from emonav_drake.planners.specs import MpcNearbySpec, MpcSpec, ShieldSpec
 
 
 def n_params(m):
@@ -289,7 +290,7 @@ def test_an_mpc_expert_labels_every_state_with_its_nearest_grid_command():
             sample_scenario(10**6 + 3, env_cfg), env_cfg, goal_radius=0.2, response=response
         )
 
-    expert = route_expert(env_cfg, "mpc", 0.1, "digit")
+    expert = MpcSpec().build(env_cfg)
     run_episode_collect(world(), expert, None, 1.0, demos, np.random.default_rng(0), grid=grid)
     mpc, w, labels = MpcPlanner(env_cfg), world(), []
     while True:
@@ -328,16 +329,16 @@ def test_a_route_starts_from_a_shipped_variant_by_name(tmp_path, monkeypatch):
 
 
 def test_an_mpc_expert_with_clearance_keeps_more_room():
-    """`DaggerConfig.expert_clearance` widens the MPC expert's collision and discomfort
+    """`MpcSpec.clearance` widens the MPC expert's collision and discomfort
     margins by exactly that much (the caller's configuration untouched), and the real MPC
     then walks another path: seed 10⁶ + 6 takes 56 steps without clearance, more with it."""
     env_cfg = EmoNavConfig()
     before = (env_cfg.mpc.collision_margin, env_cfg.mpc.discomfort_margin)
-    wide = route_expert(env_cfg, "mpc", 0.05, "", 0.15)
+    wide = MpcSpec(clearance=0.15).build(env_cfg)
     assert (env_cfg.mpc.collision_margin, env_cfg.mpc.discomfort_margin) == before
     assert wide.config.mpc.collision_margin == pytest.approx(before[0] + 0.15)
     assert wide.config.mpc.discomfort_margin == pytest.approx(before[1] + 0.15)
-    assert route_expert(env_cfg, "mpc", 0.05, "", 0.0).config is env_cfg
+    assert MpcSpec().build(env_cfg).config is env_cfg
 
     def walk(expert) -> tuple[str, int]:
         world = NavigationWorld(
@@ -352,12 +353,12 @@ def test_an_mpc_expert_with_clearance_keeps_more_room():
     plain, widened = walk(MpcPlanner(env_cfg)), walk(wide)
     assert plain[0] == widened[0] == "success"
     assert widened[1] > plain[1]
-    with pytest.raises(Exception, match="expert_clearance"):
-        DaggerConfig(expert_clearance=1.5).validate()
+    with pytest.raises(Exception, match="expert.clearance = 1.5 is out of range"):
+        DaggerConfig(expert=MpcSpec(clearance=1.5)).validate()
 
 
 def test_a_shield_expert_labels_with_the_registered_shielded_policy():
-    """`DaggerConfig.expert = "shield"`: in the calibrated world the labels are the
+    """A `ShieldSpec` expert: in the calibrated world the labels are the
     commands of `policy_shield_digit` (the default policy behind the LGM shield with
     Digit's response), step for step; on seed 10⁶ + 34 the shield overrides the bare
     policy within 12 steps, so the labels are not the policy's own choices."""
@@ -372,7 +373,7 @@ def test_a_shield_expert_labels_with_the_registered_shielded_policy():
             sample_scenario(10**6 + 34, env_cfg), env_cfg, goal_radius=0.2, response=response
         )
 
-    expert = route_expert(env_cfg, "shield", 0.0, "digit", policy="emobipednav_digit_mpc")
+    expert = ShieldSpec(checkpoint="emobipednav_digit_mpc", response="digit").build(env_cfg)
     grid = expert.policy.commands
     demos = Demonstrations(FrameStore(100))
     run_episode_collect(world(), expert, None, 1.0, demos, np.random.default_rng(0), grid=grid)
@@ -391,11 +392,11 @@ def test_a_shield_expert_labels_with_the_registered_shielded_policy():
 def test_a_shield_expert_needs_a_policy_to_shield():
     from emonav_drake.params import ConfigError
 
-    with pytest.raises(ConfigError, match="expert = shield needs expert_policy"):
-        DaggerConfig(expert="shield").validate()
-    DaggerConfig(expert="shield", init_policy="shipped").validate()
-    with pytest.raises(ConfigError, match="needs the policy it shields"):
-        route_expert(EmoNavConfig(), "shield", 0.0, "digit")
+    with pytest.raises(ConfigError, match=r"!ShieldSpec \{\} needs the policy it wraps"):
+        DaggerConfig(expert=ShieldSpec()).validate()
+    route = DaggerConfig(expert=ShieldSpec(), init_policy="shipped").validate()
+    assert route.teacher() == ShieldSpec(checkpoint="shipped")  # it wraps the start policy
+    assert route.expert == ShieldSpec()  # the configuration itself unchanged
 
 
 def test_soft_labels_of_one_hot_targets_are_the_hard_loss_mirrored_or_not():
@@ -423,7 +424,7 @@ def test_soft_labels_of_one_hot_targets_are_the_hard_loss_mirrored_or_not():
 
 
 def test_an_mpc_nearby_expert_walks_the_policys_best_command_next_to_the_mpcs():
-    """`DaggerConfig.expert = "mpc_nearby"` in the calibrated world, real MPC (Digit's
+    """An `MpcNearbySpec` expert in the calibrated world, real MPC (Digit's
     response) and real default policy: at every step the walked command lies within one
     grid step of the MPC's in both components, it is the policy's best-scored such command,
     and the soft label is the policy's softmax renormalised on exactly those commands; with
@@ -435,8 +436,8 @@ def test_an_mpc_nearby_expert_walks_the_policys_best_command_next_to_the_mpcs():
     world = NavigationWorld(
         sample_scenario(10**6 + 34, env_cfg), env_cfg, goal_radius=0.2, response=response
     )
-    expert = route_expert(env_cfg, "mpc_nearby", 0.0, "digit", policy="shipped", cells=1)
-    wide = route_expert(env_cfg, "mpc_nearby", 0.0, "digit", policy="shipped", cells=10)
+    expert = MpcNearbySpec(checkpoint="shipped", cells=1).build(env_cfg)
+    wide = MpcNearbySpec(checkpoint="shipped", cells=10).build(env_cfg)
     policy, grid = expert.policy, expert.policy.commands
     steps, moved_off = 0, 0
     for _ in range(15):
@@ -473,16 +474,14 @@ def test_nearby_labels_reject_what_they_cannot_use():
         grid_steps(np.zeros((3, 2)))
     with pytest.raises(ValueError, match="at least one"):
         restricted_softmax(np.zeros(4), np.zeros(4, bool))
-    with pytest.raises(ConfigError, match="expert = mpc_nearby needs expert_policy"):
-        DaggerConfig(expert="mpc_nearby").validate()
-    with pytest.raises(ConfigError, match="soft_labels needs expert = shield or mpc_nearby"):
-        DaggerConfig(expert="mpc", soft_labels=True).validate()
-    with pytest.raises(ConfigError, match="needs the policy it steers"):
-        route_expert(EmoNavConfig(), "mpc_nearby", 0.0, "digit")
+    with pytest.raises(ConfigError, match="MpcNearbySpec .* needs the policy it wraps"):
+        DaggerConfig(expert=MpcNearbySpec()).validate()
+    with pytest.raises(ConfigError, match="soft_labels needs a ShieldSpec or MpcNearbySpec"):
+        DaggerConfig(expert=MpcSpec(), soft_labels=True).validate()
 
 
 def test_a_shielded_mpc_nearby_expert_chooses_only_what_the_shield_admits():
-    """`expert_shield`: the MPC's neighbourhood is cut to the commands the policy's own LGM
+    """`MpcNearbySpec.shielded`: the MPC's neighbourhood is cut to the commands the policy's own LGM
     shield admits; the label is the policy's softmax on what is left (or, where nothing is,
     the shield's distribution), and on seed 10⁶ + 34 the shield removes nearby commands."""
     from emonav_drake.core.lgm_shield import shield_distribution
@@ -493,9 +492,7 @@ def test_a_shielded_mpc_nearby_expert_chooses_only_what_the_shield_admits():
     world = NavigationWorld(
         sample_scenario(10**6 + 34, env_cfg), env_cfg, goal_radius=0.2, response=response
     )
-    expert = route_expert(
-        env_cfg, "mpc_nearby", 0.0, "digit", policy="emobipednav_digit_mpc", shielded=True
-    )
+    expert = MpcNearbySpec(checkpoint="emobipednav_digit_mpc", shielded=True).build(env_cfg)
     policy, grid, r = expert.policy, expert.policy.commands, env_cfg.robot.radius
     memory, cut = expert.initial_memory(), 0
     for _ in range(20):
@@ -516,10 +513,6 @@ def test_a_shielded_mpc_nearby_expert_chooses_only_what_the_shield_admits():
         if world.step(u)[1] is not None:
             break
     assert cut > 0
-    from emonav_drake.params import ConfigError
-
-    with pytest.raises(ConfigError, match="expert_shield needs expert = mpc_nearby"):
-        DaggerConfig(expert="shield", init_policy="shipped", expert_shield=True).validate()
 
 
 @pytest.mark.parametrize("name", ["policy_mpc_digit", "policy_mpc_shield_digit"])

@@ -131,10 +131,10 @@ def test_digit_rounds_from_a_state_train_resume_refuses(
     import emonav_drake.learning.digit_dagger as digit_dagger
 
     _forbid(monkeypatch, digit_dagger, "collect_round")
-    import emonav_drake.planners.model_aware as model_aware
+    import emonav_drake.planners.specs as specs
 
-    _forbid(monkeypatch, dagger_mod, "route_expert")
-    _forbid(monkeypatch, model_aware, "route_expert")
+    for spec in specs.EXPERT_SPECS:  # no expert may be built either
+        _forbid(monkeypatch, spec, "build")
     argv = ["digit-rounds", "--from", run_dir, "--rounds", "1", "--out", tmp_path / "out"]
     line = assert_user_error(*run(capsys, *argv), f"dagger_state.pt in {run_dir}", culprit)
     # the very same check, the same message, as `train --resume`

@@ -60,19 +60,25 @@ def test_a_registered_planner_of_ones_own_is_a_dagger_expert(tmp_path):
     from emonav_drake.learning.config import DaggerConfig
     from emonav_drake.learning.dagger import train_dagger
     from emonav_drake.planners.policy import load_policy
+    from emonav_drake.planners.specs import PlannerSpec
 
-    cfg = DaggerConfig(expert="cautious", planner_modules=[str(EXAMPLE)])
+    cfg = DaggerConfig(expert=PlannerSpec("cautious"), planner_modules=[str(EXAMPLE)])
     cfg.expert_episodes, cfg.episodes_per_round, cfg.rounds = 2, 1, 1
     cfg.grad_steps_first, cfg.grad_steps_per_round, cfg.batch_size = 4, 2, 8
     cfg.eval_episodes, cfg.hidden = 1, 16
     train_dagger(tmp_path / "run", cfg.validate())
     _, meta = load_policy(tmp_path / "run" / "policy.pt")
-    assert meta["provenance"]["config"]["expert"] == "cautious"
+    assert meta["provenance"]["config"]["expert"] == {
+        "_tag": "!PlannerSpec",
+        "name": "cautious",
+        "checkpoint": "",
+    }
     assert meta["provenance"]["config"]["planner_modules"] == [str(EXAMPLE)]
     # through the command line, the module given there and recorded in the run
     route = tmp_path / "route.yaml"
     route.write_text(
-        "expert: cautious\nexpert_episodes: 2\nepisodes_per_round: 1\nrounds: 1\n"
+        "expert: !PlannerSpec {name: cautious}\nexpert_episodes: 2\nepisodes_per_round: 1\n"
+        "rounds: 1\n"
         "grad_steps_first: 4\ngrad_steps_per_round: 2\nbatch_size: 8\neval_episodes: 1\n"
         "hidden: 16\n"
     )
@@ -88,9 +94,10 @@ def test_an_installed_plug_in_registers_through_its_entry_point(tmp_path, monkey
     (tmp_path / "fake_plug.py").write_text(
         textwrap.dedent(
             """
-            from emonav_drake.planners import PlannerKind, make_planner, register
+            from emonav_drake.planners import PlannerKind, register
+            from emonav_drake.planners.specs import DwaSpec
 
-            register(PlannerKind("fake_plug_dwa", lambda c, k, d: make_planner("dwa", c)))
+            register(PlannerKind("fake_plug_dwa", DwaSpec()))
             """
         )
     )

@@ -34,6 +34,7 @@ from emonav_drake.learning.run_state import (
 from emonav_drake.learning.sac_trainer import train_sac
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import load_policy
+from emonav_drake.planners.specs import MpcNearbySpec, MpcSpec, ShieldSpec
 from tests.state_equality import assert_equal_state
 
 DEAD_PID = 2**22 + 12_345  # above Linux's largest pid_max: never a running process
@@ -420,14 +421,20 @@ def test_dagger_ctrl_c_at_a_random_point_then_resume_is_bit_exact(
 @pytest.mark.parametrize(
     "expert",
     [
-        dict(expert="mpc"),
-        dict(expert="shield", expert_policy="emobipednav_digit_mpc", soft_labels=True),
-        dict(expert="mpc_nearby", expert_policy="emobipednav_digit_mpc", soft_labels=True),
+        dict(expert=MpcSpec()),
         dict(
-            expert="mpc_nearby",
-            expert_policy="emobipednav_digit_mpc",
+            expert=ShieldSpec(checkpoint="emobipednav_digit_mpc", response="digit"),
             soft_labels=True,
-            expert_shield=True,
+        ),
+        dict(
+            expert=MpcNearbySpec(checkpoint="emobipednav_digit_mpc", response="digit"),
+            soft_labels=True,
+        ),
+        dict(
+            expert=MpcNearbySpec(
+                checkpoint="emobipednav_digit_mpc", response="digit", shielded=True
+            ),
+            soft_labels=True,
         ),
     ],
     ids=["mpc", "shield_soft", "mpc_nearby_soft", "mpc_nearby_shield_soft"],
@@ -445,7 +452,8 @@ def test_an_expert_route_stopped_in_its_rollouts_resumes_bit_exact(tmp_path, mon
         _dagger_hooks(mp, calls)
         policy_path = train_dagger(reference, cfg, _dagger_env())
     _, meta = load_policy(policy_path)
-    assert meta["provenance"]["config"]["expert"] == expert["expert"]
+    saved = DaggerConfig.from_saved(meta["provenance"]["config"])
+    assert saved.expert == expert["expert"]  # the policy records its teacher, typed
     expected = _dagger_result(reference)
     targets = expected[4].get("targets")
     if cfg.soft_labels:  # a distribution per sample, whose argmax is the hard label

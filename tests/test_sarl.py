@@ -23,6 +23,7 @@ from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.learning.config import SarlConfig
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.sarl import RglValue, SarlValue, command_grid, load_sarl
+from emonav_drake.planners.specs import DwaSpec
 
 CFG = EmoNavConfig()
 F = {name: i for i, name in enumerate(FEATURES)}
@@ -123,7 +124,7 @@ def tiny_runs(tmp_path_factory, request):
     root = tmp_path_factory.mktemp(request.param)
     cfg = SarlConfig(
         network=request.param,
-        expert="dwa",
+        expert=DwaSpec(),
         il_episodes=3,
         il_epochs=2,
         rl_episodes=6,
@@ -168,7 +169,7 @@ def test_a_resume_refuses_another_configuration(tiny_runs, tmp_path):
         train_sarl(root / "whole", other, resume=True, progress=False)
     with pytest.raises(ConfigError, match="already holds a SARL run"):
         train_sarl(root / "whole", cfg, progress=False)
-    with pytest.raises(ConfigError, match="expert"):
+    with pytest.raises(ConfigError, match="expert = 'orca' is invalid: must be one of !DwaSpec"):
         SarlConfig(expert="orca").validate()
     with pytest.raises(ConfigError, match="network"):
         SarlConfig(network="gcn").validate()
@@ -231,7 +232,7 @@ def test_an_old_sarl_state_resumes_as_sarl(tmp_path):
     from emonav_drake.learning.run_state import read_run_state, write_run_state
     from emonav_drake.learning.sarl_train import SARL_STATE_FORMAT, STATE_FILE, train_sarl
 
-    cfg = SarlConfig(expert="dwa", il_episodes=2, il_epochs=1, rl_episodes=1, train_batches=1)
+    cfg = SarlConfig(expert=DwaSpec(), il_episodes=2, il_epochs=1, rl_episodes=1, train_batches=1)
     cfg.batch_size, cfg.eval_every, cfg.eval_episodes = 8, 1, 1
     train_sarl(tmp_path, cfg, progress=False)
     state, tensors = read_run_state(tmp_path / STATE_FILE, SARL_STATE_FORMAT)

@@ -256,6 +256,8 @@ def _saved_config(run: Path, algo: str, schema: type):
         return read_finetune_state(run / name)[0]
     saved = read_state_config(run / name)
     try:
+        if hasattr(schema, "from_saved"):  # a configuration with a planner spec (SARL's)
+            return schema.from_saved(saved)
         return load_typed_yaml(schema, data=json.dumps(saved))
     except ConfigError as e:
         raise RunStateError(

@@ -9,14 +9,21 @@ raising `ConfigError` naming the field.
 
 import dataclasses as dc
 
-from emonav_drake.config_yaml import ConfigError, validate_ranges
+from emonav_drake.config_yaml import ConfigError, from_plain, validate_ranges
 from emonav_drake.configs import SETTINGS
 from emonav_drake.core.goal_input import GOAL_INPUTS
 from emonav_drake.core.observations import observation_kind, observation_kinds
 from emonav_drake.core.sarl_state import VALUE_NETWORKS
 from emonav_drake.diagrams.plants import PLANTS
+from emonav_drake.learning.teacher import (
+    LEGACY_EXPERT_FIELDS,
+    expert_for_route,
+    expert_from_legacy,
+    named_expert_from_legacy,
+)
 from emonav_drake.param_ranges import SEED_RANGE
 from emonav_drake.params import NUM_BEAMS, SCENARIO_FAMILIES, EpisodeParams
+from emonav_drake.planners.specs import DwaSpec, ExpertSpec, MpcSpec, describe_spec, is_soft
 
 # The 4-conv encoder (3 x 3, strides 2-1-1-1) needs an input of at least this many cells.
 MIN_ENCODER_INPUT = 15
@@ -68,30 +75,16 @@ class DaggerConfig:
     # LIP-trained LGM policy, `planners.policy.LIP_POLICY`; a shipped variant's name, e.g.
     # "single_lgm"; or a path); its network must be the one this configuration builds.
     init_policy: str = ""
-    # The expert that labels the states: "dwa" (DWA with `expert_margin`, planning with
-    # `response`), "mpc" (the OSQP MPC of core/mpc.py, planning with the LIP model; its
-    # continuous commands are labelled as the nearest command of the student's grid) or
-    # "shield" (`expert_policy` behind the LGM shield) or "mpc_nearby" (`expert_policy`
-    # choosing within `expert_cells` grid steps of the MPC's command, the MPC planning with
-    # `response` and widened by `expert_clearance`; `planners/mpc_nearby.py`).
-    # Or any registered planner's name (`emonav planners`), e.g. one from `planner_modules`:
-    # built by `planners.make_planner` with its default checkpoint, labelled as "mpc" is.
-    expert: str = "dwa"
-    expert_margin: float = 0.05  # the DWA expert's collision margin (`dwa.safety_margin`) [m]
-    # The MPC expert's extra clearance [m], added to its collision and discomfort margins
-    # (`mpc.collision_margin`, `mpc.discomfort_margin`): a student that tracks its teacher
-    # less precisely learns to keep this much more room. 0 = the MPC as benchmarked.
-    expert_clearance: float = 0.0
-    # The policy the "shield" expert wraps ("" = `init_policy`): a categorical student that
-    # reads what this route's student reads, behind the LGM shield (`planners/shield.py`,
-    # predicting with `response`). Its labels are a function of the student's observation.
-    expert_policy: str = ""
-    # The "mpc_nearby" expert's reach: grid steps around the MPC's command in u_v and u_Δθ;
-    # with `expert_shield`, only the commands `expert_policy`'s LGM shield admits (predicting
-    # with `response`) may be chosen.
-    expert_cells: int = 1
-    expert_shield: bool = False
-    # Soft labels (experts "shield" and "mpc_nearby"): the student learns the expert's
+    # The expert that labels the states, a planner spec (`planners/specs.py`), in YAML by
+    # its tag: `!DwaSpec {margin: 0.1, response: digit}` (the default: DWA with a 0.05 m
+    # margin on the LIP), `!MpcSpec {clearance: 0.1}` (the OSQP MPC; its continuous commands
+    # are labelled as the nearest command of the student's grid), `!ShieldSpec {...}` (a
+    # policy behind the LGM shield), `!MpcNearbySpec {...}` (a policy within `cells` grid
+    # steps of the MPC's command) or `!PlannerSpec {name: NAME}` (any registered planner, one
+    # of `planner_modules` too). A shield or MPC-nearby expert without a checkpoint wraps
+    # `init_policy`.
+    expert: ExpertSpec = dc.field(default_factory=lambda: DwaSpec(margin=0.05))
+    # Soft labels (a `ShieldSpec` or `MpcNearbySpec` expert): the student learns the expert's
     # distribution over the grid (the policy's softmax on the commands the shield admits, or
     # on those next to the MPC's) by cross-entropy, not its argmax alone, so near-ties and
     # the allowed set are both in the label.
@@ -104,6 +97,25 @@ class DaggerConfig:
     device: str = "cpu"
     threads: int = 1  # batch-1 acting is fastest on one thread
 
+    # Fields of earlier versions, now parts of `expert` (a YAML file naming one is refused
+    # with this hint; a saved run's state is converted, `from_saved`).
+    _MOVED = {
+        name: "the expert's settings are now one field, e.g. `expert: !DwaSpec {margin: 0.1, "
+        "response: digit}` or `expert: !MpcSpec {clearance: 0.1}` (docs/learning.md)"
+        for name in LEGACY_EXPERT_FIELDS
+    }
+
+    def teacher(self) -> ExpertSpec:
+        """The expert spec this route builds: `expert`, a soft one without a checkpoint
+        wrapping `init_policy`; `ConfigError` if it cannot be built by name."""
+        return expert_for_route(self.expert, self.init_policy, self.planner_modules)
+
+    @classmethod
+    def from_saved(cls, plain: dict) -> "DaggerConfig":
+        """The configuration a run saved (`to_plain`), earlier versions' flat expert
+        fields converted (`expert_from_legacy`)."""
+        return from_plain(cls, expert_from_legacy(plain))
+
     def validate(self) -> "DaggerConfig":
         """Raise `ConfigError` naming the field if a value is out of range."""
         validate_ranges(self, _DAGGER_RANGES)
@@ -111,27 +123,11 @@ class DaggerConfig:
         _choice("goal_input", self.goal_input, GOAL_INPUTS)
         _choice("setting", self.setting, SETTINGS)
         _choice("family", self.family, SCENARIO_FAMILIES)
-        from emonav_drake.planners import is_registered, planner_names
-        from emonav_drake.planners.model_aware import EXPERTS, SOFT_EXPERTS
-        from emonav_drake.planners.plugins import import_planner_modules
-
-        import_planner_modules(self.planner_modules)
-        if self.expert not in EXPERTS and not is_registered(self.expert):
+        self.teacher()  # the expert's own rules
+        if self.soft_labels and not is_soft(self.expert):
             raise ConfigError(
-                f"expert = {self.expert!r} is invalid: one of {list(EXPERTS)} or a registered "
-                f"planner ({', '.join(planner_names())}; a module of your own in "
-                "planner_modules)"
-            )
-        if self.expert in SOFT_EXPERTS and not (self.expert_policy or self.init_policy):
-            raise ConfigError(
-                f"expert = {self.expert} needs expert_policy (or init_policy) to wrap"
-            )
-        if self.expert_shield and self.expert != "mpc_nearby":
-            raise ConfigError(f"expert_shield needs expert = mpc_nearby, not {self.expert!r}")
-        if self.soft_labels and self.expert not in SOFT_EXPERTS:
-            raise ConfigError(
-                f"soft_labels needs expert = {' or '.join(SOFT_EXPERTS)} (a distribution over "
-                f"the grid), not {self.expert!r}"
+                f"soft_labels needs a ShieldSpec or MpcNearbySpec expert (a distribution over "
+                f"the grid), not {describe_spec(self.expert)}"
             )
         return self
 
@@ -210,9 +206,10 @@ class SarlConfig:
     # The value network: "sarl" (CrowdNav's SARL) or "rgl" (its relational graph network,
     # `planners/sarl.py`: RglValue); the same rows, look-ahead and route.
     network: str = "sarl"
-    # The expert of the imitation phase: "mpc" (our best model planner; CrowdNav imitates
-    # ORCA, which our robot cannot follow: its steps are bounded by Eq. 2) or "dwa".
-    expert: str = "mpc"
+    # The expert of the imitation phase, a planner spec as `DaggerConfig.expert`: by default
+    # the MPC (our best model planner; CrowdNav imitates ORCA, which our robot cannot
+    # follow: its steps are bounded by Eq. 2).
+    expert: ExpertSpec = dc.field(default_factory=MpcSpec)
     il_episodes: int = 1000  # CrowdNav: 3 000
     il_epochs: int = 50
     il_lr: float = 0.01
@@ -237,9 +234,15 @@ class SarlConfig:
     def validate(self) -> "SarlConfig":
         """Raise `ConfigError` naming the field if a value is out of range."""
         validate_ranges(self, _SARL_RANGES)
-        _choice("expert", self.expert, ("dwa", "mpc"))
+        expert_for_route(self.expert, "", [])
         _choice("network", self.network, VALUE_NETWORKS)
         return self
+
+    @classmethod
+    def from_saved(cls, plain: dict) -> "SarlConfig":
+        """The configuration a run saved (`to_plain`; an earlier version's expert name
+        converted, `named_expert_from_legacy`)."""
+        return from_plain(cls, named_expert_from_legacy(plain))
 
 
 def _check_observation(grid_kind: str, encoder: str, num_frames: int) -> None:
@@ -290,9 +293,9 @@ _DAGGER_RANGES = {
     "heading_noise": (0.0, 3.1416),
     "threads": (1, 1024),
     "num_frames": (1, 64),
-    "expert_margin": (0.0, 2.0),
-    "expert_clearance": (0.0, 1.0),
-    "expert_cells": (0, 10),
+    "expert.margin": (0.0, 2.0),
+    "expert.clearance": (0.0, 1.0),
+    "expert.cells": (0, 10),
 }
 
 _SAC_RANGES = {

@@ -53,6 +53,7 @@ import numpy as np
 import torch
 
 from emonav_drake.atomic_io import write_text_atomic
+from emonav_drake.config_yaml import to_plain
 from emonav_drake.configs import load_setting
 from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.metrics import format_summary
@@ -84,9 +85,7 @@ from emonav_drake.learning.run_state import (
     set_rng_state,
 )
 from emonav_drake.params import ConfigError, EmoNavConfig
-from emonav_drake.planners import make_planner
-from emonav_drake.planners.model_aware import EXPERTS, load_response, route_expert
-from emonav_drake.planners.plugins import import_planner_modules
+from emonav_drake.planners.model_aware import load_response
 from emonav_drake.planners.policy import save_policy
 from emonav_drake.planners.protocol import Planner
 from emonav_drake.progress import progress_bar
@@ -215,20 +214,7 @@ def _start(
     torch.set_num_threads(cfg.threads)
     torch.manual_seed(cfg.seed)
     rng = np.random.default_rng(cfg.seed)
-    import_planner_modules(cfg.planner_modules)  # an expert of the user's own
-    if cfg.expert in EXPERTS:
-        expert = route_expert(
-            env_cfg,
-            cfg.expert,
-            cfg.expert_margin,
-            cfg.response,
-            cfg.expert_clearance,
-            cfg.expert_policy or cfg.init_policy,
-            cfg.expert_cells,
-            cfg.expert_shield,
-        )
-    else:  # any registered planner, built as `emonav sim` builds it
-        expert = make_planner(cfg.expert, env_cfg)
+    expert = cfg.teacher().build(env_cfg)  # imports planner_modules: a user's expert too
     response = load_response(cfg.response)
     commands = DwaPlanner(env_cfg).candidates.copy()  # the student's grid: the DWA's
     student = Student(cfg, env_cfg, commands)
@@ -244,8 +230,8 @@ def _resume(run: DaggerRunState, saved: dict, tensors: dict, out: Path) -> None:
     """Restore the saved state (`RunStateError` if it does not fit), warning first of the
     configuration fields that differ from the saved run's."""
     changes = config_changes(
-        {"config": saved["config"], "env": saved["env_config"]},
-        {"config": dc.asdict(run.cfg), "env": dc.asdict(run.env_cfg)},
+        {"config": to_plain(run.cfg.from_saved(saved["config"])), "env": saved["env_config"]},
+        {"config": to_plain(run.cfg), "env": dc.asdict(run.env_cfg)},
     )
     if changes:
         log.warning(
@@ -370,7 +356,7 @@ def _evaluate(
             "command": route.command,
             "round": rnd,
             "seed": cfg.seed,
-            "config": dc.asdict(cfg),
+            "config": to_plain(cfg),
             "samples": len(run.demos),
             "wall_seconds": round(wall, 1),
             "training_seeds": [

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from emonav_drake.config_yaml import to_plain
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.dagger_student import Student
 from emonav_drake.learning.demonstrations import Demonstrations
@@ -28,6 +29,7 @@ from emonav_drake.learning.run_state import (
     set_rng_state,
     write_run_state,
 )
+from emonav_drake.learning.teacher import LEGACY_EXPERT_FIELDS
 from emonav_drake.params import ConfigError, EmoNavConfig
 
 STATE_FILE = "dagger_state.pt"
@@ -62,12 +64,12 @@ def read_dagger_state(path: str | Path) -> tuple[DaggerConfig, dict, dict]:
                 raise ValueError(f"no {key} state in it")
         if not isinstance(saved["config"], dict):
             raise ValueError("its configuration is not a mapping")
-        known = {f.name for f in dc.fields(DaggerConfig)}
+        known = {f.name for f in dc.fields(DaggerConfig)} | set(LEGACY_EXPERT_FIELDS)
         unknown = sorted(set(saved["config"]) - known)
         if unknown:
             raise ValueError(f"configuration fields this emonav does not know: {unknown}")
         try:
-            return DaggerConfig(**saved["config"]).validate()
+            return DaggerConfig.from_saved(saved["config"]).validate()
         except ConfigError as e:
             raise ValueError(f"its configuration: {e}") from None
 
@@ -109,7 +111,7 @@ class DaggerRunState:
         """Write the state to `path` atomically (`write_run_state`)."""
         rng_plain, rng_tensors = rng_state(self.rng)
         state = {
-            "config": dc.asdict(self.cfg),
+            "config": to_plain(self.cfg),
             "env_config": dc.asdict(self.env_cfg),
             "progress": dc.asdict(self.prog) | {"losses": self.prog.losses[-100:]},
             "episodes": self.episode_counter,

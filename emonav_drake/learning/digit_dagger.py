@@ -10,8 +10,8 @@ fitted to Digit; these rounds close what the fit misses. Each round:
 1. **collect** `episodes` Digit navigation episodes (the whole diagram: station, crowd,
    LiDAR grid maps) on seeds `first_seed + round·episodes + i`, one per Ray task. The
    planner is `LabellingPlanner`: at every t_k it asks the calibrated run's expert (its
-   `DaggerConfig.expert`: the model-aware DWA, `DwaPlanner(response=digit model)` with
-   margin `expert_margin`, or the MPC) for its command, records
+   `DaggerConfig.teacher()`: a planner spec, e.g. the model-aware DWA or the MPC) for its
+   command, records
    the newest observation frame, the vector state and the expert's label, and sends the
    student's command (the expert's with probability β, drawn per (seed, step));
 2. **aggregate** the new samples with the calibrated run's demonstrations (its
@@ -38,6 +38,7 @@ from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.params import ConfigError
 from emonav_drake.planners.policy import vector_state
 from emonav_drake.planners.protocol import Planner
+from emonav_drake.planners.specs import ExpertSpec, describe_spec
 
 log = logging.getLogger(__name__)
 DIGIT_ROUNDS_FORMAT = "emonav-digit-dagger/1"
@@ -108,25 +109,12 @@ def _labelled_episode(
     rounds: DigitRoundsConfig,
 ) -> dict:
     """One Digit episode of the student (`runner`'s method) labelled by the expert of
-    `rounds` (`expert`: "dwa", the model-aware DWA with `expert_margin`, "mpc" with the
-    extra `expert_clearance`, "shield": `expert_policy` behind the LGM shield, or
-    "mpc_nearby": `expert_policy` within `expert_cells` grid steps of the MPC's command)."""
+    `rounds` (`DigitRoundsConfig.expert`, the calibrated run's)."""
     from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
-    from emonav_drake.planners.model_aware import route_expert
 
     student, cfg, grid_kind = runner.planner(method)
-    r = rounds
-    expert = route_expert(
-        cfg,
-        r.expert,
-        r.expert_margin,
-        "digit",
-        r.expert_clearance,
-        r.expert_policy,
-        r.expert_cells,
-        r.expert_shield,
-    )
+    expert = rounds.expert.build(cfg)
     planner = LabellingPlanner(student, expert, beta, seed)
     t0 = time.perf_counter()
     record = run_digit_episode(
@@ -157,18 +145,11 @@ class DigitRoundsConfig:
     grad_steps: int = 1500
     batch_size: int = 64
     digit_fraction: float = 0.5  # of every batch from Digit samples
-    expert_margin: float = 0.1
     seed: int = 0
-    # The labelling expert: "dwa", "mpc", "shield" or "mpc_nearby", the MPC's extra
-    # clearance [m], the policy the shield (or the MPC) steers, the MPC's reach in grid
-    # cells and whether a shield bounds it; `run_digit_rounds` sets them to the calibrated
-    # run's (`DaggerConfig.expert`, `expert_clearance`, `expert_policy`, `expert_cells`,
-    # `expert_shield`), so both kinds of demonstrations have one teacher.
-    expert: str = "dwa"
-    expert_clearance: float = 0.0
-    expert_policy: str = ""
-    expert_cells: int = 1
-    expert_shield: bool = False
+    # The labelling expert, a planner spec (`planners/specs.py`): `run_digit_rounds` sets it
+    # to the calibrated run's (`DaggerConfig.teacher()`), so both kinds of demonstrations
+    # have one teacher. None until then.
+    expert: ExpertSpec | None = None
 
     def validate(self) -> DigitRoundsConfig:
         """Raise `ConfigError` naming the flag (or field) of a value out of range."""
@@ -185,12 +166,6 @@ class DigitRoundsConfig:
             raise ConfigError(f"--beta {self.beta}: must be in [0, 1] (a probability)")
         if not 0.0 < self.digit_fraction <= 1.0:
             raise ConfigError(f"digit_fraction = {self.digit_fraction}: must be in (0, 1]")
-        if not 0.0 <= self.expert_margin <= 2.0:
-            raise ConfigError(f"expert_margin = {self.expert_margin}: must be in [0, 2] m")
-        from emonav_drake.planners.model_aware import EXPERTS
-
-        if self.expert not in EXPERTS:
-            raise ConfigError(f"expert = {self.expert!r}: must be one of {list(EXPERTS)}")
         if not 0 <= self.seed <= MAX_SEED:
             raise ConfigError(f"seed = {self.seed}: must be in [0, 2**64 - 1]")
         last = self.first_seed + self.rounds * self.episodes - 1
@@ -200,6 +175,11 @@ class DigitRoundsConfig:
                 "must be in [0, 2**64 - 1]"
             )
         return self
+
+
+def _plain(cfg: DigitRoundsConfig) -> dict:
+    """The rounds' settings as plain data (the expert as its YAML form, `describe_spec`)."""
+    return dc.asdict(cfg) | {"expert": describe_spec(cfg.expert)}
 
 
 def _flag(name: str) -> str:
@@ -280,14 +260,7 @@ def run_digit_rounds(
     out, source = Path(out), Path(source)
     n, calibrated, digit, student, start_policy, dcfg = _start_from(source)
     # the calibrated run's teacher labels here too
-    cfg = dc.replace(
-        cfg,
-        expert=dcfg.expert,
-        expert_clearance=dcfg.expert_clearance,
-        expert_policy=dcfg.expert_policy or dcfg.init_policy,
-        expert_cells=dcfg.expert_cells,
-        expert_shield=dcfg.expert_shield,
-    )
+    cfg = dc.replace(cfg, expert=dcfg.teacher())
     if env_config is None:  # the calibrated run's setting (var_dd unless it trained in another)
         from emonav_drake.configs import load_setting
 
@@ -353,7 +326,7 @@ def _resume_rounds(out: Path, cfg: DigitRoundsConfig, digit, student, n: int) ->
     from emonav_drake.learning.run_state import check_state, config_changes, read_run_state
 
     state, tensors = read_run_state(out / STATE_FILE, DIGIT_ROUNDS_FORMAT)
-    changes = config_changes(state.get("config"), dc.asdict(cfg))
+    changes = config_changes(state.get("config"), _plain(cfg))
     if changes:
         log.warning(
             "resuming the rounds with settings that differ from the saved ones: %s",
@@ -422,7 +395,7 @@ def _save_round(
         "route": "dagger+digit",
         "source": str(source),
         "round": rnd,
-        "config": dc.asdict(cfg),
+        "config": _plain(cfg),
         "history": history,
     }
     policy = out / f"policy_round{rnd}.pt"
@@ -434,7 +407,7 @@ def _save_round(
             "round": rnd + 1,
             "history": history,
             "demos": digit.to_plain(n),
-            "config": dc.asdict(cfg),
+            "config": _plain(cfg),
         },
         {"model": student.model.state_dict(), "optim": student.optim.state_dict()},
     )

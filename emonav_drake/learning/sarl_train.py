@@ -40,6 +40,7 @@ import torch
 from tqdm import tqdm
 
 from emonav_drake.atomic_io import write_text_atomic
+from emonav_drake.config_yaml import to_plain
 from emonav_drake.core.metrics import format_summary, summarize
 from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.sarl_state import NUM_FEATURES, current_rows, step_discount
@@ -149,7 +150,7 @@ class SarlRun:
     def save(self, out: Path) -> None:
         plain, tensors = rng_state(self.rng)
         state = {
-            "config": dc.asdict(self.cfg),
+            "config": to_plain(self.cfg),
             "env_config": dc.asdict(self.env_cfg),
             "progress": dc.asdict(self.prog),
             "memory": self.memory.state(),
@@ -248,11 +249,8 @@ class SarlRun:
 
 
 def _expert(cfg: SarlConfig, env_cfg: EmoNavConfig):
-    """The imitation stage's expert (`SarlConfig.expert`: "mpc" or "dwa"), built by the
-    planner registry as `emonav sim --planner` builds it."""
-    from emonav_drake.planners import make_planner
-
-    return make_planner(cfg.expert, env_cfg)
+    """The imitation stage's expert: `SarlConfig.expert`, a planner spec, built."""
+    return cfg.expert.build(env_cfg)
 
 
 def _selection_key(s: dict) -> list:
@@ -281,7 +279,11 @@ def train_sarl(
         state, tensors = read_run_state(out / STATE_FILE, SARL_STATE_FORMAT)
         # a run saved before a field existed ran with that field's value here
         saved = FIELDS_ADDED_LATER | dict(state.get("config") or {})
-        changes = config_changes(saved | {"rl_episodes": cfg.rl_episodes}, dc.asdict(cfg))
+        try:  # as this version writes it: an earlier version's expert name converted
+            saved = to_plain(SarlConfig.from_saved(saved))
+        except ConfigError as e:
+            raise ConfigError(f"--resume {out}: the run's configuration: {e}") from None
+        changes = config_changes(saved | {"rl_episodes": cfg.rl_episodes}, to_plain(cfg))
         if changes:
             raise ConfigError(
                 f"--resume {out}: the configuration differs from the run's (only rl_episodes "
@@ -459,7 +461,7 @@ def _provenance(run: SarlRun, summary: dict, command) -> dict:
         "network": cfg.network,
         "command": command,
         "seed": cfg.seed,
-        "config": dc.asdict(cfg),
+        "config": to_plain(cfg),
         "episode": prog.rl_episode,
         "training_seeds": [cfg.train_seed_offset, last_train],
         "selection_seeds": [cfg.eval_seed_offset, cfg.eval_seed_offset + cfg.eval_episodes - 1],

@@ -6,15 +6,18 @@ the Gymnasium environment (`planner.plan(env.unwrapped.planner_input())`, the me
 on the object, `reset()` between episodes).
 
 The registry (`planners/registry.py`) holds every planner the command line and the trial
-workers can build by name; the built-in ones are registered below, one line each:
+workers can build by name, each as a typed spec (`planners/specs.py`): `make_planner(name)`
+is that spec's `build(config, device)`. The built-in ones are registered below, one line
+each:
 
 * model planners (no checkpoint): `dwa` and `mpc` (the math in `core/dwa.py`,
   `core/mpc.py`), `dwa_digit` (DWA planning with Digit's step-response model, the
-  Digit/Digit route's expert, `planners/model_aware.py`), `mpc_digit` (the MPC planning
-  with that model, `core/mpc_response.py`);
+  Digit/Digit route's expert), `mpc_digit` (the MPC planning with that model,
+  `core/mpc_response.py`);
 * learned planners (a policy checkpoint, `planners/policy.py`): `policy` (any trained
   checkpoint, by default the shipped policy), `sac` (a SAC-trained actor, checkpoint
-  required), and every variant of `planners/variants.py` (its shipped policy by default).
+  required), the LGM-shielded and MPC-steered policies, SARL and RGL (value networks),
+  and every variant of `planners/variants.py` (its shipped policy by default).
 
 Planners from outside the package register themselves the same way, from an installed
 plug-in or a module named with `--planner-module` (`planners/plugins.py`).
@@ -23,7 +26,7 @@ plug-in or a module named with `--planner-module` (`planners/plugins.py`).
 from __future__ import annotations
 
 import copy
-import functools
+import dataclasses as dc
 from pathlib import Path
 
 from emonav_drake.core.observations import observation_kind
@@ -37,9 +40,21 @@ from emonav_drake.planners.registry import (
     register,
     unregister,
 )
-from emonav_drake.planners.variants import VARIANTS, shipped_checkpoint
+from emonav_drake.planners.specs import (
+    VALUE_CHECKPOINTS,
+    DwaSpec,
+    MpcNearbySpec,
+    MpcSpec,
+    PolicySpec,
+    SacSpec,
+    SarlSpec,
+    ShieldSpec,
+    runs_checkpoint,
+)
+from emonav_drake.planners.variants import VARIANTS
 
 __all__ = [
+    "VALUE_CHECKPOINTS",
     "PlannerKind",
     "configure_for",
     "is_default_checkpoint",
@@ -54,67 +69,7 @@ __all__ = [
 ]
 
 
-def _dwa(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
-    from emonav_drake.core.dwa import DwaPlanner
-
-    return DwaPlanner(config)
-
-
-def _mpc(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
-    from emonav_drake.core.mpc import MpcPlanner
-
-    return MpcPlanner(config)
-
-
-def _mpc_digit(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
-    from emonav_drake.core.mpc import MpcPlanner
-    from emonav_drake.planners.model_aware import load_response
-
-    return MpcPlanner(config, response=load_response("digit"))
-
-
-def _dwa_digit(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
-    from emonav_drake.planners.model_aware import dwa_digit
-
-    return dwa_digit(config)
-
-
-def _policy(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
-    from emonav_drake.planners.policy import PolicyPlanner
-
-    return PolicyPlanner(checkpoint, device=device, robot_radius=config.robot.radius)
-
-
-def _sac(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
-    from emonav_drake.planners.policy import PolicyPlanner, describe_policy, policy_kind
-
-    planner = PolicyPlanner(checkpoint, device=device, robot_radius=config.robot.radius)
-    if policy_kind(planner.meta) != "sac":
-        raise ConfigError(
-            f"--planner sac: {planner.path} is not a SAC actor but a "
-            f"{describe_policy(planner.meta)}; run it with --planner policy"
-        )
-    return planner
-
-
-def _shielded(response: str, config: EmoNavConfig, checkpoint, device: str):
-    from emonav_drake.planners.model_aware import load_response
-    from emonav_drake.planners.policy import PolicyPlanner
-    from emonav_drake.planners.shield import ShieldedPolicy
-
-    policy = PolicyPlanner(checkpoint, device=device, robot_radius=config.robot.radius)
-    return ShieldedPolicy.registered(policy, config, load_response(response))
-
-
-def _mpc_nearby(shielded: bool, config: EmoNavConfig, checkpoint, device: str):
-    from emonav_drake.planners.model_aware import mpc_nearby_expert
-    from emonav_drake.planners.policy import PolicyPlanner
-
-    policy = PolicyPlanner(checkpoint, device=device, robot_radius=config.robot.radius)
-    return mpc_nearby_expert(config, policy, "digit", shielded=shielded)
-
-
-# A policy steered by the MPC (`planners/mpc_nearby.py`, the "mpc_nearby" DAgger expert):
+# A policy steered by the MPC (`planners/mpc_nearby.py`, the `MpcNearbySpec` DAgger expert):
 # NAME: (behind its LGM shield too, what it says).
 MPC_STEERED = {
     "policy_mpc_digit": (False, "within one grid step of the Digit MPC's command"),
@@ -133,86 +88,39 @@ SHIELDED = {
     "emobipednav_shield": ("emobipednav", "the LIP-trained policy"),
 }
 
+# The Digit/Digit route's expert (`configs/variants/emobipednav_digit.yaml`, its `expert`;
+# a test keeps the two equal).
+DWA_DIGIT = DwaSpec(margin=0.1, response="digit")
 
-def _default_policy() -> Path:
-    from emonav_drake.planners.policy import DEFAULT_POLICY
-
-    return DEFAULT_POLICY
-
-
-def _sarl(config: EmoNavConfig, checkpoint: str | Path | None, device: str):
-    from emonav_drake.planners.sarl import SarlPlanner
-
-    return SarlPlanner(checkpoint, config, device=device)
-
-
-# The shipped value networks of the crowd-state planners, by planner name.
-VALUE_CHECKPOINTS = {
-    name: Path(__file__).resolve().parent.parent / "data" / "policies" / f"{name}.pt"
-    for name in ("sarl", "rgl")
-}
-
-
-def _value_checkpoint(name: str, train_flags: str) -> Path:
-    """The shipped checkpoint of value-network planner `name` (`VALUE_CHECKPOINTS`), or a
-    `ConfigError` with the command that trains it."""
-    path = VALUE_CHECKPOINTS[name]
-    if not path.is_file():
-        raise ConfigError(
-            f"{name} has no shipped checkpoint in this version: train it with `emonav train "
-            f"--algo sarl {train_flags}--out runs/{name}` and pass --checkpoint "
-            f"runs/{name}/policy.pt"
-        )
-    return path
-
-
-def _no_sac_checkpoint() -> Path:
-    raise ConfigError(
-        "--planner sac runs a SAC-trained checkpoint (`emonav train --algo sac`): "
-        "give --checkpoint PATH; the shipped policy is a DAgger student, run it "
-        "with --planner policy"
-    )
-
-
-register(PlannerKind("dwa", _dwa, summary="dynamic window approach (paper's baseline)"))
-register(PlannerKind("mpc", _mpc, summary="OSQP social MPC"))
-register(PlannerKind("mpc_digit", _mpc_digit, summary="OSQP MPC with Digit's step response"))
-register(PlannerKind("dwa_digit", _dwa_digit, summary="DWA with Digit's step response"))
-register(
-    PlannerKind("policy", _policy, True, _default_policy, "a policy checkpoint (default: shipped)")
-)
+register(PlannerKind("dwa", DwaSpec(), "dynamic window approach (paper's baseline)"))
+register(PlannerKind("mpc", MpcSpec(), "OSQP social MPC"))
+register(PlannerKind("mpc_digit", MpcSpec(response="digit"), "OSQP MPC with Digit's step response"))
+register(PlannerKind("dwa_digit", DWA_DIGIT, "DWA with Digit's step response"))
+register(PlannerKind("policy", PolicySpec(), "a policy checkpoint (default: shipped)"))
 for _name, (_default, _what) in SHIELDED.items():
     for _suffix, _response, _model in (("", "", "LIP"), ("_digit", "digit", "Digit's response")):
         register(
             PlannerKind(
                 _name + _suffix,
-                functools.partial(_shielded, _response),
-                True,
-                _default_policy
-                if _default == "policy"
-                else functools.partial(shipped_checkpoint, _default),
+                ShieldSpec(variant=_default, response=_response),
                 f"{_what} behind the LGM shield ({_model} prediction)",
                 runs_as=_name + _suffix,
             )
         )
-for _name, (_shielded_too, _what) in MPC_STEERED.items():
+for _name, (_shielded, _what) in MPC_STEERED.items():
     register(
         PlannerKind(
             _name,
-            functools.partial(_mpc_nearby, _shielded_too),
-            True,
-            _default_policy,
+            MpcNearbySpec(shielded=_shielded),
             f"a categorical policy (default: shipped) choosing {_what} (privileged teacher)",
             runs_as=_name,
         )
     )
-register(PlannerKind("sac", _sac, True, _no_sac_checkpoint, "a SAC-trained actor"))
+register(PlannerKind("sac", SacSpec(), "a SAC-trained actor"))
 register(
     PlannerKind(
         "sarl",
-        _sarl,
-        True,
-        functools.partial(_value_checkpoint, "sarl", ""),
+        SarlSpec(network="sarl"),
         "SARL (CrowdNav): value network on the crowd state, one-step look-ahead",
         runs_as="sarl",
     )
@@ -220,22 +128,14 @@ register(
 register(
     PlannerKind(
         "rgl",
-        _sarl,
-        True,
-        functools.partial(_value_checkpoint, "rgl", "--config emonav_drake/configs/rgl.yaml "),
+        SarlSpec(network="rgl"),
         "RGL (relational graph value network) on the crowd state, one-step look-ahead",
         runs_as="sarl",
     )
 )
 for _name, _variant in VARIANTS.items():
     register(
-        PlannerKind(
-            _name,
-            _policy,
-            True,
-            functools.partial(shipped_checkpoint, _name),
-            f"{_variant.paper}: {_variant.observation}",
-        )
+        PlannerKind(_name, PolicySpec(variant=_name), f"{_variant.paper}: {_variant.observation}")
     )
 
 
@@ -252,10 +152,12 @@ def make_planner(
     A learned planner loads `checkpoint`, by default its kind's default checkpoint ("policy":
     the shipped policy; a variant: the policy shipped under its name; "sac": none — a
     `ConfigError` says how to get one); a model planner takes no checkpoint."""
-    kind = planner_kind(name)
-    if kind.learned and checkpoint is None:
-        checkpoint = kind.default_checkpoint() if kind.default_checkpoint else None
-    planner = kind.build(config, checkpoint, device)
+    spec = planner_kind(name).spec
+    if checkpoint is not None:
+        if not runs_checkpoint(spec):
+            raise ConfigError(f"--checkpoint: planner {name!r} runs no checkpoint")
+        spec = dc.replace(spec, checkpoint=str(checkpoint))
+    planner = spec.build(config, device)
     planner.name = name  # what captions and logs call it: the name it was asked for
     return planner
 

@@ -2,11 +2,12 @@
 
 A planner is anything that satisfies `planners.protocol.Planner` (the pure pair
 `initial_memory()` / `plan_with_memory(obs, memory)`, the stateful `plan(obs)` /
-`reset()`). Each planner module registers a `PlannerKind` — its name, its builder and
-whether it runs a learned checkpoint — with one `register(...)` line in
-`planners/__init__.py`. Everything that chooses a planner by name (`emonav sim|eval
---planner`, `emonav benchmark --planners`, the trial workers) asks this registry, so a
-new planner is one module plus one registry line (`docs/architecture.md`).
+`reset()`). Each name is registered as a `PlannerKind` — the name and its spec (an object
+with `build(config, device)`, `planners/specs.py`; a spec with a `checkpoint` field runs
+a learned checkpoint) — with one `register(...)` line in `planners/__init__.py`.
+Everything that chooses a planner by name (`emonav sim|eval --planner`, `emonav
+benchmark --planners`, the trial workers, a route's `!PlannerSpec` expert) asks this
+registry, so a new planner is one module plus one registry line (`docs/architecture.md`).
 """
 
 from __future__ import annotations
@@ -14,13 +15,18 @@ from __future__ import annotations
 import dataclasses as dc
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.registry import Registry
 
-# build(config, checkpoint, device) -> the planner; `checkpoint` None for model planners
-Builder = Callable[[EmoNavConfig, "str | Path | None", str], Any]
+
+class Spec(Protocol):
+    """What the registry holds for a name: `build(config, device)` → a new planner, which
+    must not modify `config` (the planner may keep it). A spec that runs a checkpoint is
+    a dataclass with a `checkpoint` field (str; "" = its default, `checkpoint_file()`)."""
+
+    def build(self, config: EmoNavConfig, device: str = "cpu") -> Any: ...
 
 
 @dc.dataclass(frozen=True)
@@ -29,12 +35,7 @@ class PlannerKind:
 
     Attributes:
         name: the name on the command line.
-        build: `build(config, checkpoint, device)` → a new planner. It must not modify
-            `config` (the planner may keep it).
-        learned: runs a policy checkpoint (`--checkpoint`); model planners take none.
-        default_checkpoint: the checkpoint a learned planner runs without `--checkpoint`
-            (called when needed: it may raise `ConfigError` saying how to train it), or
-            None if one must be given.
+        spec: how to build it (`Spec`; `planners/specs.py` has the package's).
         summary: one line for `--help` and error messages.
         runs_as: the planner kind a benchmark records for this kind's checkpoints and
             builds them with: "policy" (every policy file, whatever its variant name) or
@@ -42,11 +43,23 @@ class PlannerKind:
     """
 
     name: str
-    build: Builder
-    learned: bool = False
-    default_checkpoint: Callable[[], Path] | None = None
+    spec: Spec
     summary: str = ""
     runs_as: str = "policy"
+
+    @property
+    def learned(self) -> bool:
+        """Runs a checkpoint (`--checkpoint`); model planners take none."""
+        from emonav_drake.planners.specs import runs_checkpoint
+
+        return runs_checkpoint(self.spec)
+
+    @property
+    def default_checkpoint(self) -> Callable[[], Path] | None:
+        """What gives the checkpoint a learned planner runs without `--checkpoint` (called
+        when needed: it may raise `ConfigError` saying how to train it); None for a model
+        planner."""
+        return getattr(self.spec, "checkpoint_file", None) if self.learned else None
 
 
 _KINDS: Registry[PlannerKind] = Registry("planner")
