@@ -12,6 +12,7 @@ still run.
 import dataclasses as dc
 
 from emonav_drake.params import ConfigError
+from emonav_drake.planners.registry import runs_checkpoint
 from emonav_drake.planners.specs import (
     EXPERT_SPECS,
     DwaSpec,
@@ -21,7 +22,6 @@ from emonav_drake.planners.specs import (
     ShieldSpec,
     describe_spec,
     is_soft,
-    runs_checkpoint,
 )
 
 # The flat expert fields of earlier versions (a name in `expert` and these).

@@ -26,7 +26,6 @@ plug-in or a module named with `--planner-module` (`planners/plugins.py`).
 from __future__ import annotations
 
 import copy
-import dataclasses as dc
 from pathlib import Path
 
 from emonav_drake.core.observations import observation_kind
@@ -34,6 +33,7 @@ from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.registry import (
     PlannerKind,
     is_registered,
+    make_planner,
     model_planner_names,
     planner_kind,
     planner_names,
@@ -49,7 +49,6 @@ from emonav_drake.planners.specs import (
     SacSpec,
     SarlSpec,
     ShieldSpec,
-    runs_checkpoint,
 )
 from emonav_drake.planners.variants import VARIANTS
 
@@ -142,24 +141,6 @@ for _name, _variant in VARIANTS.items():
 def is_learned(name: str) -> bool:
     """True for the registered planners that run a policy checkpoint."""
     return is_registered(name) and planner_kind(name).learned
-
-
-def make_planner(
-    name: str, config: EmoNavConfig, checkpoint: str | Path | None = None, device: str = "cpu"
-):
-    """Create the planner called `name` (any registered name).
-
-    A learned planner loads `checkpoint`, by default its kind's default checkpoint ("policy":
-    the shipped policy; a variant: the policy shipped under its name; "sac": none — a
-    `ConfigError` says how to get one); a model planner takes no checkpoint."""
-    spec = planner_kind(name).spec
-    if checkpoint is not None:
-        if not runs_checkpoint(spec):
-            raise ConfigError(f"--checkpoint: planner {name!r} runs no checkpoint")
-        spec = dc.replace(spec, checkpoint=str(checkpoint))
-    planner = spec.build(config, device)
-    planner.name = name  # what captions and logs call it: the name it was asked for
-    return planner
 
 
 def is_default_checkpoint(name: str, path: str | Path) -> bool:

@@ -50,8 +50,6 @@ class PlannerKind:
     @property
     def learned(self) -> bool:
         """Runs a checkpoint (`--checkpoint`); model planners take none."""
-        from emonav_drake.planners.specs import runs_checkpoint
-
         return runs_checkpoint(self.spec)
 
     @property
@@ -63,6 +61,30 @@ class PlannerKind:
 
 
 _KINDS: Registry[PlannerKind] = Registry("planner")
+
+
+def runs_checkpoint(spec: object) -> bool:
+    """Whether a spec runs a checkpoint (a dataclass with a `checkpoint` field)."""
+    return dc.is_dataclass(spec) and any(f.name == "checkpoint" for f in dc.fields(spec))
+
+
+def make_planner(
+    name: str, config: EmoNavConfig, checkpoint: str | Path | None = None, device: str = "cpu"
+):
+    """Create the planner called `name` (any registered name): its spec built.
+
+    A learned planner runs `checkpoint` if given (the spec's `checkpoint` replaced), else
+    its spec's default ("policy": the shipped policy; a variant: the policy shipped under
+    its name; "sac": none — a `ConfigError` says how to get one); a model planner takes no
+    checkpoint (`ConfigError` if one is given)."""
+    spec = planner_kind(name).spec
+    if checkpoint is not None:
+        if not runs_checkpoint(spec):
+            raise ConfigError(f"--checkpoint: planner {name!r} runs no checkpoint")
+        spec = dc.replace(spec, checkpoint=str(checkpoint))
+    planner = spec.build(config, device)
+    planner.name = name  # what captions and logs call it: the name it was asked for
+    return planner
 
 
 def register(kind: PlannerKind, replace: bool = False) -> PlannerKind:

@@ -27,6 +27,7 @@ from typing import ClassVar
 
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.model_aware import load_response
+from emonav_drake.planners.registry import make_planner
 
 
 def _widened(config: EmoNavConfig, clearance: float) -> EmoNavConfig:
@@ -264,8 +265,6 @@ class PlannerSpec:
     checkpoint: str = ""
 
     def build(self, config: EmoNavConfig, device: str = "cpu"):
-        from emonav_drake.planners import make_planner
-
         return make_planner(self.name, config, self.checkpoint or None, device)
 
 
@@ -273,11 +272,6 @@ class PlannerSpec:
 # an untagged mapping is the first (`DwaSpec`).
 ExpertSpec = DwaSpec | MpcSpec | ShieldSpec | MpcNearbySpec | PolicySpec | SarlSpec | PlannerSpec
 EXPERT_SPECS = typing.get_args(ExpertSpec)
-
-
-def runs_checkpoint(spec: object) -> bool:
-    """Whether a spec runs a checkpoint (it has a `checkpoint` field)."""
-    return dc.is_dataclass(spec) and any(f.name == "checkpoint" for f in dc.fields(spec))
 
 
 def is_soft(spec: object) -> bool:
