@@ -373,15 +373,17 @@ def test_goal_and_rays_are_not_the_robot_and_the_footsteps_differ():
 
 def test_meshcat_and_its_replay_legend_draw_with_the_palette():
     from emonav_drake.diagrams import meshcat_viewing as mv
-    from emonav_drake.systems import navigation_meshcat as nm
+    from emonav_drake.systems import navigation_meshcat_style as style
 
     def rgb(rgba):
         return (rgba.r(), rgba.g(), rgba.b())
 
-    assert [rgb(c) for c in nm.EMOTION_RGBA] == list(palette.EMOTION_RGB)
-    assert rgb(nm.GOAL_RGBA) == palette.GOAL_RGB and rgb(nm.RAY_RGBA) == palette.LIDAR_RAY_RGB
-    assert rgb(nm.ROBOT_RGBA) == palette.ROBOT_RGB and rgb(nm.STATIC_RGBA) == palette.STATIC_RGB
-    assert [rgb(c) for c in nm.FOOT_RGBA] == list(palette.FOOTSTEP_RGB)
+    assert [rgb(c) for c in style.EMOTION_RGBA] == list(palette.EMOTION_RGB)
+    assert rgb(style.GOAL_RGBA) == palette.GOAL_RGB and rgb(style.RAY_RGBA) == palette.LIDAR_RAY_RGB
+    assert (
+        rgb(style.ROBOT_RGBA) == palette.ROBOT_RGB and rgb(style.STATIC_RGBA) == palette.STATIC_RGB
+    )
+    assert [rgb(c) for c in style.FOOT_RGBA] == list(palette.FOOTSTEP_RGB)
     legend = dict([*mv.LEGEND, mv.RAYS_LEGEND, *mv.FOOTSTEP_LEGEND])
     assert legend["goal"] == palette.css(palette.GOAL_RGB) == "#000000"
     assert legend["negative pedestrian"] == "#d55e00"

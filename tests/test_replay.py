@@ -41,11 +41,11 @@ from emonav_drake.params import EmoNavConfig
 from emonav_drake.systems.navigation_meshcat import (
     FOOTSTEPS_RECENT,
     OVERVIEW_MIN_HFOV,
-    PREFIX,
     RAY_STRIDE,
     TRAIL_RECENT_STEPS,
     set_overview_camera,
 )
+from emonav_drake.systems.navigation_meshcat_style import PREFIX
 
 EMONAV = str(Path(sys.executable).parent / "emonav")
 SEED = 5  # four pedestrians, three static discs

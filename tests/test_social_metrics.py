@@ -31,7 +31,8 @@ from emonav_drake.core.social_metrics import (
 )
 from emonav_drake.core.social_metrics import StepMotion as Motion
 from emonav_drake.evaluation import tables
-from emonav_drake.evaluation.run_directory import check_trial, load_run
+from emonav_drake.evaluation.run_directory import load_run
+from emonav_drake.evaluation.trial_check import check_trial
 from emonav_drake.params import EmoNavConfig
 
 ROOT = Path(__file__).resolve().parent.parent

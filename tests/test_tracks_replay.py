@@ -25,12 +25,12 @@ from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.diagrams.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
 from emonav_drake.diagrams.navigation import build_navigation_diagram
 from emonav_drake.params import EmoNavConfig
-from emonav_drake.systems.navigation_meshcat import (
-    PREFIX,
+from emonav_drake.systems.navigation_meshcat import set_overview_camera
+from emonav_drake.systems.navigation_meshcat_style import PREFIX
+from emonav_drake.systems.navigation_meshcat_tracks import (
     TRACK_ARROW_HORIZON,
     TRACK_SLOTS,
     TRACK_STATIC_SLOTS,
-    set_overview_camera,
 )
 
 SEED = 7

@@ -24,7 +24,7 @@ from emonav_drake.core.reward import evaluate_step
 from emonav_drake.core.scenario import PedestrianSpec, Scenario, WallSpec
 from emonav_drake.core.walls import point_segment_distances, wall_discs
 from emonav_drake.evaluation.failures import failure_cause
-from emonav_drake.evaluation.run_directory import check_trial
+from emonav_drake.evaluation.trial_check import check_trial
 from emonav_drake.params import EmoNavConfig
 
 CFG = EmoNavConfig()

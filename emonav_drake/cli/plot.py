@@ -84,12 +84,12 @@ def cmd_plot(args: argparse.Namespace) -> int:
         raise ConfigError("--times applies to --png (the animation shows every step)")
 
     from emonav_drake.evaluation.trajectory import load_trajectory
-    from emonav_drake.evaluation.trajectory_plot import (
+    from emonav_drake.evaluation.trajectory_animation import (
         animation_writer,
-        check_drawable,
         render_trajectory_animation,
-        render_trajectory_figure,
     )
+    from emonav_drake.evaluation.trajectory_check import check_drawable
+    from emonav_drake.evaluation.trajectory_plot import render_trajectory_figure
 
     traj = load_trajectory(args.run)
     check_drawable(traj, str(args.run))  # a null/NaN/Infinity: named, nothing drawn

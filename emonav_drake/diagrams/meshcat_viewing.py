@@ -31,6 +31,7 @@ from pydrake.geometry import Meshcat, MeshcatParams
 from emonav_drake.core import palette
 from emonav_drake.params import ConfigError
 from emonav_drake.systems import navigation_meshcat as nm
+from emonav_drake.systems import navigation_meshcat_style as style
 
 log = logging.getLogger(__name__)
 
@@ -42,22 +43,22 @@ def _css(rgba) -> str:
 
 # (label, CSS colour) of the legend: the colours `NavigationMeshcatVisualizer` draws with
 LEGEND = (
-    ("happy pedestrian", _css(nm.EMOTION_RGBA[0])),
-    ("neutral pedestrian", _css(nm.EMOTION_RGBA[1])),
-    ("negative pedestrian", _css(nm.EMOTION_RGBA[2])),
-    ("static disc or wall", _css(nm.STATIC_RGBA)),
-    ("robot and its trail", _css(nm.ROBOT_RGBA)),
-    ("start (square pad)", palette.css(palette.ROBOT_RGB, nm.START_RGBA.a())),
-    ("goal", _css(nm.GOAL_RGBA)),
+    ("happy pedestrian", _css(style.EMOTION_RGBA[0])),
+    ("neutral pedestrian", _css(style.EMOTION_RGBA[1])),
+    ("negative pedestrian", _css(style.EMOTION_RGBA[2])),
+    ("static disc or wall", _css(style.STATIC_RGBA)),
+    ("robot and its trail", _css(style.ROBOT_RGBA)),
+    ("start (square pad)", palette.css(palette.ROBOT_RGB, style.START_RGBA.a())),
+    ("goal", _css(style.GOAL_RGBA)),
 )
-RAYS_LEGEND = ("LiDAR rays (per walking step)", _css(nm.RAY_RGBA))
+RAYS_LEGEND = ("LiDAR rays (per walking step)", _css(style.RAY_RGBA))
 TRACKS_LEGEND = (
     ("tracked pedestrian (LiDAR), arrow: 1 s of its velocity", palette.css(palette.TRACK_RGB)),
     ("tracked static obstacle (LiDAR)", palette.css(palette.TRACK_STATIC_RGB)),
 )
 FOOTSTEP_LEGEND = (
-    ("footstep target, left", _css(nm.FOOT_RGBA[0])),
-    ("footstep target, right", _css(nm.FOOT_RGBA[1])),
+    ("footstep target, left", _css(style.FOOT_RGBA[0])),
+    ("footstep target, right", _css(style.FOOT_RGBA[1])),
 )
 # the legend in words, for Meshcat's control panel (no colours there; ~44 characters fit)
 LIVE_LEGEND = (

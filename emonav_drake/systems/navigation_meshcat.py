@@ -14,7 +14,8 @@ Input ports:
         static discs' centres and radii [m]; leave unconnected when the state is the truth.
 
 What is drawn (all under `/emonav`, world frame W, z up), in the shared palette
-(`core/palette.py`; the names of the colours here are its roles):
+(`core/palette.py`, as Drake colours in `navigation_meshcat_style.py`; the names of the
+colours here are its roles):
     * every `publish_period` (default 0.1 s): the robot (blue column with a black heading
       marker; off when the full-order Digit is drawn by Drake's `MeshcatVisualizer`),
       the pedestrians and their discomfort rings, coloured by their emotion now (happy
@@ -27,17 +28,17 @@ What is drawn (all under `/emonav`, world frame W, z up), in the shared palette
       position at t_{k−1} to t_k, bright for `TRAIL_RECENT_STEPS` steps, then pale) and,
       with `show_rays`, the LiDAR rays of t_k (light grey, every `RAY_STRIDE`-th beam, one
       line-segment object per step, visible from t_k to t_{k+1});
-    * with `tracks` connected, every `publish_period`, beside the true crowd: each
-      tracked pedestrian as a flat violet ring at waist height (`TRACK_HEIGHT`), just
-      wider than a pedestrian, with a velocity arrow from its position along its velocity,
-      as long as the distance it covers in `TRACK_ARROW_HORIZON` (1 s; none for a track
-      slower than `TRACK_ARROW_MIN_SPEED`); each tracked static disc as a dark violet ring
-      of its fitted radius on top of the disc (still tracks: a pedestrian that stands still
-      gets one too). Tracks come and go: a fixed pool of `TRACK_SLOTS` pedestrian and
-      `TRACK_STATIC_SLOTS` static slots is drawn once, hidden, and a slot is shown while a
-      track is in it (a track keeps its slot while it lives); a replay thus shows a track
-      appear once it is confirmed, coast on while its pedestrian is hidden from the LiDAR,
-      and vanish when deleted;
+    * with `tracks` connected (`navigation_meshcat_tracks.py`), every `publish_period`,
+      beside the true crowd: each tracked pedestrian as a flat violet ring at waist height
+      (`TRACK_HEIGHT`), just wider than a pedestrian, with a velocity arrow from its
+      position along its velocity, as long as the distance it covers in
+      `TRACK_ARROW_HORIZON` (1 s; none for a track slower than `TRACK_ARROW_MIN_SPEED`);
+      each tracked static disc as a dark violet ring of its fitted radius on top of the
+      disc (still tracks: a pedestrian that stands still gets one too). Tracks come and
+      go: a fixed pool of `TRACK_SLOTS` pedestrian and `TRACK_STATIC_SLOTS` static slots
+      is drawn once, hidden, and a slot is shown while a track is in it (a track keeps its
+      slot while it lives); a replay thus shows a track appear once it is confirmed, coast
+      on while its pedestrian is hidden from the LiDAR, and vanish when deleted;
     * with `footstep_targets` connected: a foot-sized marker at each planned footstep
       (left sky blue, right reddish purple), following the target while the planner
       re-plans it and pale once `FOOTSTEPS_RECENT` newer steps have started;
@@ -65,30 +66,24 @@ from pydrake.geometry import Box, Cylinder, Meshcat, Rgba, Sphere
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import Context, EventStatus, LeafSystem
 
-from emonav_drake.core import palette
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
+from emonav_drake.systems.navigation_meshcat_style import (
+    EMOTION_RGBA,
+    FOOT_RGBA,
+    GOAL_RADIUS_RGBA,
+    GOAL_RGBA,
+    HEADING_RGBA,
+    PREFIX,
+    RAY_RGBA,
+    ROBOT_RGBA,
+    START_RGBA,
+    STATIC_HEIGHT,
+    STATIC_RGBA,
+    TRAIL_RGBA,
+)
+from emonav_drake.systems.navigation_meshcat_tracks import TrackDrawing
 
-
-def _rgba(rgb: palette.RGB, alpha: float = 1.0) -> Rgba:
-    """A palette colour as a Drake `Rgba`."""
-    return Rgba(*rgb, alpha)
-
-
-# The palette's roles as Drake colours (the replay's legend reads them too)
-EMOTION_RGBA = tuple(_rgba(rgb) for rgb in palette.EMOTION_RGB)
-STATIC_RGBA = _rgba(palette.STATIC_RGB)
-ROBOT_RGBA = _rgba(palette.ROBOT_RGB)
-HEADING_RGBA = _rgba(palette.INK_RGB)  # the robot's heading marker
-TRAIL_RGBA = _rgba(palette.TRAIL_RGB)
-GOAL_RGBA = _rgba(palette.GOAL_RGB)
-GOAL_RADIUS_RGBA = _rgba(palette.GOAL_RADIUS_RGB)
-RAY_RGBA = _rgba(palette.LIDAR_RAY_RGB, 0.8)
-START_RGBA = _rgba(palette.ROBOT_RGB, 0.45)  # the start pad: the robot's colour, see-through
-FOOT_RGBA = tuple(_rgba(rgb, 0.9) for rgb in palette.FOOTSTEP_RGB)  # left, right
-TRACK_RGBA = _rgba(palette.TRACK_RGB)  # a tracked pedestrian: ring and velocity arrow
-TRACK_STATIC_RGBA = _rgba(palette.TRACK_STATIC_RGB)  # a tracked static disc: ring
-PREFIX = "/emonav"
 TRAIL_RECENT_STEPS = 10  # trail segments drawn bright for this many walking steps
 FOOTSTEPS_RECENT = 6  # footstep markers drawn bright until this many newer steps
 RAY_STRIDE = 15  # draw every RAY_STRIDE-th LiDAR beam
@@ -98,16 +93,6 @@ OVERVIEW_FOV = 45.0  # vertical field of view of the overview camera [deg]
 OVERVIEW_MIN_HFOV = 55.0
 _GOAL_POLE = 2.0  # [m]
 _START_PAD = 0.5  # [m] side of the start's square pad
-TRACK_SLOTS = 24  # tracked pedestrians drawn at most (a pool of slots, shown or hidden)
-TRACK_STATIC_SLOTS = 8  # tracked static discs drawn at most
-TRACK_ARROW_HORIZON = 1.0  # a track's velocity arrow: the distance it covers in this [s]
-TRACK_ARROW_MIN_SPEED = 0.05  # [m/s] a slower track gets no arrow
-TRACK_HEIGHT = 1.0  # [m] the height of a tracked pedestrian's ring and arrow (its waist)
-TRACK_RING_GAP = 0.05  # [m] between a tracked disc's radius and its ring's inner edge
-TRACK_RING_WIDTH = 0.07  # [m] the ring's width (a static one's at its nominal radius)
-TRACK_STATIC_NOMINAL = 0.3  # [m] the radius a static ring is drawn for, scaled to the track's
-TRACK_SLOT_GATE = 0.8  # [m] a track stays in its slot when it moved at most this far
-_STATIC_HEIGHT = 0.8  # [m] of a static disc's column (and of a wall)
 _WALL_THICKNESS = 0.06  # [m] a wall as drawn (it has none in the simulation)
 
 
@@ -163,7 +148,7 @@ class NavigationMeshcatVisualizer(LeafSystem):
             "footstep_targets", AbstractValue.Make(object())
         )
         self._tracks = self.DeclareAbstractInputPort("tracks", AbstractValue.Make(object()))
-        self._track_pool = False  # the tracks' slots are drawn (at the first publish)
+        self._track_drawing = TrackDrawing(meshcat)  # the `tracks` input's slots
         self._step_time = config.robot.step_time
         self._reset_drawing()
         self._draw_static_scene(scenario)
@@ -182,11 +167,7 @@ class NavigationMeshcatVisualizer(LeafSystem):
         self._last_rays: str | None = None
         self._step_start: float | None = None
         self._footstep_count = 0
-        # per slot: the position of the track it shows (None: hidden), and whether its
-        # arrow is shown; None until the first publish draws every slot's visibility
-        self._ped_slots: list[np.ndarray | None] | None = None
-        self._static_slots: list[np.ndarray | None] | None = None
-        self._arrows: list[bool] = [False] * TRACK_SLOTS
+        self._track_drawing.reset()
 
     def _draw_static_scene(self, scenario: Scenario) -> None:
         m, c = self._meshcat, self._config
@@ -220,8 +201,8 @@ class NavigationMeshcatVisualizer(LeafSystem):
         m.SetTransform(f"{PREFIX}/goal", RigidTransform([goal[0], goal[1], 0.0]))
         for i, o in enumerate(scenario.obstacles):
             path = f"{PREFIX}/static/{i}"
-            m.SetObject(f"{path}/disc", Cylinder(o.radius, _STATIC_HEIGHT), STATIC_RGBA)
-            m.SetTransform(f"{path}/disc", RigidTransform([0, 0, _STATIC_HEIGHT / 2]))
+            m.SetObject(f"{path}/disc", Cylinder(o.radius, STATIC_HEIGHT), STATIC_RGBA)
+            m.SetTransform(f"{path}/disc", RigidTransform([0, 0, STATIC_HEIGHT / 2]))
             m.SetObject(
                 f"{path}/ring",
                 Cylinder(o.radius + c.reward.static_discomfort, 0.01),
@@ -257,8 +238,8 @@ class NavigationMeshcatVisualizer(LeafSystem):
         discomfort band (`discomfort` m each side) on the floor."""
         m = self._meshcat
         length = float(np.hypot(b[0] - a[0], b[1] - a[1]))
-        m.SetObject(f"{path}/slab", Box(length, _WALL_THICKNESS, _STATIC_HEIGHT), STATIC_RGBA)
-        m.SetTransform(f"{path}/slab", RigidTransform([0, 0, _STATIC_HEIGHT / 2]))
+        m.SetObject(f"{path}/slab", Box(length, _WALL_THICKNESS, STATIC_HEIGHT), STATIC_RGBA)
+        m.SetTransform(f"{path}/slab", RigidTransform([0, 0, STATIC_HEIGHT / 2]))
         band = Box(length + 2 * discomfort, 2 * discomfort, 0.01)
         m.SetObject(f"{path}/band", band, _faded(STATIC_RGBA, 0.25))
         m.SetTransform(f"{path}/band", RigidTransform([0, 0, 0.005]))
@@ -309,99 +290,8 @@ class NavigationMeshcatVisualizer(LeafSystem):
         if self._footsteps.HasValue(context):
             self._draw_footstep(self._footsteps.Eval(context), t)
         if self._tracks.HasValue(context):
-            self._draw_tracks(self._tracks.Eval(context), t)
+            self._track_drawing.draw(self._tracks.Eval(context), t)
         return EventStatus.Succeeded()
-
-    # -- the LiDAR tracks ----------------------------------------------------------------
-
-    def _draw_track_pool(self, radius: float) -> None:
-        """Every slot, hidden: a ring and a velocity arrow per pedestrian slot (arrow along
-        the slot's +x, its shaft 1 m long, scaled to the track's speed), a ring per static
-        slot (drawn for `TRACK_STATIC_NOMINAL`, scaled to the track's radius)."""
-        m = self._meshcat
-        ring = _annulus(radius + TRACK_RING_GAP, radius + TRACK_RING_GAP + TRACK_RING_WIDTH)
-        head = np.array([[0.0, -0.1, 0.0], [0.18, 0.0, 0.0], [0.0, 0.1, 0.0]]).T
-        for j in range(TRACK_SLOTS):
-            path = f"{PREFIX}/tracks/pedestrians/{j}"
-            m.SetTriangleMesh(f"{path}/ring", *ring, TRACK_RGBA)
-            m.SetTransform(f"{path}/ring", RigidTransform([0, 0, TRACK_HEIGHT]))
-            m.SetObject(f"{path}/arrow/shaft", Box(1.0, 0.05, 0.03), TRACK_RGBA)
-            m.SetTriangleMesh(
-                f"{path}/arrow/head", head, np.array([[0], [1], [2]], dtype=np.int32), TRACK_RGBA
-            )
-            m.SetProperty(path, "visible", False)
-            m.SetProperty(f"{path}/arrow", "visible", False)
-        r0 = TRACK_STATIC_NOMINAL
-        ring = _annulus(r0 + TRACK_RING_GAP, r0 + TRACK_RING_GAP + TRACK_RING_WIDTH)
-        for j in range(TRACK_STATIC_SLOTS):
-            path = f"{PREFIX}/tracks/static/{j}"
-            m.SetTriangleMesh(f"{path}/ring", *ring, TRACK_STATIC_RGBA)
-            m.SetTransform(f"{path}/ring", RigidTransform([0, 0, _STATIC_HEIGHT + 0.02]))
-            m.SetProperty(path, "visible", False)
-        self._track_pool = True
-
-    def _fill_slot(
-        self, slots: list, j: int, path: str, position: np.ndarray | None, first: bool, t: float
-    ) -> None:
-        """Show slot `j` at a track (`position`) or hide it (None); its "visible" property is
-        recorded only when that changes (and at the first publish)."""
-        shown = position is not None
-        if first or shown != (slots[j] is not None):
-            self._meshcat.SetProperty(path, "visible", shown, t)
-        slots[j] = position
-
-    def _draw_tracks(self, snap, t: float) -> None:
-        """The tracked crowd `snap` (a `CrowdSnapshot`) at t: each track in a slot of its
-        own, kept while it lives; slots without a track hidden."""
-        if not self._track_pool:
-            self._draw_track_pool(float(snap.radius))
-        first = self._ped_slots is None
-        if first:
-            self._ped_slots = [None] * TRACK_SLOTS
-            self._static_slots = [None] * TRACK_STATIC_SLOTS
-        positions = np.asarray(snap.positions, dtype=float).reshape(-1, 2)
-        velocities = np.asarray(snap.velocities, dtype=float).reshape(-1, 2)
-        centres = np.asarray(snap.static_centers, dtype=float).reshape(-1, 2)
-        radii = np.asarray(snap.static_radii, dtype=float).reshape(-1)
-        peds = _assign_slots(self._ped_slots, positions)
-        statics = _assign_slots(self._static_slots, centres)
-        m = self._meshcat
-        for j, i in enumerate(peds):
-            path = f"{PREFIX}/tracks/pedestrians/{j}"
-            self._fill_slot(self._ped_slots, j, path, None if i is None else positions[i], first, t)
-            if i is None:
-                if first:
-                    m.SetProperty(f"{path}/arrow", "visible", False, t)
-                    self._arrows[j] = False
-                continue
-            (px, py), (vx, vy) = positions[i], velocities[i]
-            speed = math.hypot(vx, vy)
-            arrow = speed >= TRACK_ARROW_MIN_SPEED  # a still track has no heading to show
-            yaw = math.atan2(vy, vx) if arrow else 0.0
-            m.SetTransform(path, RigidTransform(RotationMatrix.MakeZRotation(yaw), [px, py, 0]), t)
-            if first or arrow != self._arrows[j]:
-                m.SetProperty(f"{path}/arrow", "visible", arrow, t)
-                self._arrows[j] = arrow
-            if arrow:
-                length = speed * TRACK_ARROW_HORIZON
-                m.SetTransform(
-                    f"{path}/arrow/shaft", RigidTransform([length / 2, 0, TRACK_HEIGHT]), t
-                )
-                m.SetProperty(f"{path}/arrow/shaft", "scale", [length, 1.0, 1.0], t)
-                m.SetTransform(f"{path}/arrow/head", RigidTransform([length, 0, TRACK_HEIGHT]), t)
-        for j, i in enumerate(statics):
-            path = f"{PREFIX}/tracks/static/{j}"
-            self._fill_slot(
-                self._static_slots, j, path, None if i is None else centres[i], first, t
-            )
-            if i is None:
-                continue
-            cx, cy = centres[i]
-            scale = (radii[i] + TRACK_RING_GAP + TRACK_RING_WIDTH) / (
-                TRACK_STATIC_NOMINAL + TRACK_RING_GAP + TRACK_RING_WIDTH
-            )
-            m.SetTransform(path, RigidTransform([cx, cy, 0.0]), t)
-            m.SetProperty(path, "scale", [scale, scale, 1.0], t)
 
     def _draw_footstep(self, targets, t: float) -> None:
         """The marker of the step being planned; a new step gets a new marker."""
@@ -481,47 +371,6 @@ class NavigationMeshcatVisualizer(LeafSystem):
         if self._last_rays is not None:
             self._meshcat.SetProperty(self._last_rays, "visible", False, t)
         self._last_rays = path
-
-
-def _annulus(inner: float, outer: float, sides: int = 48) -> tuple[np.ndarray, np.ndarray]:
-    """A flat ring in the plane z = 0, centred at the origin: (vertices (3, 2n), faces
-    (3, 2n) int32) for `Meshcat.SetTriangleMesh`."""
-    ang = np.linspace(0.0, 2.0 * np.pi, sides, endpoint=False)
-    rim = np.vstack([np.cos(ang), np.sin(ang), np.zeros(sides)])
-    vertices = np.hstack([inner * rim, outer * rim])
-    i = np.arange(sides)
-    n = (i + 1) % sides
-    faces = np.hstack([np.vstack([i, sides + i, sides + n]), np.vstack([i, sides + n, n])])
-    return vertices, faces.astype(np.int32)
-
-
-def _assign_slots(slots: list[np.ndarray | None], points: np.ndarray) -> list[int | None]:
-    """Which of `points` (N, 2) each slot shows now (an index, or None): a point within
-    `TRACK_SLOT_GATE` of a slot's last position stays in it (nearest pairs first); the others
-    take a slot that showed nothing, else one freed now, so that a new track rarely takes
-    the slot a dead one just left. Points beyond the slots are not drawn."""
-    out: list[int | None] = [None] * len(slots)
-    taken = set()
-    pairs = sorted(
-        (float(np.hypot(*(points[i] - last))), j, i)
-        for j, last in enumerate(slots)
-        if last is not None
-        for i in range(len(points))
-    )
-    for gap, j, i in pairs:
-        if gap > TRACK_SLOT_GATE:
-            break
-        if out[j] is None and i not in taken:
-            out[j] = i
-            taken.add(i)
-    # a new track takes a slot that showed nothing before, else one just freed
-    free = [j for j in range(len(slots)) if slots[j] is None] + [
-        j for j in range(len(slots)) if slots[j] is not None and out[j] is None
-    ]
-    for i in range(len(points)):
-        if i not in taken and free:
-            out[free.pop(0)] = i
-    return out
 
 
 def set_overview_camera(meshcat: Meshcat, config: EmoNavConfig) -> None:
