@@ -23,13 +23,13 @@ from __future__ import annotations
 import argparse
 import dataclasses as dc
 
-from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.metrics import summarize
 from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.learning.demonstrations import command_index
 from emonav_drake.params import EmoNavConfig, EpisodeParams
 from emonav_drake.planners import configure_for, make_planner
+from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.model_aware import load_response
 
 

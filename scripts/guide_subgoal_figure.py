@@ -20,7 +20,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from emonav_drake.core.goal_input import guide_subgoal  # noqa: E402
-from emonav_drake.core.mpc import MpcPlanner  # noqa: E402
 from emonav_drake.core.navigation import NavigationWorld  # noqa: E402
 from emonav_drake.core.palette import (  # noqa: E402
     GOAL_RGB,
@@ -32,6 +31,7 @@ from emonav_drake.core.palette import (  # noqa: E402
 )
 from emonav_drake.core.scenario import sample_scenario  # noqa: E402
 from emonav_drake.params import EmoNavConfig  # noqa: E402
+from emonav_drake.planners.mpc import MpcPlanner  # noqa: E402
 
 GUIDE_RGB = OKABE_ITO["reddish_purple"]  # the guide sub-goal's bearing
 

@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.navigation import CommandError
 from emonav_drake.learning.env import EmoNavLIPEnv
+from emonav_drake.planners.dwa import DwaPlanner
 
 
 def test_make_by_id_and_env_checker():

@@ -4,8 +4,6 @@ import numpy as np
 import pytest
 import torch
 
-from emonav_drake.core.dwa import DwaPlanner
-from emonav_drake.core.mpc import MpcPlanner
 from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.learning.config import DaggerConfig, SacConfig
@@ -15,7 +13,9 @@ from emonav_drake.learning.demonstrations import Demonstrations, FrameStore, com
 from emonav_drake.learning.sac import SacAgent
 from emonav_drake.learning.sac_trainer import train_sac
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.model_aware import load_response
+from emonav_drake.planners.mpc import MpcPlanner
 from emonav_drake.planners.networks import Actor, Critic, LgmEncoder
 from emonav_drake.planners.policy import PolicyError, PolicyPlanner, load_policy, save_policy
 from emonav_drake.planners.specs import MpcNearbySpec, MpcSpec, ShieldSpec

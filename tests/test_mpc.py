@@ -1,4 +1,4 @@
-"""The MPC baseline (`core/mpc.py`): model, behaviour, bounds, fallback, determinism."""
+"""The MPC baseline (`planners/mpc.py`): model, behaviour, bounds, fallback, determinism."""
 
 import copy
 import math
@@ -8,13 +8,13 @@ import pytest
 
 from emonav_drake.core.crowd import CrowdSnapshot
 from emonav_drake.core.lip import LipState, lip_step
-from emonav_drake.core.mpc import MpcPlanner
 from emonav_drake.core.navigation import NavigationWorld, PlannerInput
 from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec, sample_scenario
 from emonav_drake.diagrams.navigation import run_episode
 from emonav_drake.learning.env import EmoNavLIPEnv
 from emonav_drake.params import ConfigError, EmoNavConfig, load_config
 from emonav_drake.planners import make_planner
+from emonav_drake.planners.mpc import MpcPlanner
 
 
 def _snapshot(ped_pos=(), ped_vel=(), emotions=(), static=(), radii=()) -> CrowdSnapshot:
@@ -278,7 +278,7 @@ def test_a_wall_clock_cut_is_counted_and_warned(caplog):
     cfg.mpc.time_limit = 1e-6
     cfg.episode.max_steps = 8
     mpc = MpcPlanner(cfg)
-    with caplog.at_level("WARNING", logger="emonav_drake.core.mpc"):
+    with caplog.at_level("WARNING", logger="emonav_drake.planners.mpc"):
         _episode(sample_scenario(3, cfg), cfg, mpc)
     assert mpc.time_limit_hits > 0
     assert caplog.text.count("wall-clock safety") == mpc.time_limit_hits

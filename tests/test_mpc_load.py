@@ -26,7 +26,7 @@ SEED = 77  # the seed of the report: its path length moved in the 4th digit unde
 _DRIVER = """
 import sys
 import emonav_drake.cli as cli
-import emonav_drake.core.mpc, emonav_drake.diagrams.evaluation_episode, emonav_drake.planners
+import emonav_drake.planners.mpc, emonav_drake.diagrams.evaluation_episode, emonav_drake.planners
 print("READY", flush=True)
 sys.stdin.readline()
 sys.exit(cli.main(sys.argv[1:]))

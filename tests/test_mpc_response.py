@@ -8,13 +8,13 @@ import pytest
 
 from emonav_drake.cli import main
 from emonav_drake.core.lip import LipState
-from emonav_drake.core.mpc import MpcPlanner
 from emonav_drake.core.mpc_response import ResponseHorizonModel
 from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners import make_planner
 from emonav_drake.planners.model_aware import load_response
+from emonav_drake.planners.mpc import MpcPlanner
 
 
 def test_the_rollout_walks_the_response_model_and_the_jacobian_is_its_derivative():

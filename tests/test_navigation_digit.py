@@ -7,13 +7,13 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 
 from emonav_drake.cli import main
-from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.scenario import Scenario, StaticDiscSpec, sample_scenario
 from emonav_drake.diagrams.navigation_digit import (
     build_digit_navigation_diagram,
     simulate_digit_episode,
 )
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.dwa import DwaPlanner
 from tests.test_digit_station import kneeling_positions
 
 
@@ -131,9 +131,9 @@ def test_a_command_turns_the_step_it_was_planned_for_on_both_plants():
     change of step 5 (t_5 → t_6), on the LIP plant exactly and on Digit within a few
     centiradians, and not in steps 4 or 6 (before in-step commands Digit walked it in
     step 6)."""
-    from emonav_drake.core.replay_planner import ReplayPlanner
     from emonav_drake.diagrams.navigation import run_episode
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
+    from emonav_drake.planners.replay import ReplayPlanner
 
     cfg = _short_config(8)
     commands = np.array([[0.3, 0.0]] * 8)

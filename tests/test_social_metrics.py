@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.lip import LipState
 from emonav_drake.core.metrics import (
     EpisodeTracker,
@@ -19,7 +18,6 @@ from emonav_drake.core.metrics import (
     summarize,
 )
 from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.replay_planner import ReplayPlanner
 from emonav_drake.core.reward import StepEvaluation
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.core.social_metrics import (
@@ -34,6 +32,8 @@ from emonav_drake.evaluation import tables
 from emonav_drake.evaluation.run_directory import load_run
 from emonav_drake.evaluation.trial_check import check_trial
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.dwa import DwaPlanner
+from emonav_drake.planners.replay import ReplayPlanner
 
 ROOT = Path(__file__).resolve().parent.parent
 LIP_RUN = ROOT / "benchmarks" / "results" / "lip_table2"

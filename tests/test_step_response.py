@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 from emonav_drake.core import step_response as sr
-from emonav_drake.core.dwa import DwaPlanner, ResponseMemory
 from emonav_drake.core.lip import LipState, lip_step
 from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.dwa import DwaPlanner, ResponseMemory
 
 T, OMEGA = 0.4, EmoNavConfig().robot.omega
 

@@ -143,9 +143,9 @@ def test_the_mixed_variant_is_the_mpc_route_on_the_scenario_families(tiny_varian
 
 def test_the_mirrored_batch_is_the_mirrored_world_for_scans():
     # the student's augmentation flips scans beam i <-> K-1-i and the label's turn
-    from emonav_drake.core.dwa import DwaPlanner
     from emonav_drake.learning.dagger_student import Student
     from emonav_drake.params import EmoNavConfig
+    from emonav_drake.planners.dwa import DwaPlanner
 
     env_cfg = EmoNavConfig()
     commands = DwaPlanner(env_cfg).candidates

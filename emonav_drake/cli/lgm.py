@@ -45,9 +45,9 @@ def cmd_lgm(args: argparse.Namespace) -> int:
     import numpy as np
 
     from emonav_drake.core.crowd import obstacle_discs
-    from emonav_drake.core.dwa import DwaPlanner
     from emonav_drake.core.navigation import NavigationWorld
     from emonav_drake.evaluation.grid_map_figure import render_grid_map_figure
+    from emonav_drake.planners.dwa import DwaPlanner
 
     resolved = resolve_config(args)
     cfg = resolved.config

@@ -28,7 +28,6 @@ import numpy as np
 
 from emonav_drake.core.lip import LipState, held_plans, lip_rollout
 from emonav_drake.core.navigation import PlannerInput
-from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.params import DwaParams, EmoNavConfig
 
 
@@ -70,111 +69,75 @@ class ResponseMemory:
 _LATE_COLLISION_PENALTY = 5.0
 
 
-class DwaPlanner:
-    """DWA over LIP walking steps, or over the steps of a fitted response model.
+def command_candidates(config: EmoNavConfig) -> np.ndarray:
+    """The candidate commands (C, 2) of (u_v [m/s], u_Δθ [rad]): `dwa.speed_samples` speeds
+    in [0, ū_v] × `dwa.heading_samples` heading changes in [−ū_Δθ, ū_Δθ], slow → fast,
+    right → left (the tie-breaking order)."""
+    p: DwaParams = config.dwa
+    r = config.robot
+    speeds = np.linspace(0.0, r.max_speed, p.speed_samples)
+    turns = np.linspace(-r.max_heading_change, r.max_heading_change, p.heading_samples)
+    grid_v, grid_t = np.meshgrid(speeds, turns, indexing="ij")
+    return np.stack([grid_v.ravel(), grid_t.ravel()], axis=1)
 
-    Args:
-        config: robot bounds and LIP constants, and the `dwa` weights.
-        response: None rolls out the LIP (Eq. 1) from the robot's state; a
-            `StepResponseModel` rolls out the calibrated robot instead, with the commands
-            already sent (u_{k−2} from the memory, u_{k−1} = `obs.last_command`) first and
-            the step-averaged speed measured from the memory's previous pose.
-    """
 
-    name = "dwa"
+def lip_candidate_positions(
+    config: EmoNavConfig, candidates: np.ndarray, start: LipState
+) -> np.ndarray:
+    """CoM positions (C, 2·H, 2) [m], world frame, at the middle and end of each of the
+    H = `dwa.horizon_steps` steps of every candidate held, walked by the LIP (Eq. 1)."""
+    r, p = config.robot, config.dwa
+    plans = held_plans(candidates, p.horizon_steps)
+    return lip_rollout(start, plans, r.omega, r.step_time)
 
-    def __init__(self, config: EmoNavConfig, response: StepResponseModel | None = None) -> None:
-        self.config = config
-        self.response = response
-        self._memory = self.initial_memory()
-        p: DwaParams = config.dwa
-        r = config.robot
-        speeds = np.linspace(0.0, r.max_speed, p.speed_samples)
-        turns = np.linspace(-r.max_heading_change, r.max_heading_change, p.heading_samples)
-        grid_v, grid_t = np.meshgrid(speeds, turns, indexing="ij")
-        self.candidates = np.stack([grid_v.ravel(), grid_t.ravel()], axis=1)  # (C, 2)
 
-    def initial_memory(self) -> ResponseMemory | None:
-        """None on the LIP; with a response model, what the robot did one step ago."""
-        return None if self.response is None else ResponseMemory()
+def choose_candidate(
+    config: EmoNavConfig, obs: PlannerInput, candidates: np.ndarray, traj: np.ndarray
+) -> np.ndarray:
+    """The best of `candidates` (C, 2) given their predicted CoM positions `traj` (C, S, 2)
+    at the middle and end of each step (see the module: rejection, score, tie-breaking)."""
+    cfg, p = config, config.dwa
+    r_robot, step_time = cfg.robot.radius, cfg.robot.step_time
+    rb = obs.robot
+    samples = traj.shape[1]
+    times = step_time * (np.arange(samples) + 1) / 2  # mid and end of each step
+    crowd = obs.crowd
 
-    def reset(self) -> None:
-        """Back to `initial_memory()` (a new episode)."""
-        self._memory = self.initial_memory()
+    # Pedestrians at constant velocity: (S, P, 2); gaps robot centre → surface (C, S, P).
+    ped = crowd.positions[None, :, :] + times[:, None, None] * crowd.velocities[None, :, :]
+    ped_gap = np.linalg.norm(traj[:, :, None, :] - ped[None], axis=-1) - crowd.radius
+    st_gap = (
+        np.linalg.norm(traj[:, :, None, :] - crowd.static_centers[None, None], axis=-1)
+        - crowd.static_radii
+    )
+    margin, hard = r_robot + p.safety_margin, 2 * p.hard_steps
+    hit_static = (st_gap <= margin).any(axis=(1, 2))
+    ped_hit = ped_gap <= margin  # (C, S, P)
+    hit_early = ped_hit[:, :hard].any(axis=(1, 2))  # the first `hard_steps` steps
+    hit_late = ped_hit[:, hard:].any(axis=(1, 2))
+    feasible = ~(hit_static | hit_early)
 
-    def plan_with_memory(
-        self, obs: PlannerInput, memory: ResponseMemory | None
-    ) -> tuple[np.ndarray, ResponseMemory | None]:
-        """The command and the next memory: the planner interface of the diagram."""
-        if self.response is None:
-            rb = obs.robot
-            return self._choose(obs, self._rollout(rb.x, rb.y, rb.heading, rb.speed)), None
-        memory = memory if memory is not None else ResponseMemory()
-        rb = obs.robot
-        speed = memory.step_speed(rb, self.config.robot.step_time)
-        start = type(rb)(rb.x, rb.y, rb.heading, speed)
-        traj = self.response.rollout(
-            start, memory.committed(obs), self.candidates, self.config.dwa.horizon_steps
-        )
-        return self._choose(obs, traj), ResponseMemory.after(obs)
+    all_gap = np.concatenate([ped_gap, st_gap], axis=2)
+    if all_gap.shape[2]:
+        clearance = np.clip(all_gap.min(axis=(1, 2)) - r_robot, 0.0, p.clearance_cap)
+        zone = np.concatenate([crowd.discomfort, np.full(st_gap.shape[2], crowd.static_discomfort)])
+        intrusion = np.clip(zone + r_robot - all_gap, 0.0, None).sum(axis=(1, 2)) / samples
+    else:
+        clearance = np.full(len(traj), p.clearance_cap)
+        intrusion = np.zeros(len(traj))
 
-    def _rollout(self, x0: float, y0: float, th0: float, v0: float) -> np.ndarray:
-        """CoM positions (C, 2·H, 2) at the middle and end of each of H steps."""
-        r, p = self.config.robot, self.config.dwa
-        plans = held_plans(self.candidates, p.horizon_steps)
-        return lip_rollout(LipState(x0, y0, th0, v0), plans, r.omega, r.step_time)
-
-    def plan(self, obs: PlannerInput) -> np.ndarray:
-        """The command (u_v [m/s], u_Δθ [rad]) for this walking step."""
-        command, self._memory = self.plan_with_memory(obs, self._memory)
-        return command
-
-    def _choose(self, obs: PlannerInput, traj: np.ndarray) -> np.ndarray:
-        """The best candidate given its predicted CoM positions (C, S, 2)."""
-        cfg, p = self.config, self.config.dwa
-        r_robot, step_time = cfg.robot.radius, cfg.robot.step_time
-        rb = obs.robot
-        samples = traj.shape[1]
-        times = step_time * (np.arange(samples) + 1) / 2  # mid and end of each step
-        crowd = obs.crowd
-
-        # Pedestrians at constant velocity: (S, P, 2); gaps robot centre → surface (C, S, P).
-        ped = crowd.positions[None, :, :] + times[:, None, None] * crowd.velocities[None, :, :]
-        ped_gap = np.linalg.norm(traj[:, :, None, :] - ped[None], axis=-1) - crowd.radius
-        st_gap = (
-            np.linalg.norm(traj[:, :, None, :] - crowd.static_centers[None, None], axis=-1)
-            - crowd.static_radii
-        )
-        margin, hard = r_robot + p.safety_margin, 2 * p.hard_steps
-        hit_static = (st_gap <= margin).any(axis=(1, 2))
-        ped_hit = ped_gap <= margin  # (C, S, P)
-        hit_early = ped_hit[:, :hard].any(axis=(1, 2))  # the first `hard_steps` steps
-        hit_late = ped_hit[:, hard:].any(axis=(1, 2))
-        feasible = ~(hit_static | hit_early)
-
-        all_gap = np.concatenate([ped_gap, st_gap], axis=2)
-        if all_gap.shape[2]:
-            clearance = np.clip(all_gap.min(axis=(1, 2)) - r_robot, 0.0, p.clearance_cap)
-            zone = np.concatenate(
-                [crowd.discomfort, np.full(st_gap.shape[2], crowd.static_discomfort)]
-            )
-            intrusion = np.clip(zone + r_robot - all_gap, 0.0, None).sum(axis=(1, 2)) / samples
-        else:
-            clearance = np.full(len(traj), p.clearance_cap)
-            intrusion = np.zeros(len(traj))
-
-        d_now = math.hypot(obs.goal_xy[0] - rb.x, obs.goal_xy[1] - rb.y)
-        d_end = np.linalg.norm(traj[:, -1, :] - obs.goal_xy, axis=1)
-        reach = cfg.robot.max_speed * step_time * p.horizon_steps
-        score = (
-            p.goal_weight * (d_now - d_end) / reach
-            + p.clearance_weight * clearance / p.clearance_cap
-            - p.discomfort_weight * intrusion
-            + p.speed_weight * self.candidates[:, 0] / cfg.robot.max_speed
-            - _LATE_COLLISION_PENALTY * hit_late
-        )
-        if feasible.any():
-            best = int(np.argmax(np.where(feasible, score, -np.inf)))
-        else:  # everything collides: take the candidate that stays farthest away
-            best = int(np.argmax(all_gap.min(axis=(1, 2)) if all_gap.shape[2] else score))
-        return self.candidates[best].copy()
+    d_now = math.hypot(obs.goal_xy[0] - rb.x, obs.goal_xy[1] - rb.y)
+    d_end = np.linalg.norm(traj[:, -1, :] - obs.goal_xy, axis=1)
+    reach = cfg.robot.max_speed * step_time * p.horizon_steps
+    score = (
+        p.goal_weight * (d_now - d_end) / reach
+        + p.clearance_weight * clearance / p.clearance_cap
+        - p.discomfort_weight * intrusion
+        + p.speed_weight * candidates[:, 0] / cfg.robot.max_speed
+        - _LATE_COLLISION_PENALTY * hit_late
+    )
+    if feasible.any():
+        best = int(np.argmax(np.where(feasible, score, -np.inf)))
+    else:  # everything collides: take the candidate that stays farthest away
+        best = int(np.argmax(all_gap.min(axis=(1, 2)) if all_gap.shape[2] else score))
+    return candidates[best].copy()

@@ -1,6 +1,6 @@
 """The MPC's guide path: a shortest path to the goal around the static discs, on a grid.
 
-The goal term of the MPC (`core/mpc.py`) is local; alone it leaves the robot in the pockets
+The goal term of the MPC (`planners/mpc.py`) is local; alone it leaves the robot in the pockets
 that two or three discs can form. `GuidePath` is a cost-to-go field on a square grid of
 the world frame (positions and distances in metres): Dijkstra from the goal over an
 8-connected grid, cells within contact distance of a disc blocked, cells in its discomfort

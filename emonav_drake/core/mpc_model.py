@@ -1,4 +1,4 @@
-"""The MPC's model of the next N walking steps, and what needs no solver (`core/mpc.py`).
+"""The MPC's model of the next N walking steps, and what needs no solver (`planners/mpc.py`).
 
 `HorizonModel` holds what the planner derives once from the configuration — the LIP step
 constant c = tanh(ωT/2)/ω, the command bounds of paper Eq. 2, the step-end times, the

@@ -1,7 +1,57 @@
 """The MPC's quadratic program: its fixed structure, its data at a plan, its OSQP solve.
 
-The formulation (variables, constraints, cost) is in the docstring of `core/mpc.py`; this
-module builds and solves it:
+The planner (`planners/mpc.py`, `MpcPlanner`) answers one walking-step command
+u_0 = (u_v, u_Δθ) per step by optimising a horizon of N walking steps of the paper's LIP
+step map (Eq. 1, `core/lip.py`) against a constant-velocity prediction of the pedestrians
+and the static discs, then applying the first command (receding horizon). The QP:
+
+Decision variables (one QP, n = 2N + N·O + (N − h)·P, O = P pedestrians + S discs)
+    u_v,k ∈ [0, ū_v]  and  u_Δθ,k ∈ [−ū_Δθ, ū_Δθ],  k = 0 … N−1   (paper Eq. 2)
+    s_k,o ∈ [0, d_o^zone − d_o^col]   discomfort slack of step k, obstacle o
+    σ_k,i ≥ 0                          late-contact slack, pedestrians, steps k ≥ h
+
+Dynamics (exact LIP step map, written in the world frame). Step k is walked along
+φ_k = θ_0 + Σ_{j≤k} u_Δθ,j; the speed at its end is the command, v_{k+1} = u_v,k
+(v_0 = the robot's current speed), and the CoM advances
+    Δx_k = v_k sinh(ωT)/ω + d_k (1 − cosh ωT),  d_k = (v_k cosh ωT − u_v,k)/(ω sinh ωT)
+         = c (v_k + u_v,k),  c = tanh(ωT/2)/ω,
+so p_{k+1} = p_k + c (v_k + u_v,k) (cos φ_k, sin φ_k). Speeds enter linearly, headings
+through cos/sin: the positions p_1 … p_N are nonlinear in u. They are linearised around
+a reference ū (the shifted previous plan or a seed, then each SCP iterate):
+    p_k(u) ≈ p̄_k + J_k (u − ū),
+    ∂p_k/∂u_v,m  = c e(φ_m)[m < k] + c e(φ_{m+1})[m + 1 < k],
+    ∂p_k/∂u_Δθ,i = Σ_{i ≤ j < k} c (v̄_j + ū_v,j) e⊥(φ_j),
+with e(φ) = (cos φ, sin φ) and e⊥ = (−sin φ, cos φ); no state variables are needed
+(condensed form), J is built for all k at once with cumulative sums.
+
+Constraints, for each step end k = 1 … N and obstacle o with centre c_o(t_k)
+(pedestrians: c_o + v_o kT; discs: fixed), linearised as half-planes around p̄_k with
+n_k,o = (p̄_k − c_o)/|p̄_k − c_o| (a half-plane tangent to the disc: conservative):
+    n_k,oᵀ (p_k(u) − c_o) + s_k,o [+ σ_k,o] ≥ d_o^zone
+    d_o^zone = r_o + r_robot + d_o^emo + discomfort_margin  (pedestrian: emotion distance;
+               disc: d_static) — the emotion-aware discomfort zone, a soft constraint;
+    d_o^col  = r_o + r_robot + collision_margin — contact: the slack cap s ≤ d^zone − d^col
+               makes it hard for every disc and for pedestrians in the first h steps
+               (`hard_pedestrian_steps`); later pedestrian steps add σ (soft, costly),
+               because a constant-velocity prediction that far is only a guess.
+Box rows keep u within Eq. 2 and within a trust region |u_Δθ − ū_Δθ| ≤ Δ around the
+linearisation point.
+
+Cost (½ zᵀ P z + qᵀ z, P built from the Gauss–Newton approximation of the goal term)
+    Σ_k w_k |p_k(u) − p_k^ref|²                  goal reaching, w_N += terminal_weight
+  + w_sv Σ_k (u_v,k − u_v,k−1)² + w_sθ Σ_k (u_Δθ,k − u_Δθ,k−1)²   smoothness (k = 0 uses
+                                                   the last command)
+  + w_θ Σ_k u_Δθ,k²                                turning effort
+  + Σ_k,o γ_o^k (ρ_zone s_k,o + ρ_col σ_k,o) + ε Σ (s² + σ²)       slack penalties
+    (γ_o = prediction_discount for pedestrians, 1 for discs; the linear penalty is exact).
+The reference p_k^ref lies on a guide path to the goal, k full-speed steps plus
+`reference_lead` ahead of the robot (clamped at the goal): a bounded residual that asks
+for the speed limit and stops at the goal. The guide path is the shortest path around the
+static discs on a grid (`GuidePath`: Dijkstra from the goal, contact cells blocked,
+discomfort cells dearer), built once per episode — without it the local goal term leaves
+the robot in the pockets that two or three discs can form.
+
+This module builds and solves it:
 
 * `build_layout`: the QP's sparsity pattern for P pedestrians and S discs (one `QpLayout`
   per obstacle count, kept by the planner), with the maps from CSC slots to the dense
@@ -21,10 +71,10 @@ polished (active-set refinement), so commands on a bound are exactly on it.
 
 Every QP goes through the same sequence of updates — q zeroed, then the matrices, then
 the vectors — and rho is reset at each planning step, so that a plan does not depend on
-what the workspace solved before (`core/mpc.py`, "Memory and determinism"). Every number
+what the workspace solved before (`planners/mpc.py`, "Memory and determinism"). Every number
 that decides how far OSQP iterates is a count (`max_iter`, rho adapted every
 `_RHO_INTERVAL` iterations); the wall-clock `time_limit` is only a safety, which the
-planner counts and logs (`core/mpc.py`, "Work budget").
+planner counts and logs (`planners/mpc.py`, "Work budget").
 
 Units: the world frame; positions and distances [m], speeds [m/s], heading changes [rad].
 Variables are ordered (u_v,0…N−1, u_Δθ,0…N−1, s_k,o for k·O + o, σ of the soft rows).

@@ -7,7 +7,7 @@ step-averaged speed v̄ as the state — rather than from the LIP step map of pa
 The response model is linear in the commands but the heading it accumulates rotates the
 steps, so the Jacobian of the step-end positions is taken by forward differences of one
 batched rollout (2N + 1 plans). Everything else (obstacles, seeds, costs, QP) is the
-LIP MPC's. `core.mpc.MpcPlanner(config, response=model)` plans with it.
+LIP MPC's. `planners.mpc.MpcPlanner(config, response=model)` plans with it.
 
 Frame and units as in `core/mpc_model.py`: world frame, [m], [m/s], [rad].
 """

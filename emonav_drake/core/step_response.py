@@ -20,7 +20,7 @@ speed products that move the CoM sideways. C is fitted by least squares; σ is t
 residual's standard deviation on the fitting data, and `evaluate` reports the errors on
 held-out data. `step` and `rollout` apply the model, so the same numbers drive the
 calibrated navigation world (`core.navigation.NavigationWorld(response=...)`) and the
-expert that plans with it (`core.dwa.DwaPlanner(response=...)`).
+expert that plans with it (`planners.dwa.DwaPlanner(response=...)`).
 
 Everything here is NumPy; the model is plain data (`to_plain` / `from_plain`, JSON).
 """

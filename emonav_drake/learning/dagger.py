@@ -55,7 +55,6 @@ import torch
 from emonav_drake.atomic_io import write_text_atomic
 from emonav_drake.config_yaml import to_plain
 from emonav_drake.configs import load_setting
-from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.metrics import format_summary
 from emonav_drake.core.observations import observation_dtype, observation_shape
 from emonav_drake.core.scenario import sample_scenario
@@ -85,6 +84,7 @@ from emonav_drake.learning.run_state import (
     set_rng_state,
 )
 from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.model_aware import load_response
 from emonav_drake.planners.policy import save_policy
 from emonav_drake.planners.protocol import Planner

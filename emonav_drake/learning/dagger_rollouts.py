@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.core.metrics import summarize
 from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import Scenario, sample_scenario
@@ -20,6 +19,7 @@ from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.dagger_student import Student
 from emonav_drake.learning.demonstrations import Demonstrations, command_index
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.policy import vector_state
 from emonav_drake.planners.protocol import Planner
 

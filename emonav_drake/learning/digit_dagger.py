@@ -34,8 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-from emonav_drake.core.dwa import DwaPlanner
 from emonav_drake.params import ConfigError
+from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.policy import vector_state
 from emonav_drake.planners.protocol import Planner
 from emonav_drake.planners.specs import ExpertSpec, describe_spec

@@ -10,10 +10,10 @@ workers can build by name, each as a typed spec (`planners/specs.py`): `make_pla
 is that spec's `build(config, device)`. The built-in ones are registered below, one line
 each:
 
-* model planners (no checkpoint): `dwa` and `mpc` (the math in `core/dwa.py`,
-  `core/mpc.py`), `dwa_digit` (DWA planning with Digit's step-response model, the
-  Digit/Digit route's expert), `mpc_digit` (the MPC planning with that model,
-  `core/mpc_response.py`);
+* model planners (no checkpoint): `dwa` and `mpc` (`planners/dwa.py`, `planners/mpc.py`;
+  their math in `core/dwa.py` and `core/mpc_*.py`), `dwa_digit` (DWA planning with
+  Digit's step-response model, the Digit/Digit route's expert), `mpc_digit` (the MPC
+  planning with that model, `core/mpc_response.py`);
 * learned planners (a policy checkpoint, `planners/policy.py`): `policy` (any trained
   checkpoint, by default the shipped policy), `sac` (a SAC-trained actor, checkpoint
   required), the LGM-shielded and MPC-steered policies, SARL and RGL (value networks),

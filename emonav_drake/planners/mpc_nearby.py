@@ -1,6 +1,6 @@
 """A categorical policy steered by the MPC: the "mpc_nearby" DAgger expert.
 
-At every walking step the OSQP MPC (`core/mpc.py`, with the privileged crowd state and,
+At every walking step the OSQP MPC (`planners/mpc.py`, with the privileged crowd state and,
 on Digit, its fitted step response) plans its command; the policy scores its 99 grid
 commands from its own LGM; the planner walks the best-scored command within `cells` grid
 steps of the MPC's (`core/nearby_labels.py`). `last_distribution` is the policy's softmax
@@ -19,9 +19,9 @@ import dataclasses as dc
 import numpy as np
 
 from emonav_drake.core.lgm_shield import shield_distribution
-from emonav_drake.core.mpc import MpcMemory, MpcPlanner
 from emonav_drake.core.navigation import PlannerInput
 from emonav_drake.core.nearby_labels import nearby_mask, restricted_softmax
+from emonav_drake.planners.mpc import MpcMemory, MpcPlanner
 from emonav_drake.planners.policy import (
     PolicyError,
     PolicyPlanner,

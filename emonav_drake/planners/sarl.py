@@ -128,7 +128,7 @@ def value_network(name: str) -> nn.Module:
 
 def command_grid(config: EmoNavConfig) -> np.ndarray:
     """The commands SARL chooses from (A, 2): the DWA candidates of `config`."""
-    from emonav_drake.core.dwa import DwaPlanner
+    from emonav_drake.planners.dwa import DwaPlanner
 
     return DwaPlanner(config).candidates.copy()
 

@@ -72,7 +72,7 @@ class _Learned:
 
 @dc.dataclass
 class DwaSpec:
-    """The dynamic window approach (`core/dwa.py`).
+    """The dynamic window approach (`planners/dwa.py`).
 
     Fields:
         margin: its collision margin [m] (`dwa.safety_margin`); None = the configuration's.
@@ -83,7 +83,7 @@ class DwaSpec:
     response: str = ""
 
     def build(self, config: EmoNavConfig, device: str = "cpu"):
-        from emonav_drake.core.dwa import DwaPlanner
+        from emonav_drake.planners.dwa import DwaPlanner
 
         if self.margin is not None:
             config = copy.deepcopy(config)
@@ -93,7 +93,7 @@ class DwaSpec:
 
 @dc.dataclass
 class MpcSpec:
-    """The OSQP social MPC (`core/mpc.py`).
+    """The OSQP social MPC (`planners/mpc.py`).
 
     Fields:
         response: the step model it plans with ("" = the LIP).
@@ -105,7 +105,7 @@ class MpcSpec:
     clearance: float = 0.0
 
     def build(self, config: EmoNavConfig, device: str = "cpu"):
-        from emonav_drake.core.mpc import MpcPlanner
+        from emonav_drake.planners.mpc import MpcPlanner
 
         return MpcPlanner(_widened(config, self.clearance), load_response(self.response))
 
@@ -206,7 +206,7 @@ class MpcNearbySpec(_Learned):
     shielded: bool = False
 
     def build(self, config: EmoNavConfig, device: str = "cpu"):
-        from emonav_drake.core.mpc import MpcPlanner
+        from emonav_drake.planners.mpc import MpcPlanner
         from emonav_drake.planners.mpc_nearby import MpcNearbyPolicy
         from emonav_drake.planners.shield import ShieldedPolicy
 

@@ -1,55 +1,14 @@
-"""Model predictive control on the LIP model, solved with OSQP — the model-based baseline.
+"""The MPC planner on the LIP model, solved with OSQP — the model-based baseline.
 
 The planner answers one walking-step command u_0 = (u_v, u_Δθ) per step by optimising a
 horizon of N walking steps of the paper's LIP step map (Eq. 1, `core/lip.py`) against a
 constant-velocity prediction of the pedestrians and the static discs (privileged
 `CrowdSnapshot`, as DWA), then applying the first command (receding horizon).
 
-Decision variables (one QP, n = 2N + N·O + (N − h)·P, O = P pedestrians + S discs)
-    u_v,k ∈ [0, ū_v]  and  u_Δθ,k ∈ [−ū_Δθ, ū_Δθ],  k = 0 … N−1   (paper Eq. 2)
-    s_k,o ∈ [0, d_o^zone − d_o^col]   discomfort slack of step k, obstacle o
-    σ_k,i ≥ 0                          late-contact slack, pedestrians, steps k ≥ h
-
-Dynamics (exact LIP step map, written in the world frame). Step k is walked along
-φ_k = θ_0 + Σ_{j≤k} u_Δθ,j; the speed at its end is the command, v_{k+1} = u_v,k
-(v_0 = the robot's current speed), and the CoM advances
-    Δx_k = v_k sinh(ωT)/ω + d_k (1 − cosh ωT),  d_k = (v_k cosh ωT − u_v,k)/(ω sinh ωT)
-         = c (v_k + u_v,k),  c = tanh(ωT/2)/ω,
-so p_{k+1} = p_k + c (v_k + u_v,k) (cos φ_k, sin φ_k). Speeds enter linearly, headings
-through cos/sin: the positions p_1 … p_N are nonlinear in u. They are linearised around
-a reference ū (the shifted previous plan or a seed, then each SCP iterate):
-    p_k(u) ≈ p̄_k + J_k (u − ū),
-    ∂p_k/∂u_v,m  = c e(φ_m)[m < k] + c e(φ_{m+1})[m + 1 < k],
-    ∂p_k/∂u_Δθ,i = Σ_{i ≤ j < k} c (v̄_j + ū_v,j) e⊥(φ_j),
-with e(φ) = (cos φ, sin φ) and e⊥ = (−sin φ, cos φ); no state variables are needed
-(condensed form), J is built for all k at once with cumulative sums.
-
-Constraints, for each step end k = 1 … N and obstacle o with centre c_o(t_k)
-(pedestrians: c_o + v_o kT; discs: fixed), linearised as half-planes around p̄_k with
-n_k,o = (p̄_k − c_o)/|p̄_k − c_o| (a half-plane tangent to the disc: conservative):
-    n_k,oᵀ (p_k(u) − c_o) + s_k,o [+ σ_k,o] ≥ d_o^zone
-    d_o^zone = r_o + r_robot + d_o^emo + discomfort_margin  (pedestrian: emotion distance;
-               disc: d_static) — the emotion-aware discomfort zone, a soft constraint;
-    d_o^col  = r_o + r_robot + collision_margin — contact: the slack cap s ≤ d^zone − d^col
-               makes it hard for every disc and for pedestrians in the first h steps
-               (`hard_pedestrian_steps`); later pedestrian steps add σ (soft, costly),
-               because a constant-velocity prediction that far is only a guess.
-Box rows keep u within Eq. 2 and within a trust region |u_Δθ − ū_Δθ| ≤ Δ around the
-linearisation point.
-
-Cost (½ zᵀ P z + qᵀ z, P built from the Gauss–Newton approximation of the goal term)
-    Σ_k w_k |p_k(u) − p_k^ref|²                  goal reaching, w_N += terminal_weight
-  + w_sv Σ_k (u_v,k − u_v,k−1)² + w_sθ Σ_k (u_Δθ,k − u_Δθ,k−1)²   smoothness (k = 0 uses
-                                                   the last command)
-  + w_θ Σ_k u_Δθ,k²                                turning effort
-  + Σ_k,o γ_o^k (ρ_zone s_k,o + ρ_col σ_k,o) + ε Σ (s² + σ²)       slack penalties
-    (γ_o = prediction_discount for pedestrians, 1 for discs; the linear penalty is exact).
-The reference p_k^ref lies on a guide path to the goal, k full-speed steps plus
-`reference_lead` ahead of the robot (clamped at the goal): a bounded residual that asks
-for the speed limit and stops at the goal. The guide path is the shortest path around the
-static discs on a grid (`GuidePath`: Dijkstra from the goal, contact cells blocked,
-discomfort cells dearer), built once per episode — without it the local goal term leaves
-the robot in the pockets that two or three discs can form.
+The formulation (decision variables, the LIP dynamics in condensed form, the emotion-aware
+discomfort and contact half-planes, the cost and the guide path it follows) is in the
+docstring of `core/mpc_qp.py`, which builds and solves it; this module is the planner
+around it.
 
 SCP loop. An initial guess is chosen by evaluating the nonlinear cost of a few seed
 plans with one vectorised rollout: the previous plan shifted by one step (with a small
@@ -89,13 +48,13 @@ fires the planner counts it (`time_limit_hits`) and logs a warning naming the pl
 step; no result we publish had one (`tests/test_mpc_load.py` runs the MPC beside a CPU
 hog and under stalls).
 
-Modules. This one holds `MpcPlanner` (seed choice, SCP loop, memory, fallback, counters)
-and `MpcMemory`; `core/mpc_model.py` the horizon's constants and solver-free model
-(rollout, Jacobian, obstacle prediction, seeds, nonlinear cost); `core/mpc_qp.py` the QP's
-structure, its linearisation and the OSQP solve (one `osqp.OSQP` per obstacle count, fixed
-sparsity, values updated in place, explicit warm starts, polished solutions: see its
-docstring); `core/mpc_guide.py` the guide path. Beyond numpy they need osqp and scipy
-(sparse matrices, the guide path's Dijkstra).
+Modules. This one (a planner, beside the others in `planners/`) holds `MpcPlanner` (seed
+choice, SCP loop, memory, fallback, counters) and `MpcMemory`; `core/mpc_model.py` the
+horizon's constants and solver-free model (rollout, Jacobian, obstacle prediction, seeds,
+nonlinear cost); `core/mpc_qp.py` the QP's structure, its linearisation and the OSQP solve
+(one `osqp.OSQP` per obstacle count, fixed sparsity, values updated in place, explicit warm
+starts, polished solutions: see its docstring); `core/mpc_guide.py` the guide path. Beyond
+numpy they need osqp and scipy (sparse matrices, the guide path's Dijkstra).
 
 Fallback. If the first QP of a planning step is infeasible (e.g. the hard contact
 constraints cannot be met) or fails, the command is the safe one — slow down to
