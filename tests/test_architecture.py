@@ -33,6 +33,7 @@ LAYERS: list[tuple[str, frozenset[str]]] = [
                 "torch_load",
                 "run_lock",
                 "provenance",
+                "torch_device",
                 "progress",
                 "registry",
                 "parallel",

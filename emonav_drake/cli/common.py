@@ -177,7 +177,7 @@ def check_planner_flags(args: argparse.Namespace) -> None:
                 f"not {args.planner}"
             )
         return
-    from emonav_drake.planners.policy import resolve_device
+    from emonav_drake.torch_device import resolve_device
 
     resolve_device(args.device)
 

@@ -21,7 +21,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 def cmd_export(args: argparse.Namespace) -> int:
     """Write the checkpoint (default: the shipped policy) as TorchScript to --out."""
     from emonav_drake.atomic_io import check_distinct, check_output_file
-    from emonav_drake.planners.policy import DEFAULT_POLICY, export_torchscript
+    from emonav_drake.planners.policy import DEFAULT_POLICY
+    from emonav_drake.planners.policy_export import export_torchscript
 
     check_output_file(args.out, "--out")
     check_distinct({"CHECKPOINT": args.checkpoint, "--out": args.out})

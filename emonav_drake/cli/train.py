@@ -318,7 +318,7 @@ def resume_command(args: argparse.Namespace, out: Path) -> str:
 
 def cmd_train(args: argparse.Namespace) -> int:
     """Train by the chosen route into --out (or continue --resume)."""
-    from emonav_drake.planners.policy import resolve_device
+    from emonav_drake.torch_device import resolve_device
 
     _apply_variant(args)
     if args.resume is not None:

@@ -82,11 +82,11 @@ from emonav_drake.planners.model_aware import load_response
 from emonav_drake.planners.policy import (
     build_model,
     goal_input_of,
-    resolve_device,
     save_policy,
     vector_state,
 )
 from emonav_drake.progress import progress_bar
+from emonav_drake.torch_device import resolve_device
 
 log = logging.getLogger(__name__)
 

@@ -42,6 +42,7 @@ from emonav_drake.planners.networks import (
     ScanEncoder,
     ScanLstmEncoder,
 )
+from emonav_drake.torch_device import resolve_device
 from emonav_drake.torch_load import CheckpointReadError, load_checked
 
 FORMAT = "emonav-policy/1"
@@ -56,41 +57,6 @@ DEFAULT_POLICY = _DATA / "policies" / "emobipednav_distilled_digit.pt"
 
 class PolicyError(ValueError):
     """A policy checkpoint is missing, corrupt, or does not fit the observation."""
-
-
-class DeviceError(ValueError):
-    """A torch device string is malformed or names hardware this machine does not have."""
-
-
-def resolve_device(device: str, flag: str = "--device") -> torch.device:
-    """`device` as a `torch.device`, checked against the hardware; else `DeviceError`.
-
-    Catches the two mistakes that otherwise surface deep inside torch: a malformed name
-    ("bogus") and a GPU that is not there ("cuda" on a CPU-only machine, "cuda:3" on a
-    one-GPU machine), so the error blames the flag and not the checkpoint.
-    """
-    try:
-        d = torch.device(device)
-    except (RuntimeError, ValueError, TypeError):
-        raise DeviceError(
-            f"{flag} {device!r}: not a torch device; use cpu, cuda or cuda:N"
-        ) from None
-    if d.type == "cuda":
-        if not torch.cuda.is_available():
-            raise DeviceError(
-                f"{flag} {device}: no CUDA GPU is available to torch on this machine "
-                "(torch.cuda.is_available() is False); use --device cpu"
-            )
-        if d.index is not None and d.index >= torch.cuda.device_count():
-            raise DeviceError(
-                f"{flag} {device}: only {torch.cuda.device_count()} CUDA device(s) visible"
-            )
-    elif d.type == "mps":
-        if not torch.backends.mps.is_available():
-            raise DeviceError(f"{flag} {device}: the Apple MPS backend is not available here")
-    elif d.type != "cpu":
-        raise DeviceError(f"{flag} {device}: unsupported device type; use cpu or cuda")
-    return d
 
 
 def vector_state(
@@ -454,25 +420,6 @@ class PolicyPlanner:
         return self.act(obs.lgm_stack, self.goal_state(obs), obs.last_command)
 
 
-def export_torchscript(path: str | Path, out: str | Path) -> Path:
-    """Export a checkpoint's network to TorchScript (inputs: uint8 stack, vector state).
-
-    The file is written atomically (a temporary sibling renamed when complete), through a
-    file object: a full disk is an `OSError` naming `out` (torch's own file writer would
-    abort the process).
-    """
-    from emonav_drake.atomic_io import check_output_file
-
-    out = check_output_file(out)
-    model, meta = load_policy(path)
-    example = probe_input(meta)
-    scripted = torch.jit.trace(
-        model if meta["kind"] == "categorical" else _ActorMean(model), example
-    )
-    atomic_write(out, lambda f: torch.jit.save(scripted, f), durable=False)
-    return out
-
-
 class WrappedPolicy:
     """A planner around a `PolicyPlanner` (`self.policy`) that reads the policy's
     observation: the diagram's map builder produces what these properties say."""
@@ -494,13 +441,3 @@ class WrappedPolicy:
     @property
     def path(self) -> Path:
         return self.policy.path
-
-
-class _ActorMean(torch.nn.Module):
-    def __init__(self, actor: Actor) -> None:
-        super().__init__()
-        self.actor = actor
-
-    def forward(self, obs: torch.Tensor, state: torch.Tensor) -> torch.Tensor:
-        mu, _ = self.actor(obs, state)
-        return torch.tanh(mu)

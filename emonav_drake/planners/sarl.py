@@ -171,7 +171,7 @@ class SarlPlanner:
     name = "sarl"
 
     def __init__(self, path: str | Path, config: EmoNavConfig, device: str = "cpu") -> None:
-        from emonav_drake.planners.policy import resolve_device
+        from emonav_drake.torch_device import resolve_device
 
         self.path = Path(path)
         self.config = config
