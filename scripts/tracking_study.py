@@ -65,14 +65,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"tracking_study: error: {e}", file=sys.stderr)
         return 2
 
-    from emonav_drake.evaluation.tracking_report import (
-        clear_mot,
-        csv_rows,
-        plot,
-        summarise,
-        tables_md,
-    )
+    from emonav_drake.evaluation.tracking_report import csv_rows, plot, tables_md
     from emonav_drake.evaluation.tracking_study import study
+    from emonav_drake.evaluation.tracking_summary import clear_mot, summarise
     from emonav_drake.params import EmoNavConfig
 
     cfg = EmoNavConfig()

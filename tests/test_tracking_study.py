@@ -24,13 +24,10 @@ from emonav_drake.evaluation.scan_visibility import (
     VISIBLE,
     visibility,
 )
-from emonav_drake.evaluation.tracking_report import summarise, tables_md
-from emonav_drake.evaluation.tracking_study import (
-    MATCH_DISTANCE,
-    EpisodeEvaluator,
-    ScanTruth,
-    study,
-)
+from emonav_drake.evaluation.tracking_evaluator import MATCH_DISTANCE, EpisodeEvaluator, ScanTruth
+from emonav_drake.evaluation.tracking_report import tables_md
+from emonav_drake.evaluation.tracking_study import study
+from emonav_drake.evaluation.tracking_summary import summarise
 from emonav_drake.params import EmoNavConfig
 
 CFG = EmoNavConfig()
