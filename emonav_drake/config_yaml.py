@@ -4,8 +4,9 @@ The schema-agnostic half of the configuration: Drake's typed loader
 (`pydrake.common.yaml.yaml_load_typed`, which already rejects unknown fields) preceded by a
 check of the raw YAML against the dataclass (types, unknown fields, required fields), so
 that every mistake raises `ConfigError` naming the dotted field; the dump back to YAML;
-and the check of a dataclass's values against a table of allowed ranges. It knows no
-particular configuration: `params.py` holds the project's (`EmoNavConfig`, its ranges,
+and the check of a dataclass's values against the ranges its fields declare
+(`validate_fields`; the fields' doc, unit and range are `config_fields.setting`'s). It
+knows no particular configuration: `params.py` holds the project's (`EmoNavConfig`,
 `load_config`, `dump_config`), `learning/config.py` the training ones, `core/scenario.py`
 the scenarios; all of them load and check through here.
 
@@ -66,25 +67,27 @@ def _describe_range(lo: Any, hi: Any) -> str:
     return f"in [{lo}, {hi}]"
 
 
-def _validate_ranges(obj: Any, ranges: dict[str, Any], prefix: str, key: str = "") -> None:
-    """Check `obj`'s fields (recursively) against `ranges`.
+def validate_fields(obj: Any, prefix: str = "") -> None:
+    """Check every field of dataclass `obj` against the range in its metadata
+    (`config_fields.setting`); raise `ConfigError` "`prefix``field` = value is out of
+    range: …" for the first outside.
 
-    `ranges` maps a dotted field name (relative to `obj`) to (low, high) inclusive —
-    either bound may be None for "no bound" — or, for a list field, (length, low, high)
-    for each element (of each row, for a list of lists; length None: any number of them).
-    `prefix` goes before the field's name in the messages; an unset optional field (None)
-    is not checked.
+    Recurses into nested dataclasses, a union field's dataclass value included (a
+    planner spec), with the field's dotted name as their prefix. A range is (low, high)
+    inclusive (None: no bound), or (length, low, high) for a list field's elements (of
+    each row, for a list of lists; length None: any length). A non-finite float is
+    refused in any field; an unset optional field (None) is not checked.
     """
     for f in dc.fields(obj):
-        name, dotted = f"{prefix}{f.name}", f"{key}{f.name}"
+        name = f"{prefix}{f.name}"
         value = getattr(obj, f.name)
         if dc.is_dataclass(value):
-            _validate_ranges(value, ranges, name + ".", dotted + ".")
+            validate_fields(value, name + ".")
             continue
         if isinstance(value, float) and not math.isfinite(value):
             raise ConfigError(f"{name} = {value!r} is invalid: must be a finite number")
-        spec = ranges.get(dotted)
-        if spec is None or value is None:  # an unset optional field has no range to check
+        spec = f.metadata.get("range")
+        if spec is None or value is None:
             continue
         if len(spec) == 3:
             length, lo, hi = spec
@@ -110,17 +113,6 @@ def _validate_ranges(obj: Any, ranges: dict[str, Any], prefix: str, key: str = "
 def _flat(values: list) -> list:
     """The numbers of a list, or of a list of lists (a matrix's rows)."""
     return [x for v in values for x in (_flat(v) if isinstance(v, list) else [v])]
-
-
-def validate_ranges(obj: Any, ranges: dict[str, Any], prefix: str = "") -> None:
-    """Check every field of dataclass `obj` (nested ones included) that `ranges` names;
-    raise `ConfigError` "`prefix``field` = value is out of range: …" for the first outside.
-
-    `ranges`: dotted field name relative to `obj` → (low, high) inclusive (None: no bound),
-    or (length, low, high) for a list field's elements (length None: any length). A
-    non-finite float is refused in any field.
-    """
-    _validate_ranges(obj, ranges, prefix)
 
 
 def required_fields(schema: type) -> tuple[str, ...]:

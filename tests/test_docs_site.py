@@ -52,8 +52,10 @@ def test_an_api_page_is_rendered_from_the_docstrings(built):
     assert "One walking step of the LIP model" in page  # and its docstring
 
 
-def test_the_configuration_page_lists_every_field_from_params(built):
+def test_the_configuration_page_lists_every_field_from_the_fields(built):
     _, site = built
     page = (site / "config" / "index.html").read_text()
     assert "emonav config --dump -->" not in page  # the hook replaced its marker
-    assert "one walking step [s]" in page  # robot.step_time's note in params.py
+    # robot.step_time's doc, unit and range, read from its field
+    assert "<td>T, one walking step</td>" in page and "<td>in [0.05, 2.0]</td>" in page
+    assert 'id="walking"' in page  # a section's heading

@@ -3,13 +3,17 @@ import re
 
 import pytest
 
-from emonav_drake.config_notes import (
+from emonav_drake.config_fields import (
     annotate_yaml,
     describe,
     dump_annotated_yaml,
-    field_notes,
+    field_doc,
+    field_range,
+    field_unit,
+    setting,
     undocumented_fields,
 )
+from emonav_drake.config_yaml import validate_fields
 from emonav_drake.params import ConfigError, EmoNavConfig, dump_config, load_config
 
 
@@ -68,7 +72,7 @@ def test_validate_catches_nan():
         c.validate()
 
 
-# --- field notes and the annotated dump (`emonav config --dump`) ------------------------------
+# --- fields that describe themselves, and the annotated dump (`emonav config --dump`) -----
 
 
 @dc.dataclass
@@ -78,21 +82,18 @@ class _Inner:
     More text that is not the description.
     """
 
-    a: float = 1.0  # trailing note [m]
-    # a comment line
-    # continued above
-    b: list[float] = dc.field(default_factory=lambda: [1.0, 2.0])
-    c: str = "x"
+    a: float = setting(1.0, "a length", "m", (0.0, 2.0))
+    b: list[float] = setting([1.0, 2.0], "two numbers", "", (2, -5.0, 5.0))
+    c: str = setting("x", "")
 
 
 @dc.dataclass
 class _Outer:
     """Outer."""
 
-    inner: _Inner = dc.field(default_factory=_Inner)
-    d: list[float] = dc.field(  # note on the first line of a wrapped field
-        default_factory=lambda: [3.0]
-    )
+    inner: _Inner = setting(factory=_Inner)
+    d: list[float] = setting([3.0], "any number of them", "s", (None, 0.0, 10.0))
+    e: int = setting(1, "at least one", "", (1, None))
 
 
 def _strip_comments(text: str) -> list[str]:
@@ -104,23 +105,50 @@ def _strip_comments(text: str) -> list[str]:
     ]
 
 
-def test_field_notes_read_the_source_comments():
-    assert field_notes(_Inner) == {
-        "a": "trailing note [m]",
-        "b": "a comment line continued above",
-    }
-    assert field_notes(_Outer) == {"d": "note on the first line of a wrapped field"}
+def test_a_setting_carries_its_doc_unit_and_range():
+    assert (field_doc(_Inner, "a"), field_unit(_Inner, "a"), field_range(_Inner, "a")) == (
+        "a length",
+        "m",
+        (0.0, 2.0),
+    )
+    assert field_range(_Outer, "inner.b") == (2, -5.0, 5.0)  # dotted: a nested field
+    assert field_doc(_Outer, "inner") == "Inner part."  # a section: its class's description
+    assert _Inner().b == [1.0, 2.0] and _Inner().b is not _Inner().b  # a fresh list each
     assert describe(_Inner) == "Inner part." and describe(_Outer) == "Outer."
     assert undocumented_fields(_Outer) == ["inner.c"]
+    with pytest.raises(TypeError):
+        setting()  # neither a default nor a factory
+    for bounds in [(2.0, 1.0), (2, 0.0, None), (1.0,)]:
+        with pytest.raises(ValueError):
+            setting(1.0, "a range of no form", "", bounds)
+
+
+def test_validate_fields_reads_the_ranges_in_the_fields():
+    validate_fields(_Outer())
+    bad = [
+        (_Outer(inner=_Inner(a=3.0)), "x.inner.a = 3.0 is out of range: allowed in [0.0, 2.0]"),
+        (_Outer(inner=_Inner(b=[1.0])), "x.inner.b = [1.0] is invalid: must have 2 elements"),
+        (_Outer(inner=_Inner(b=[1.0, 9.0])), "each element in [-5.0, 5.0]"),
+        (_Outer(e=0), "x.e = 0 is out of range: allowed >= 1"),
+        (_Outer(d=[1.0, -1.0]), "x.d = [1.0, -1.0] is out of range: each element in [0.0, 10.0]"),
+        (_Outer(inner=_Inner(a=float("inf"))), "x.inner.a = inf is invalid: must be a finite"),
+    ]
+    for obj, message in bad:
+        with pytest.raises(ConfigError, match=re.escape(message)):
+            validate_fields(obj, "x.")
+
+
+def test_the_annotated_dump_gives_each_fields_doc_unit_and_range():
     assert dump_annotated_yaml(_Outer()) == (
         "# Outer.\n"
         "\n"
         "# Inner part.\n"
         "inner:\n"
-        "  a: 1.0  # trailing note [m]\n"
-        "  b: [1.0, 2.0]  # a comment line continued above\n"
+        "  a: 1.0  # a length [m]; in [0.0, 2.0]\n"
+        "  b: [1.0, 2.0]  # two numbers; 2 values, each in [-5.0, 5.0]\n"
         "  c: x\n"
-        "d: [3.0]  # note on the first line of a wrapped field\n"
+        "d: [3.0]  # any number of them [s]; each in [0.0, 10.0]\n"
+        "e: 1  # at least one; >= 1\n"
     )
     # a scalar continued on the next line keeps no comment (it would end the scalar)
     assert annotate_yaml(_Inner, "a: long\n  words\nc: x\n") == "a: long\n  words\nc: x\n"
@@ -135,18 +163,19 @@ def test_annotated_dump_is_the_bare_yaml_with_comments_and_loads_back(yaml_text)
     text = dump_annotated_yaml(config)
     assert load_config(data=text) == config
     assert _strip_comments(text) == dump_config(config).splitlines()
-    assert "  step_time: 0.4  # T, one walking step [s]\n" in text
+    assert "  step_time: 0.4  # T, one walking step [s]; in [0.05, 2.0]\n" in text
     assert "# The reduced-order (LIP) robot and its command bounds" in text.split("\nrobot:\n")[0]
     assert "\n# Full-order Digit walking: gait, ALIP planner" in text.split("\nwalking:\n")[0]
 
 
-def test_every_config_field_has_a_note_with_a_meaning():
-    """New fields of `EmoNavConfig` must be documented by a comment in `params.py`."""
+def test_every_config_field_has_a_doc_with_a_meaning():
+    """New fields of `EmoNavConfig` must be documented (`setting(default, doc, …)`)."""
     assert undocumented_fields(EmoNavConfig) == []
     for section in dc.fields(EmoNavConfig):
-        for name, note in field_notes(section.type).items():
-            meaning = re.sub(r"\[[^\]]*\]", "", note)  # drop the units in brackets
-            assert re.search(r"[A-Za-z]{2}", meaning), f"{section.name}.{name}: {note!r}"
+        for f in dc.fields(section.type):
+            doc = f.metadata["doc"]
+            assert re.search(r"[A-Za-z]{2}", doc), f"{section.name}.{f.name}: {doc!r}"
+            assert "[" not in f.metadata["unit"], f"{section.name}.{f.name}: the unit bare"
 
 
 def test_config_cli_dump_is_annotated_and_bare_on_request(capsys):
@@ -157,7 +186,7 @@ def test_config_cli_dump_is_annotated_and_bare_on_request(capsys):
         assert main(["config", "--dump", "--setting", name]) == 0
         text = capsys.readouterr().out
         assert load_config(data=text) == load_setting(name)
-        assert "  # discomfort distance of negative pedestrians [m]\n" in text
+        assert "  # discomfort distance of negative pedestrians [m]; in [0.0, 3.0]\n" in text
     assert main(["config", "--bare"]) == 0
     assert capsys.readouterr().out == (
         f"# emonav configuration: the default configuration\n{dump_config(load_config())}"

@@ -2,7 +2,7 @@
 
 A hostile input must not be able to take the machine: a YAML alias bomb, a huge list or
 a huge file, an image that declares billions of pixels, `--workers 100000`; every numeric
-field has a range (one table per dataclass, the same for scenarios and configurations);
+field has a range (in the field, the same for scenarios and configurations);
 a damaged image or video gives our one line on stderr and nothing from the C libraries;
 and no message is longer than a few hundred characters. Real files, the real CLI; the
 memory-hungry cases run in a child process under an address-space limit.
@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 import pytest
 
-from emonav_drake import param_ranges
+from emonav_drake.config_fields import SEED_RANGE, WORLD_POINT, field_range
 from emonav_drake.config_yaml import MAX_YAML_BYTES, MAX_YAML_VALUES, ConfigError
 from emonav_drake.core.scenario import (
     MAX_SCHEDULE,
@@ -41,6 +41,7 @@ from emonav_drake.core.scenario import (
 from emonav_drake.params import EmoNavConfig, load_config
 from emonav_drake.perception.image_io import HARD_MAX_PIXELS, image_header_size
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams, HeadCameraParams
+from emonav_drake.planners.specs import EXPERT_SPECS
 from tests.cli_errors import assert_user_error, run
 
 PACKAGE = Path(__file__).resolve().parent.parent / "emonav_drake"
@@ -561,7 +562,7 @@ def test_dwa_weights_and_rewards_are_bounded(tmp_path, capsys, text, field):
 
 def test_a_scenarios_emotion_period_has_the_configs_range(tmp_path, tiny, capsys):
     # before: 1e-300 accepted (the config's range is [0.1, 100])
-    lo, hi = param_ranges.RANGES["crowd.emotion_change_period"]
+    lo, hi = field_range(EmoNavConfig, "crowd.emotion_change_period")
     f = tmp_path / "s.yaml"
     for bad in ("1.0e-300", "0.05", "1000.0"):
         f.write_text(f"emotion_change_period: {bad}\n")
@@ -593,15 +594,26 @@ def _numeric(kind: typing.Any) -> bool:
     return False
 
 
-def _numeric_fields(schema: type, prefix: str = "") -> list[str]:
-    """Dotted names of every numeric field of `schema`, nested dataclasses included."""
-    names = []
+def field_problems(schema: type, prefix: str = "") -> list[str]:
+    """What is wrong with the metadata of `schema`'s fields (nested dataclasses included):
+    a field without a doc, a numeric field without a finite two-sided range, or a range on
+    a field of no number."""
+    problems = []
     for f in dc.fields(schema):
+        name, bounds = prefix + f.name, f.metadata.get("range")
+        if not f.metadata.get("doc"):
+            problems.append(f"{name}: no doc")
         if dc.is_dataclass(f.type):
-            names += _numeric_fields(f.type, f"{prefix}{f.name}.")
+            problems += field_problems(f.type, f"{name}.")
         elif _numeric(f.type):
-            names.append(prefix + f.name)
-    return names
+            lo, hi = (None, None) if bounds is None else bounds[-2:]
+            if lo is None or hi is None or not (math.isfinite(lo) and math.isfinite(hi)):
+                problems.append(f"{name}: no finite two-sided range ({bounds!r})")
+            elif not lo <= hi:
+                problems.append(f"{name}: range {bounds!r} is empty")
+        elif bounds is not None:
+            problems.append(f"{name}: a range on a field of no number ({bounds!r})")
+    return problems
 
 
 def _list_item_schemas(schema: type) -> dict[str, type]:
@@ -614,37 +626,40 @@ def _list_item_schemas(schema: type) -> dict[str, type]:
 
 
 @pytest.mark.parametrize(
-    "schema, table_name",
+    "schema",
     [
-        (EmoNavConfig, "RANGES"),
-        (Scenario, "SCENARIO_RANGES"),
-        (PedestrianSpec, "PEDESTRIAN_RANGES"),
-        (StaticDiscSpec, "OBSTACLE_RANGES"),
-        (WallSpec, "WALL_RANGES"),
-        (EmotionEstimateParams, "ESTIMATE_RANGES"),
+        EmoNavConfig,
+        Scenario,
+        PedestrianSpec,
+        StaticDiscSpec,
+        WallSpec,
+        EmotionEstimateParams,
+        *EXPERT_SPECS,
     ],
+    ids=lambda schema: schema.__name__,
 )
-def test_every_numeric_field_has_a_range(schema, table_name):
-    # a new numeric field without a line in param_ranges.py fails here
-    table = getattr(param_ranges, table_name)
-    missing = [n for n in _numeric_fields(schema) if n not in table]
-    assert not missing, f"{schema.__name__}: no range for {missing} in param_ranges.py"
-    unknown = [n for n in table if n not in _numeric_fields(schema)]
-    assert not unknown, f"{schema.__name__}: ranges of no field: {unknown}"
-    for name, spec in table.items():
-        lo, hi = spec[-2:]
-        assert lo is not None and hi is not None, (name, spec)  # bounded both ways
-        assert math.isfinite(lo) and math.isfinite(hi) and lo <= hi, (name, spec)
+def test_every_numeric_field_has_a_range(schema):
+    # a new numeric field without a range in its `setting(...)` fails here, and a new field
+    # without a doc
+    problems = field_problems(schema)
+    assert not problems, f"{schema.__name__}: {problems}"
 
 
 def test_the_scenario_and_the_estimate_use_the_configs_ranges():
-    r = param_ranges
-    assert r.SCENARIO_RANGES["emotion_change_period"] == r.RANGES["crowd.emotion_change_period"]
-    assert r.SCENARIO_RANGES["robot_start"] == r.RANGES["robot.start"]
-    assert r.SCENARIO_RANGES["robot_goal"] == r.RANGES["robot.goal"]
-    assert r.PEDESTRIAN_RANGES["start"] == r.PEDESTRIAN_RANGES["goal"] == r.RANGES["robot.start"]
-    assert r.SCENARIO_RANGES["seed"] == (-1, 2**64 - 1)
-    assert r.ESTIMATE_RANGES["seed"] == r.SEED_RANGE == (0, 2**64 - 1)
+    def rng(schema, name):
+        return field_range(schema, name)
+
+    assert rng(Scenario, "emotion_change_period") == rng(
+        EmoNavConfig, "crowd.emotion_change_period"
+    )
+    assert rng(Scenario, "robot_start") == rng(EmoNavConfig, "robot.start") == WORLD_POINT
+    assert rng(Scenario, "robot_goal") == rng(EmoNavConfig, "robot.goal") == WORLD_POINT
+    assert rng(PedestrianSpec, "start") == rng(PedestrianSpec, "goal") == WORLD_POINT
+    assert rng(PedestrianSpec, "waypoints") == (None, *WORLD_POINT[1:])
+    assert rng(StaticDiscSpec, "center") == rng(WallSpec, "start") == WORLD_POINT
+    assert rng(WallSpec, "end") == WORLD_POINT
+    assert rng(Scenario, "seed") == (-1, 2**64 - 1)
+    assert rng(EmotionEstimateParams, "seed") == SEED_RANGE == (0, 2**64 - 1)
     assert set(_list_item_schemas(Scenario)) == {"pedestrians", "obstacles", "walls"}
     assert dc.is_dataclass(HeadCameraParams)
 
@@ -652,15 +667,17 @@ def test_the_scenario_and_the_estimate_use_the_configs_ranges():
 def test_the_largest_reward_keeps_the_total_reward_finite():
     # every step's reward is at most |collision| + |discomfort| + goal + progress_gain x the
     # farthest a step can move, over the longest episode
-    r = param_ranges.RANGES
+    def r(name):
+        return field_range(EmoNavConfig, name)
+
     worst_step = (
-        max(abs(v) for v in r["reward.collision"])
-        + max(abs(v) for v in r["reward.discomfort"])
-        + max(abs(v) for v in r["reward.goal"])
-        + r["reward.progress_gain"][1] * r["robot.max_speed"][1] * r["robot.step_time"][1]
+        max(abs(v) for v in r("reward.collision"))
+        + max(abs(v) for v in r("reward.discomfort"))
+        + max(abs(v) for v in r("reward.goal"))
+        + r("reward.progress_gain")[1] * r("robot.max_speed")[1] * r("robot.step_time")[1]
     )
-    assert math.isfinite(worst_step * r["episode.max_steps"][1])
-    assert worst_step * r["episode.max_steps"][1] < 1e12
+    assert math.isfinite(worst_step * r("episode.max_steps")[1])
+    assert worst_step * r("episode.max_steps")[1] < 1e12
 
 
 def test_every_shipped_configuration_and_scenario_still_loads():

@@ -4,10 +4,10 @@ and example scenarios.
 emonav config [--dump] [--bare] [--setting NAME | --config F] [--time-varying]
 emonav config --list
 
-The dump is annotated: each field is followed by its unit and meaning as a YAML comment
-(the field's comment in `params.py`, read by `config_notes.py`) and each section is headed
-by the first line of its dataclass's docstring; `--bare` prints the YAML without comments.
-Both load back (`--config`) to the same configuration.
+The dump is annotated: each field is followed by its meaning, unit and allowed range as a
+YAML comment (the field's own, `config_fields.setting`) and each section is headed by the
+first line of its dataclass's docstring; `--bare` prints the YAML without comments. Both
+load back (`--config`) to the same configuration.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         dest="show",
         action="store_true",
         help="print the whole configuration, loadable with --config (the default action); "
-        "each field is annotated with its unit and meaning as a YAML comment",
+        "each field is annotated with its meaning, unit and range as a YAML comment",
     )
     c.add_argument(
         "--bare",
@@ -57,7 +57,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 
 def cmd_config(args: argparse.Namespace) -> int:
     """Print the resolved configuration as YAML (loadable with --config)."""
-    from emonav_drake.config_notes import dump_annotated_yaml
+    from emonav_drake.config_fields import dump_annotated_yaml
     from emonav_drake.params import dump_config
 
     if args.list:

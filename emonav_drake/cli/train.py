@@ -221,9 +221,10 @@ def _training_config(args: argparse.Namespace):
         recorded = import_planner_modules(args.planner_modules)
         cfg.planner_modules = list(dict.fromkeys([*cfg.planner_modules, *recorded]))
     if args.envs is not None:
-        from emonav_drake.learning.config import _SAC_RANGES
+        from emonav_drake.config_fields import field_range
+        from emonav_drake.learning.config import SacConfig
 
-        low, high = _SAC_RANGES["num_envs"]
+        low, high = field_range(SacConfig, "num_envs")
         if not low <= args.envs <= high:
             raise ConfigError(f"--envs {args.envs}: must be in [{low}, {high}]")
         cfg.num_envs = args.envs

@@ -10,9 +10,9 @@ clear of every pedestrian's and its goal farther than the goal radius from its s
 pedestrians must not start overlapping each other nor start, pass or head for a spot
 inside an obstacle or on a wall; at most `MAX_PEDESTRIANS` pedestrians, `MAX_OBSTACLES`
 obstacles and `MAX_WALLS` walls, and a file's emotion schedules at most `MAX_SCHEDULE`
-entries (refused before the typed load). Every number has its range in `param_ranges.py`
-(`SCENARIO_RANGES`, `PEDESTRIAN_RANGES`, `OBSTACLE_RANGES`, `WALL_RANGES`), the
-configuration's where a scenario holds the same quantity. The samplers are in
+entries (refused before the typed load). Every field declares its doc, unit and range
+(`config_fields.setting`), the configuration's range where a scenario holds the same
+quantity (a point of the world, the emotion change period). The samplers are in
 `core/paper_scenario.py` and `core/scenario_families.py`; `core/scenario.py` gathers all.
 
 World frame: x towards the robot's goal, y left, metres.
@@ -23,21 +23,15 @@ import dataclasses as dc
 import math
 from pathlib import Path
 
+from emonav_drake.config_fields import SEED_RANGE, WORLD_POINT, field_range, setting
 from emonav_drake.config_yaml import (
     ConfigError,
     dump_typed_yaml,
     load_typed_yaml_raw,
     short_repr,
-    validate_ranges,
+    validate_fields,
 )
-from emonav_drake.param_ranges import (
-    OBSTACLE_RANGES,
-    PEDESTRIAN_RANGES,
-    SCENARIO_RANGES,
-    SEED_RANGE,
-    WALL_RANGES,
-)
-from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
+from emonav_drake.params import EMOTION_NAMES, CrowdParams, EmoNavConfig
 
 # The most a scenario may hold: what the sampler can be configured to draw
 # (crowd.max_pedestrians, crowd.max_static <= 20); the crowd's ORCA step is quadratic in it.
@@ -55,6 +49,7 @@ MAX_SCHEDULE = 10_000
 # Seeds are 64-bit unsigned integers: a larger one would alias a smaller one (the episode's
 # step-response generator takes `seed % 2**64`).
 MAX_SEED = SEED_RANGE[1]
+MAX_GROUPS = 20  # group numbers 0 … 20 (a scenario holds at most 20 pedestrians)
 
 
 class ScenarioSamplingError(ConfigError):
@@ -71,24 +66,44 @@ class PedestrianSpec:
     goal for good or for a while at each end, a delayed start, and walking in a group.
     """
 
-    start: list[float] = dc.field(default_factory=lambda: [0.0, 4.0])  # world [m]
-    goal: list[float] = dc.field(default_factory=lambda: [0.0, -4.0])  # world [m]
-    emotion: str = "neutral"  # happy | neutral | negative
-    # Time-varying mode: emotion_schedule[i] holds during [i·period, (i+1)·period).
-    # Empty: the emotion is constant.
-    emotion_schedule: list[str] = dc.field(default_factory=list)
-    # Preferred (and ORCA maximum) speed [m/s]; None: the crowd's `preferred_speed`.
-    speed: float | None = None
-    # Points walked through between start and goal, in order (and reversed on the way back).
-    waypoints: list[list[float]] = dc.field(default_factory=list)  # world [m]
-    # At the goal: "return" walks the route back (and so on), "stand" stops there for good.
-    at_goal: str = "return"
-    stand_time: float = 0.0  # [s] standing at each end of the route before turning round
-    start_delay: float = 0.0  # [s] standing at the start before walking
-    # Pedestrians with the same group number (>= 0) walk as a group: the first of them in
-    # the list leads (its route, speed and behaviour), the others keep their start offset
-    # from the leader (world frame) while avoiding; their goals and routes are not used.
-    group: int = -1
+    start: list[float] = setting([0.0, 4.0], "where it starts, world x, y", "m", WORLD_POINT)
+    goal: list[float] = setting([0.0, -4.0], "its goal, world x, y", "m", WORLD_POINT)
+    emotion: str = setting("neutral", "happy | neutral | negative")
+    emotion_schedule: list[str] = setting(
+        [],
+        "time-varying mode: emotion_schedule[i] holds during [i·period, (i+1)·period); "
+        "empty: the emotion is constant",
+    )
+    # 1.0 m/s is the paper's "high walking speed".
+    speed: float | None = setting(
+        None,
+        "preferred (and ORCA maximum) speed; None: the crowd's `preferred_speed`",
+        "m/s",
+        (0.05, 2.0),
+    )
+    waypoints: list[list[float]] = setting(
+        [],
+        "points [x, y] walked through between start and goal, in order (and reversed on the "
+        "way back)",
+        "m",
+        (None, *WORLD_POINT[1:]),
+    )
+    at_goal: str = setting(
+        "return",
+        'at the goal: "return" walks the route back (and so on), "stand" stops there for good',
+    )
+    stand_time: float = setting(
+        0.0, "standing at each end of the route before turning round", "s", (0.0, 1000.0)
+    )
+    start_delay: float = setting(0.0, "standing at the start before walking", "s", (0.0, 1000.0))
+    group: int = setting(
+        -1,
+        "pedestrians with the same group number (>= 0) walk as a group: the first of them in "
+        "the list leads (its route, speed and behaviour), the others keep their start offset "
+        "from the leader (world frame) while avoiding; their goals and routes are not used",
+        "",
+        (-1, MAX_GROUPS),
+    )
 
     _REQUIRED = ("start", "goal", "emotion")  # in YAML (no annotation: not a field)
     _MAX_ITEMS = {  # in YAML, before the typed load
@@ -101,8 +116,9 @@ class PedestrianSpec:
 class StaticDiscSpec:
     """A static obstacle: a disc in the world frame."""
 
-    center: list[float] = dc.field(default_factory=lambda: [0.0, 0.0])  # [m]
-    radius: float = 0.3  # [m]
+    center: list[float] = setting([0.0, 0.0], "its centre, world x, y", "m", WORLD_POINT)
+    # A hand-placed disc may be larger than the sampler's (`crowd.static_radius_max`).
+    radius: float = setting(0.3, "its radius", "m", (0.01, 5.0))
 
     _REQUIRED = ("center", "radius")  # in YAML (no annotation: not a field)
 
@@ -115,8 +131,8 @@ class WallSpec:
     two-vertex obstacles) and a collision for the robot (its disc must not touch it).
     """
 
-    start: list[float] = dc.field(default_factory=lambda: [0.0, 0.0])  # [m]
-    end: list[float] = dc.field(default_factory=lambda: [1.0, 0.0])  # [m]
+    start: list[float] = setting([0.0, 0.0], "one end, world x, y", "m", WORLD_POINT)
+    end: list[float] = setting([1.0, 0.0], "the other end, world x, y", "m", WORLD_POINT)
 
     _REQUIRED = ("start", "end")  # in YAML (no annotation: not a field)
 
@@ -125,14 +141,27 @@ class WallSpec:
 class Scenario:
     """Everything random about one episode."""
 
-    pedestrians: list[PedestrianSpec] = dc.field(default_factory=list)
-    obstacles: list[StaticDiscSpec] = dc.field(default_factory=list)
-    walls: list[WallSpec] = dc.field(default_factory=list)
-    robot_start: list[float] = dc.field(default_factory=lambda: [-4.0, 0.0])
-    robot_goal: list[float] = dc.field(default_factory=lambda: [4.0, 0.0])
-    robot_heading: float = 0.0  # initial heading [rad]
-    emotion_change_period: float = 2.0  # [s], used when a schedule is present
-    seed: int = -1  # the seed it was sampled with, −1 when written by hand
+    pedestrians: list[PedestrianSpec] = setting([], "the pedestrians (`PedestrianSpec`)")
+    obstacles: list[StaticDiscSpec] = setting([], "the static discs (`StaticDiscSpec`)")
+    walls: list[WallSpec] = setting([], "the walls, line segments (`WallSpec`)")
+    robot_start: list[float] = setting(
+        [-4.0, 0.0], "the robot's start, world x, y", "m", field_range(EmoNavConfig, "robot.start")
+    )
+    robot_goal: list[float] = setting(
+        [4.0, 0.0], "the robot's goal, world x, y", "m", field_range(EmoNavConfig, "robot.goal")
+    )
+    robot_heading: float = setting(
+        0.0, "the robot's initial heading", "rad", (-2 * math.pi, 2 * math.pi)
+    )
+    emotion_change_period: float = setting(
+        2.0,
+        "period of the emotion schedules' changes (used when a schedule is present)",
+        "s",
+        field_range(CrowdParams, "emotion_change_period"),
+    )
+    seed: int = setting(
+        -1, "the seed it was sampled with, −1 when written by hand", "", (-1, MAX_SEED)
+    )
 
     _MAX_ITEMS = {  # in YAML
         "pedestrians": MAX_PEDESTRIANS,
@@ -163,8 +192,7 @@ class Scenario:
         return self
 
     def _check_own_values(self) -> None:
-        """The counts, the seed, the robot's start, goal and heading, the emotion period
-        (`SCENARIO_RANGES`)."""
+        """The counts, the seed, the robot's start, goal and heading, the emotion period."""
         if len(self.pedestrians) > MAX_PEDESTRIANS:
             raise ConfigError(
                 f"pedestrians: {len(self.pedestrians)} given, at most {MAX_PEDESTRIANS} allowed"
@@ -180,13 +208,12 @@ class Scenario:
                 f"seed = {self.seed!r} is invalid: must be -1 (written by hand) or in "
                 "[0, 2**64 - 1]"
             )
-        validate_ranges(self, SCENARIO_RANGES)
+        validate_fields(self)
 
     def _check_item_values(self) -> None:
-        """Each pedestrian's start, goal and emotions; each obstacle's centre and radius
-        (`PEDESTRIAN_RANGES`, `OBSTACLE_RANGES`)."""
+        """Each pedestrian's values, route and emotions; each obstacle's and wall's values."""
         for i, p in enumerate(self.pedestrians):
-            validate_ranges(p, PEDESTRIAN_RANGES, prefix=f"pedestrians[{i}].")
+            validate_fields(p, f"pedestrians[{i}].")
             _check_route(p, f"pedestrians[{i}].")
             for j, e in enumerate([p.emotion, *p.emotion_schedule]):
                 if e not in EMOTION_NAMES:
@@ -196,9 +223,9 @@ class Scenario:
                         f"must be one of {list(EMOTION_NAMES)}"
                     )
         for i, o in enumerate(self.obstacles):
-            validate_ranges(o, OBSTACLE_RANGES, prefix=f"obstacles[{i}].")
+            validate_fields(o, f"obstacles[{i}].")
         for i, w in enumerate(self.walls):
-            validate_ranges(w, WALL_RANGES, prefix=f"walls[{i}].")
+            validate_fields(w, f"walls[{i}].")
             if math.dist(w.start, w.end) < MIN_WALL_LENGTH:
                 raise ConfigError(
                     f"walls[{i}]: start {w.start!r} and end {w.end!r} are "
@@ -270,7 +297,7 @@ class Scenario:
 
 
 def _check_route(p: PedestrianSpec, prefix: str) -> None:
-    """A pedestrian's waypoints are points [x, y] (their ranges: `PEDESTRIAN_RANGES`); its
+    """A pedestrian's waypoints are points [x, y] (their range: the field's); its
     `at_goal` is one of `AT_GOAL`."""
     for k, w in enumerate(p.waypoints):
         if len(w) != 2:

@@ -21,9 +21,9 @@ import dataclasses as dc
 
 import numpy as np
 
-from emonav_drake.config_yaml import validate_ranges
+from emonav_drake.config_fields import SEED_RANGE, setting
+from emonav_drake.config_yaml import validate_fields
 from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.param_ranges import ESTIMATE_RANGES
 from emonav_drake.params import EMOTION_NAMES, ConfigError
 
 NUM_EMOTIONS = len(EMOTION_NAMES)
@@ -123,29 +123,28 @@ class HeadCameraParams:
     with a 45° vertical field of view (≈ 58° horizontal, f ≈ 579 px); in YAML:
     `camera: {width: 640, height: 480, fov_y_deg: 45}`.
 
-    Attributes:
-        width, height: image size [px].
-        fov_y_deg: vertical field of view [deg].
-        lip_height: camera height above the ground on the LIP robot [m].
-        digit_offset: camera origin in Digit's torso frame (x forward, y left, z up) [m];
-            the optical axis is the torso's x axis.
-        near, far: rendering clipping range [m].
-        min_face_size: smallest face the Haar cascade accepts [px]. 24 is the cascade's
-            own window, the smallest face it can find at all: a face facing the camera is
-            found up to ≈ 3.5 m with the ZED 2 HD720 intrinsics, ≈ 4 m at 640 × 480 / 45°
-            (the wider field spreads fewer pixels over a face).
-        max_range: pedestrians farther than this get no face [m].
+    `min_face_size` 24 is the Haar cascade's own window, the smallest face it can find at
+    all: a face facing the camera is found up to ≈ 3.5 m with the ZED 2 HD720 intrinsics,
+    ≈ 4 m at 640 × 480 / 45° (the wider field spreads fewer pixels over a face).
     """
 
-    width: int = 1280
-    height: int = 720
-    fov_y_deg: float = 70.0
-    lip_height: float = 1.45
-    digit_offset: list[float] = dc.field(default_factory=lambda: [0.05, 0.0, 0.45])
-    near: float = 0.1
-    far: float = 15.0
-    min_face_size: int = 24
-    max_range: float = 6.0
+    width: int = setting(1280, "image width", "px", (16, 4096))
+    height: int = setting(720, "image height", "px", (16, 4096))
+    fov_y_deg: float = setting(70.0, "vertical field of view", "deg", (1.0, 170.0))
+    lip_height: float = setting(
+        1.45, "camera height above the ground on the LIP robot", "m", (0.1, 3.0)
+    )
+    digit_offset: list[float] = setting(
+        [0.05, 0.0, 0.45],
+        "camera origin in Digit's torso frame (x forward, y left, z up); the optical axis "
+        "is the torso's x axis",
+        "m",
+        (3, -2.0, 2.0),
+    )
+    near: float = setting(0.1, "rendering clipping range: near", "m", (0.001, 100.0))
+    far: float = setting(15.0, "rendering clipping range: far", "m", (0.01, 1000.0))
+    min_face_size: int = setting(24, "smallest face the Haar cascade accepts", "px", (8, 4096))
+    max_range: float = setting(6.0, "pedestrians farther than this get no face", "m", (0.1, 100.0))
 
     @classmethod
     def vga(cls, **overrides: object) -> "HeadCameraParams":
@@ -154,10 +153,10 @@ class HeadCameraParams:
         return cls(**{"width": 640, "height": 480, "fov_y_deg": 45.0, **overrides})
 
     def validate(self) -> "HeadCameraParams":
-        """Raise `ConfigError` naming the field if a value is invalid: the ranges of
-        `param_ranges.ESTIMATE_RANGES` ("camera.*"), near < far, a face fits the image."""
+        """Raise `ConfigError` naming the field if a value is invalid: the fields' ranges,
+        near < far, a face fits the image."""
         pre = "emotion_estimate.camera"
-        validate_ranges(self, _CAMERA_RANGES, prefix=f"{pre}.")
+        validate_fields(self, f"{pre}.")
         if not self.near < self.far:
             raise ConfigError(f"{pre}: near {self.near!r}, far {self.far!r}: 0 < near < far")
         if not self.min_face_size <= min(self.width, self.height):
@@ -168,39 +167,44 @@ class HeadCameraParams:
         return self
 
 
-_CAMERA_RANGES = {
-    k.removeprefix("camera."): v for k, v in ESTIMATE_RANGES.items() if k.startswith("camera.")
-}
-
-
 @dc.dataclass
 class EmotionEstimateParams:
     """Where the emotions that shape the discomfort zones come from (YAML-loadable).
 
-    Attributes:
-        mode: "ground_truth" (simulation default), "confusion" (truth through
-            `confusion`, seeded), "classifier" (the estimates of a face classifier the
-            caller wires in) or "camera" (the robot's head camera renders the crowd's
-            faces and the face classifier reads them: `diagrams/camera_perception.py`).
-        confusion: rows = true happy / neutral / negative, columns = estimate.
-        seed: seed of the confusion draws.
-        period: a new confusion draw, or a new camera classification, every `period`
-            [s] (0.5 Hz, the paper's emotion rate).
-        camera: the head camera of mode "camera".
+    The confusion matrix's rows must also sum to 1 (`validate_confusion`).
     """
 
-    mode: str = "ground_truth"
-    confusion: list[list[float]] = dc.field(default_factory=lambda: np.eye(NUM_EMOTIONS).tolist())
-    seed: int = 0
-    period: float = 2.0
-    camera: HeadCameraParams = dc.field(default_factory=HeadCameraParams)
+    mode: str = setting(
+        "ground_truth",
+        '"ground_truth" (simulation default), "confusion" (truth through `confusion`, '
+        'seeded), "classifier" (the estimates of a face classifier the caller wires in) or '
+        "\"camera\" (the robot's head camera renders the crowd's faces and the face classifier "
+        "reads them: `diagrams/camera_perception.py`)",
+    )
+    confusion: list[list[float]] = setting(
+        np.eye(NUM_EMOTIONS).tolist(),
+        "confusion matrix: rows = true happy / neutral / negative, columns = estimate",
+        "",
+        (3, 0.0, 1.0),
+    )
+    seed: int = setting(0, "seed of the confusion draws", "", SEED_RANGE)
+    period: float = setting(
+        2.0,
+        "a new confusion draw, or a new camera classification, every `period` (0.5 Hz, the "
+        "paper's emotion rate)",
+        "s",
+        (0.01, 100.0),
+    )
+    camera: HeadCameraParams = setting(
+        doc='the head camera of mode "camera"', factory=HeadCameraParams
+    )
 
     def validate(self) -> "EmotionEstimateParams":
-        """Raise `ConfigError` naming the field if a value is invalid (the ranges are
-        `param_ranges.ESTIMATE_RANGES`; seeds in [0, 2**64 - 1])."""
+        """Raise `ConfigError` naming the field if a value is invalid (the fields' ranges,
+        the camera's included; seeds in [0, 2**64 - 1])."""
         if self.mode not in ESTIMATE_MODES:
             raise ConfigError(f"emotion_estimate.mode = {self.mode!r}: one of {ESTIMATE_MODES}")
         validate_confusion(self.confusion, "emotion_estimate.confusion")
-        validate_ranges(self, ESTIMATE_RANGES, prefix="emotion_estimate.")
+        validate_fields(self, "emotion_estimate.")
         self.camera.validate()
         return self

@@ -25,6 +25,7 @@ import typing
 from pathlib import Path
 from typing import ClassVar
 
+from emonav_drake.config_fields import setting
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.model_aware import load_response
 from emonav_drake.planners.registry import make_planner
@@ -72,15 +73,15 @@ class _Learned:
 
 @dc.dataclass
 class DwaSpec:
-    """The dynamic window approach (`planners/dwa.py`).
+    """The dynamic window approach (`planners/dwa.py`)."""
 
-    Fields:
-        margin: its collision margin [m] (`dwa.safety_margin`); None = the configuration's.
-        response: the step model its candidates are rolled out with ("" = the LIP).
-    """
-
-    margin: float | None = None
-    response: str = ""
+    margin: float | None = setting(
+        None,
+        "its collision margin (`dwa.safety_margin`); None = the configuration's",
+        "m",
+        (0.0, 2.0),
+    )
+    response: str = setting("", 'the step model its candidates are rolled out with ("" = the LIP)')
 
     def build(self, config: EmoNavConfig, device: str = "cpu"):
         from emonav_drake.planners.dwa import DwaPlanner
@@ -93,16 +94,16 @@ class DwaSpec:
 
 @dc.dataclass
 class MpcSpec:
-    """The OSQP social MPC (`planners/mpc.py`).
+    """The OSQP social MPC (`planners/mpc.py`)."""
 
-    Fields:
-        response: the step model it plans with ("" = the LIP).
-        clearance: added to its collision and discomfort margins [m] (0 = as benchmarked;
-            a student that tracks its teacher less precisely learns to keep more room).
-    """
-
-    response: str = ""
-    clearance: float = 0.0
+    response: str = setting("", 'the step model it plans with ("" = the LIP)')
+    clearance: float = setting(
+        0.0,
+        "added to its collision and discomfort margins (0 = as benchmarked; a student that "
+        "tracks its teacher less precisely learns to keep more room)",
+        "m",
+        (0.0, 1.0),
+    )
 
     def build(self, config: EmoNavConfig, device: str = "cpu"):
         from emonav_drake.planners.mpc import MpcPlanner
@@ -112,15 +113,12 @@ class MpcSpec:
 
 @dc.dataclass
 class PolicySpec(_Learned):
-    """A trained policy checkpoint (`planners/policy.py`): a DAgger student or SAC actor.
+    """A trained policy checkpoint (`planners/policy.py`): a DAgger student or SAC actor."""
 
-    Fields:
-        checkpoint: the file it runs ("" = `variant`'s shipped policy).
-        variant: the shipped variant whose policy runs by default ("" = the default policy).
-    """
-
-    checkpoint: str = ""
-    variant: str = ""
+    checkpoint: str = setting("", 'the file it runs ("" = `variant`\'s shipped policy)')
+    variant: str = setting(
+        "", 'the shipped variant whose policy runs by default ("" = the default policy)'
+    )
 
     def build(self, config: EmoNavConfig, device: str = "cpu"):
         return _categorical_policy(self.checkpoint_file(), config, device)
@@ -130,8 +128,8 @@ class PolicySpec(_Learned):
 class SacSpec(_Learned):
     """A SAC-trained actor (`emonav train --algo sac`); the checkpoint must be given."""
 
-    checkpoint: str = ""
-    variant: str = ""
+    checkpoint: str = setting("", "the SAC-trained actor it runs (required)")
+    variant: str = setting("", "not used: a SAC actor runs only from a given checkpoint")
 
     def checkpoint_file(self) -> Path:
         if not self.checkpoint:
@@ -159,19 +157,16 @@ class ShieldSpec(_Learned):
     """A categorical LGM policy behind the LGM shield (`planners/shield.py`), with the
     registered shields' settings for its response model. As a DAgger expert it labels
     with a distribution over the grid (`soft`).
-
-    Fields:
-        checkpoint: the policy it shields ("" = `variant`'s; in a DAgger route, the
-            route's `init_policy`).
-        variant: the shipped variant shielded by default.
-        response: the step model the shield predicts with ("" = the LIP).
     """
 
     soft: ClassVar[bool] = True
 
-    checkpoint: str = ""
-    variant: str = ""
-    response: str = ""
+    checkpoint: str = setting(
+        "",
+        "the policy it shields (\"\" = `variant`'s; in a DAgger route, the route's `init_policy`)",
+    )
+    variant: str = setting("", "the shipped variant shielded by default")
+    response: str = setting("", 'the step model the shield predicts with ("" = the LIP)')
 
     def build(self, config: EmoNavConfig, device: str = "cpu"):
         from emonav_drake.planners.shield import ShieldedPolicy
@@ -185,25 +180,23 @@ class MpcNearbySpec(_Learned):
     """A categorical policy choosing within `cells` grid steps of the MPC's command
     (`planners/mpc_nearby.py`); with `shielded`, only among the commands its LGM shield
     admits. As a DAgger expert it labels with a distribution over the grid (`soft`).
-
-    Fields:
-        checkpoint: the policy it steers ("" = `variant`'s; in a DAgger route, the route's
-            `init_policy`).
-        variant: the shipped variant steered by default.
-        response: the step model of the MPC and the shield ("" = the LIP).
-        clearance: added to the MPC's collision and discomfort margins [m].
-        cells: the reach, in grid steps of u_v and u_Δθ around the MPC's command.
-        shielded: only commands the policy's LGM shield admits.
     """
 
     soft: ClassVar[bool] = True
 
-    checkpoint: str = ""
-    variant: str = ""
-    response: str = "digit"
-    clearance: float = 0.0
-    cells: int = 1
-    shielded: bool = False
+    checkpoint: str = setting(
+        "",
+        "the policy it steers (\"\" = `variant`'s; in a DAgger route, the route's `init_policy`)",
+    )
+    variant: str = setting("", "the shipped variant steered by default")
+    response: str = setting("digit", 'the step model of the MPC and the shield ("" = the LIP)')
+    clearance: float = setting(
+        0.0, "added to the MPC's collision and discomfort margins", "m", (0.0, 1.0)
+    )
+    cells: int = setting(
+        1, "the reach, in grid steps of u_v and u_Δθ around the MPC's command", "", (0, 10)
+    )
+    shielded: bool = setting(False, "only commands the policy's LGM shield admits")
 
     def build(self, config: EmoNavConfig, device: str = "cpu"):
         from emonav_drake.planners.mpc import MpcPlanner
@@ -229,14 +222,10 @@ _VALUE_TRAIN_FLAGS = {"sarl": "", "rgl": "--config emonav_drake/configs/rgl.yaml
 class SarlSpec:
     """A value network on the crowd state with one-step look-ahead (`planners/sarl.py`):
     CrowdNav's SARL or its relational graph network (RGL).
-
-    Fields:
-        checkpoint: the value network's file ("" = the shipped one of `network`).
-        network: "sarl" or "rgl": whose shipped checkpoint runs by default.
     """
 
-    checkpoint: str = ""
-    network: str = "sarl"
+    checkpoint: str = setting("", 'the value network\'s file ("" = the shipped one of `network`)')
+    network: str = setting("sarl", '"sarl" or "rgl": whose shipped checkpoint runs by default')
 
     def checkpoint_file(self) -> Path:
         if self.checkpoint:
@@ -261,8 +250,8 @@ class PlannerSpec:
     """Any registered planner by name (`emonav planners`; a plug-in's or one from
     `--planner-module` too), with its default checkpoint unless `checkpoint` is given."""
 
-    name: str = "dwa"
-    checkpoint: str = ""
+    name: str = setting("dwa", "a registered planner's name (`emonav planners`)")
+    checkpoint: str = setting("", 'the checkpoint it runs ("" = its default)')
 
     def build(self, config: EmoNavConfig, device: str = "cpu"):
         return make_planner(self.name, config, self.checkpoint or None, device)

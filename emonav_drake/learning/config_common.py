@@ -1,0 +1,58 @@
+"""What the training configurations share: their common ranges and cross-field rules.
+
+Every numeric field of a training configuration is bounded both ways: seeds in
+[0, 2**64 - 1], seed offsets so that offset + i stays a seed, counts and sizes up to
+`MAX_COUNT` (a run that long would never end on any machine; a typo such as 1e12 is
+refused instead of started). The ranges of what a training configuration shares with
+`EmoNavConfig` (a goal radius, a frame count, a grid size) are the configuration's.
+"""
+
+from emonav_drake.config_fields import field_range
+from emonav_drake.config_yaml import ConfigError
+from emonav_drake.core.observations import observation_kind, observation_kinds
+from emonav_drake.params import EpisodeParams, LidarParams
+
+# The 4-conv encoder (3 x 3, strides 2-1-1-1) needs an input of at least this many cells.
+MIN_ENCODER_INPUT = 15
+# `emonav benchmark`'s evaluation seeds are 0 … EVALUATION_SEEDS − 1 (docs/results.md): a
+# training or selection seed range must stay clear of them.
+EVALUATION_SEEDS = 500
+
+MAX_COUNT = 10**9
+MAX_SEED_OFFSET = 2**63
+COUNT = (1, MAX_COUNT)  # episodes, steps, sizes: at least one
+COUNT_OR_NONE = (0, MAX_COUNT)  # … or none
+SEED_OFFSET = (0, MAX_SEED_OFFSET)
+LEARNING_RATE = (1e-8, 1.0)
+THREADS = (1, 1024)
+WIDTH = (1, 65536)  # a hidden layer's or a feature vector's size
+POOL = (1, 6)  # max-pool factor before the encoder
+FRACTION = (0.0, 1.0)  # a probability, a discount, a fraction
+TEMPERATURE = (1e-8, 1e3)  # SAC's entropy temperature α
+POLYAK = (1e-6, 1.0)  # a target network's Polyak rate
+GOAL_RADIUS = field_range(EpisodeParams, "goal_radius")
+NUM_FRAMES = field_range(LidarParams, "num_frames")
+GRID_SIZE = field_range(LidarParams, "grid_size")
+
+
+def check_observation(grid_kind: str, encoder: str, num_frames: int) -> None:
+    """The observation variant's cross-field rules (shared by the DAgger and SAC routes)."""
+    check_choice("grid_kind", grid_kind, observation_kinds())
+    check_choice("encoder", encoder, ("cnn", "lstm"))
+    kind = observation_kind(grid_kind)
+    if encoder == "lstm" and not kind.scans:
+        raise ConfigError(
+            f"encoder = 'lstm' is invalid with grid_kind = {grid_kind!r}: "
+            "the LSTM encoder reads scans (grid_kind: scan)"
+        )
+    if kind.single_frame and num_frames != 1:
+        raise ConfigError(
+            f"num_frames = {num_frames} is invalid with grid_kind = {grid_kind!r}: "
+            f"it observes one {kind.description} (num_frames: 1)"
+        )
+
+
+def check_choice(name: str, value: str, allowed: tuple[str, ...]) -> None:
+    """`ConfigError` unless `value` is one of `allowed`."""
+    if value not in allowed:
+        raise ConfigError(f"{name} = {value!r} is invalid: must be one of {list(allowed)}")

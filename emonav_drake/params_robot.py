@@ -1,0 +1,178 @@
+"""The robot's sections of the configuration: the LIP robot, its LiDAR, what it perceives
+of the crowd, and the full-order Digit walking stack.
+
+Part of `EmoNavConfig` (`params.py`, which re-exports every name here). Each field gives
+its default, doc, unit and allowed range (`config_fields.setting`). Units are SI
+throughout (metres, seconds, radians).
+"""
+
+# No `from __future__ import annotations`: Drake's typed YAML loader needs real types.
+import dataclasses as dc
+import math
+
+from emonav_drake.config_fields import WORLD_POINT, setting
+
+
+def pendulum_frequency(height: float, gravity: float) -> float:
+    """ω = √(g/H) [1/s] of a (angular-momentum) linear inverted pendulum of CoM height H [m]
+    under gravity g [m/s²]: the LIP of the paper's Eq. 1 and Digit's ALIP alike."""
+    return math.sqrt(gravity / height)
+
+
+@dc.dataclass
+class RobotParams:
+    """The reduced-order (LIP) robot and its command bounds (paper Table I, Eq. 1–2)."""
+
+    step_time: float = setting(0.4, "T, one walking step", "s", (0.05, 2.0))
+    com_height: float = setting(1.02, "H, centre-of-mass height of the LIP", "m", (0.3, 2.0))
+    gravity: float = setting(9.81, "g, gravitational acceleration", "m/s^2", (1.0, 20.0))
+    radius: float = setting(0.3, "r_robot, collision radius", "m", (0.05, 1.0))
+    max_speed: float = setting(0.4, "ū_v, sagittal speed bound", "m/s", (0.01, 2.0))
+    max_heading_change: float = setting(
+        0.2, "ū_Δθ, heading change per step bound", "rad", (0.01, math.pi / 2)
+    )
+    start: list[float] = setting([-4.0, 0.0], "start, world x, y", "m", WORLD_POINT)
+    goal: list[float] = setting([4.0, 0.0], "goal, world x, y", "m", WORLD_POINT)
+
+    @property
+    def omega(self) -> float:
+        """LIP natural frequency ω = √(g/H) [1/s] of this robot's H."""
+        return pendulum_frequency(self.com_height, self.gravity)
+
+
+# K, the paper's number of LiDAR beams over 360° (`LidarParams.num_beams`): the default of
+# every function and network that takes a beam count.
+NUM_BEAMS = 1800
+
+
+@dc.dataclass
+class LidarParams:
+    """The 2-D LiDAR and the grid maps built from it (docs/lidar_grid_maps.md)."""
+
+    num_beams: int = setting(NUM_BEAMS, "K, beams over 360°", "", (4, 36000))
+    max_range: float = setting(6.0, "L, maximum range", "m", (0.5, 50.0))
+    min_range: float = setting(0.27, "nearer hits are raised to this range", "m", (0.0, 5.0))
+    grid_size: int = setting(
+        100, "M (rings × sectors for the LGM, cells per side for the OGM)", "", (2, 1000)
+    )
+    num_frames: int = setting(9, "N, frames in the stack", "", (1, 64))
+
+
+# Where the model-based planners' crowd state comes from (`PerceptionParams.state_source`).
+STATE_SOURCES = ("truth", "lidar")
+
+
+@dc.dataclass
+class PerceptionParams:
+    """What the robot knows of the crowd (docs/perception.md, "Perceived state").
+
+    The learned policies read the LiDAR grid maps in either case; `state_source` decides
+    what the state-based planners (DWA, MPC, SARL, RGL) read: "truth", the simulator's
+    exact crowd (privileged: every pedestrian, also hidden ones), or "lidar", the
+    pedestrians and obstacles detected in the 1800-beam scan and tracked at the scan's
+    rate (`core/lidar_objects.py`, `core/crowd_tracker.py`): what a robot can run.
+    """
+
+    state_source: str = setting("truth", '"truth" (the simulator\'s crowd) or "lidar" (tracked)')
+
+
+@dc.dataclass
+class WalkingParams:
+    """Full-order Digit walking: gait, ALIP planner, passivity controller, model options.
+
+    The step time T and gravity g are not here: they belong to `RobotParams`
+    (`robot.step_time`, `robot.gravity`), shared by the navigation model, the Digit plant,
+    the footstep planner and the controller. Fractions `*_fraction` are of T.
+
+    Gains of the passivity law τ = M̄ q̈_r + C̄ q̇_r + Ḡ − K_D s (docs/walking.md): the task
+    error e decays through q̇_r = q̇_d − Λ e (rates `lambda_*` [1/s]) and s = q̇ − q̇_r is
+    damped by the joint-space K_D (`kd_leg` [N·m·s/rad]).
+    """
+
+    step_width: float = setting(0.22, "W, lateral distance between the feet", "m", (0.1, 0.5))
+    clearance: float = setting(0.08, "swing-foot apex above the ground", "m", (0.01, 0.3))
+    touchdown_speed: float = setting(
+        0.2, "swing foot vertical speed at touchdown", "m/s", (0.0, 1.0)
+    )
+    early_touchdown: float = setting(
+        0.9, "a touchdown is accepted after this fraction of T", "", (0.5, 1.0)
+    )
+    touchdown_tolerance: float = setting(
+        0.002, "swing sole this close to the ground = touchdown", "m", (0.0, 0.05)
+    )
+    torso_height: float = setting(1.0, "torso origin above the ground", "m", (0.7, 1.1))
+    torso_pitch: float = setting(0.0, "torso pitch target (+ leans forward)", "rad", (-0.5, 0.5))
+    stand_time: float = setting(0.4, "double support before the first step", "s", (0.0, 1.0e6))
+    stand_com_lead: float = setting(
+        0.02, "standing CoM target ahead of the feet's midpoint", "m", (-0.1, 0.1)
+    )
+    speed_integral_gain: float = setting(
+        0.3, "per-step integrator on the speed error", "", (0.0, 1.0)
+    )
+    speed_integral_limit: float = setting(0.15, "bound of that integrator", "m/s", (0.0, 0.5))
+    heading_blend_fraction: float = setting(
+        0.6, "torso heading reaches its target at this·T", "", (0.1, 1.0)
+    )
+    swing_yaw_blend_fraction: float = setting(
+        0.8, "swing foot yaw reaches its target at this·T", "", (0.1, 1.0)
+    )
+    swing_finish_fraction: float = setting(
+        0.85, "swing foot reaches its target (horizontally) at this·T", "", (0.3, 1.0)
+    )
+    target_freeze_fraction: float = setting(
+        0.8, "the swing target is frozen after this·T", "", (0.1, 1.0)
+    )
+    prediction_fraction: float = setting(
+        0.5, "the logged ALIP end-of-step prediction is made at this·T", "", (0.0, 1.0)
+    )
+    lateral_step_min: float = setting(
+        0.12, "lateral step clamp from the stance foot: lower", "m", (0.0, 0.5)
+    )
+    lateral_step_max: float = setting(
+        0.45, "lateral step clamp from the stance foot: upper", "m", (0.1, 1.0)
+    )
+    max_step_length: float = setting(
+        0.45, "sagittal step clamp from the stance foot", "m", (0.05, 1.0)
+    )
+    lambda_orientation: float = setting(
+        12.0, "Λ, error decay rate of the torso orientation", "1/s", (0.0, 200.0)
+    )
+    lambda_height: float = setting(
+        10.0, "Λ, error decay rate of the torso height", "1/s", (0.0, 200.0)
+    )
+    lambda_horizontal: float = setting(
+        2.0,
+        "Λ, error decay rate of the CoM horizontal vs the LIP (ankle actuation)",
+        "1/s",
+        (0.0, 200.0),
+    )
+    lambda_swing: float = setting(
+        20.0, "Λ, error decay rate of the swing foot position and orientation", "1/s", (0.0, 200.0)
+    )
+    # Hip yaw 40 (was 20 until December 2026) halves the torso-yaw sway that alternates with
+    # the stance foot; 60 and more slows the first turn from standing (docs/walking.md, "Gains").
+    kd_leg: list[float] = setting(
+        [60.0, 40.0, 60.0, 60.0, 6.0, 6.0],
+        "K_D per leg joint: hip roll, hip yaw, hip pitch, knee, toe pitch, toe roll",
+        "N·m·s/rad",
+        (6, 0.0, 1000.0),
+    )
+    kd_arm: float = setting(20.0, "PD damping of the arms when held", "N·m·s/rad", (0.0, 1000.0))
+    kp_arm: float = setting(200.0, "PD stiffness of the arms when held", "N·m/rad", (0.0, 10000.0))
+    ankle_torque_fraction: float = setting(
+        0.8, "stance toe torque bound, fraction of its limit", "", (0.0, 1.0)
+    )
+    # Rates (docs/rates.md, "Fast Digit"): the plant at 4 ms, the controller at every plant
+    # step (250 Hz), the footstep planner at 50 Hz walk as the 1 ms / 1 kHz / 200 Hz stack
+    # did (configs/walking_1ms.yaml) at ~3.5x its speed
+    planner_period: float = setting(0.02, "ALIP footstep planner update (50 Hz)", "s", (0.001, 0.1))
+    controller_period: float = setting(
+        0.004, "passivity controller period; = time_step: every step", "s", (0.0002, 0.02)
+    )
+    time_step: float = setting(0.004, "plant step", "s", (0.0002, 0.005))
+    friction: float = setting(1.0, "ground friction coefficient", "", (0.1, 2.0))
+    arms: str = setting("welded", '"welded" (fixed at the held pose) or "held" (PD-controlled)')
+    fall_height: float = setting(0.6, "torso origin below this is a fall", "m", (0.2, 1.0))
+    fall_check_period: float = setting(
+        0.008, "the fall monitor's period (125 Hz)", "s", (0.0002, 0.01)
+    )
