@@ -24,10 +24,11 @@ import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from emonav_drake.learning.config import DaggerConfig, SacConfig  # noqa: E402
+from emonav_drake.learning.config import DaggerConfig  # noqa: E402
 from emonav_drake.learning.dagger_student import Student  # noqa: E402
 from emonav_drake.learning.demonstrations import Demonstrations, FrameStore  # noqa: E402
 from emonav_drake.learning.sac import SacAgent  # noqa: E402
+from emonav_drake.learning.sac_config import SacConfig  # noqa: E402
 from emonav_drake.params import EmoNavConfig  # noqa: E402
 from emonav_drake.planners.policy import DEFAULT_POLICY, PolicyPlanner  # noqa: E402
 

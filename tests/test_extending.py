@@ -276,8 +276,8 @@ def test_a_registered_plant_with_simulate_gets_the_sim_outputs(
 
 
 def test_a_plant_without_a_training_environment_is_refused(half_speed_plant):
-    from emonav_drake.learning.config import SacConfig
     from emonav_drake.learning.env_pool import make_env
+    from emonav_drake.learning.sac_config import SacConfig
     from emonav_drake.params import ConfigError
 
     with pytest.raises(ConfigError, match="'lip_half' has no training environment"):

@@ -18,7 +18,6 @@ from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning import finetune as finetune_mod
-from emonav_drake.learning.config import FinetuneConfig
 from emonav_drake.learning.finetune import train_finetune
 from emonav_drake.learning.finetune_agent import DiscreteSac, load_init, resolve_init
 from emonav_drake.learning.finetune_state import (
@@ -28,6 +27,7 @@ from emonav_drake.learning.finetune_state import (
 )
 from emonav_drake.learning.replay import FrameReplayBuffer
 from emonav_drake.learning.run_state import read_run_state
+from emonav_drake.learning.sac_config import FinetuneConfig
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.networks import Actor, CategoricalPolicy, LgmEncoder, ScanEncoder
 from emonav_drake.planners.policy import (

@@ -6,11 +6,12 @@ import torch
 
 from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import sample_scenario
-from emonav_drake.learning.config import DaggerConfig, SacConfig
+from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.dagger_rollouts import run_episode_collect
 from emonav_drake.learning.dagger_student import Student
 from emonav_drake.learning.demonstrations import Demonstrations, FrameStore, command_index
 from emonav_drake.learning.sac import SacAgent
+from emonav_drake.learning.sac_config import SacConfig
 from emonav_drake.learning.sac_trainer import train_sac
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner

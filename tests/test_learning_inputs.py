@@ -19,7 +19,7 @@ import torch
 from emonav_drake.cli import main
 from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.learning import dagger as dagger_mod
-from emonav_drake.learning.config import DaggerConfig, SacConfig
+from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.dagger import train_dagger
 from emonav_drake.learning.dagger_state import read_dagger_state
 from emonav_drake.learning.env import EmoNavLIPEnv
@@ -33,6 +33,7 @@ from emonav_drake.learning.run_state import (
     unpack,
     write_run_state,
 )
+from emonav_drake.learning.sac_config import SacConfig
 from emonav_drake.learning.sac_trainer import train_sac
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import PolicyError, load_policy

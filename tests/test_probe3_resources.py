@@ -683,7 +683,8 @@ def test_the_largest_reward_keeps_the_total_reward_finite():
 def test_every_shipped_configuration_and_scenario_still_loads():
     from emonav_drake.config_yaml import load_typed_yaml
     from emonav_drake.configs import SETTINGS, load_setting
-    from emonav_drake.learning.config import DaggerConfig, FinetuneConfig, SarlConfig
+    from emonav_drake.learning.config import DaggerConfig, SarlConfig
+    from emonav_drake.learning.sac_config import FinetuneConfig
     from emonav_drake.planners.variants import VARIANTS
     from emonav_drake.scenarios import EXAMPLES, scenario_path
 

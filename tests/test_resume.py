@@ -18,7 +18,7 @@ from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning import dagger as dagger_mod
 from emonav_drake.learning import run_state
-from emonav_drake.learning.config import DaggerConfig, SacConfig
+from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.dagger import train_dagger
 from emonav_drake.learning.dagger_student import Student
 from emonav_drake.learning.env import EmoNavLIPEnv
@@ -31,6 +31,7 @@ from emonav_drake.learning.run_state import (
     unpack,
     write_run_state,
 )
+from emonav_drake.learning.sac_config import SacConfig
 from emonav_drake.learning.sac_trainer import train_sac
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import load_policy

@@ -10,9 +10,9 @@ import pytest
 
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.diagrams.navigation_digit import run_digit_episode
-from emonav_drake.learning.config import SacConfig
 from emonav_drake.learning.digit_env import EmoNavDigitEnv
 from emonav_drake.learning.run_state import SAC_FORMAT, read_run_state
+from emonav_drake.learning.sac_config import SacConfig
 from emonav_drake.learning.sac_trainer import make_env, train_sac
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners import configure_for, make_planner

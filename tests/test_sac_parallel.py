@@ -3,8 +3,8 @@ an interrupted run resumes bit-for-bit (real LIP envs, real networks, a real loc
 
 import pytest
 
-from emonav_drake.learning.config import SacConfig
 from emonav_drake.learning.run_state import SAC_FORMAT, read_run_state
+from emonav_drake.learning.sac_config import SacConfig
 from emonav_drake.learning.sac_trainer import train_sac
 from tests.state_equality import assert_equal_state
 

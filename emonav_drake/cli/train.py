@@ -178,7 +178,7 @@ def _training_config(args: argparse.Namespace):
                 "through its calibrated world: `response: digit` in its configuration)"
             )
     elif args.algo == "finetune":
-        from emonav_drake.learning.config import FinetuneConfig as schema
+        from emonav_drake.learning.sac_config import FinetuneConfig as schema
 
         _refuse_sac_flags(
             args,
@@ -195,7 +195,7 @@ def _training_config(args: argparse.Namespace):
             "its --config",
         )
     else:
-        from emonav_drake.learning.config import SacConfig as schema
+        from emonav_drake.learning.sac_config import SacConfig as schema
     _check_init(args)
     if args.config is not None:
         cfg = load_typed_yaml(schema, path=args.config)
@@ -222,7 +222,7 @@ def _training_config(args: argparse.Namespace):
         cfg.planner_modules = list(dict.fromkeys([*cfg.planner_modules, *recorded]))
     if args.envs is not None:
         from emonav_drake.config_fields import field_range
-        from emonav_drake.learning.config import SacConfig
+        from emonav_drake.learning.sac_config import SacConfig
 
         low, high = field_range(SacConfig, "num_envs")
         if not low <= args.envs <= high:

@@ -33,7 +33,6 @@ from emonav_drake.learning.config_common import (
     check_choice,
     check_observation,
 )
-from emonav_drake.learning.sac_config import FinetuneConfig, SacConfig
 from emonav_drake.learning.teacher import (
     LEGACY_EXPERT_FIELDS,
     expert_for_route,
@@ -50,12 +49,7 @@ from emonav_drake.planners.specs import (
     is_soft,
 )
 
-__all__ = [
-    "DaggerConfig",
-    "FinetuneConfig",
-    "SacConfig",
-    "SarlConfig",
-]
+__all__ = ["DaggerConfig", "SarlConfig"]
 
 _EXPERT_TAGS = ", ".join(f"`!{spec.__name__}`" for spec in EXPERT_SPECS)
 

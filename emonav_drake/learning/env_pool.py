@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from emonav_drake.learning.config import SacConfig
 from emonav_drake.learning.env import EmoNavLIPEnv
+from emonav_drake.learning.sac_config import SacConfig
 from emonav_drake.parallel import Worker, init_ray, ray_get, start_actors
 from emonav_drake.params import ConfigError, EmoNavConfig
 

@@ -55,7 +55,6 @@ from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.errors import RunInterrupted
-from emonav_drake.learning.config import FinetuneConfig
 from emonav_drake.learning.finetune_agent import DiscreteSac, check_observation, load_init
 from emonav_drake.learning.finetune_state import (
     STATE_FILE,
@@ -77,6 +76,7 @@ from emonav_drake.learning.run_state import (
     rng_state,
     set_rng_state,
 )
+from emonav_drake.learning.sac_config import FinetuneConfig
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.model_aware import load_response
 from emonav_drake.planners.policy import (

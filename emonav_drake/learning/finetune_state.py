@@ -27,7 +27,6 @@ from pathlib import Path
 
 import numpy as np
 
-from emonav_drake.learning.config import FinetuneConfig
 from emonav_drake.learning.finetune_agent import DiscreteSac
 from emonav_drake.learning.replay import FrameReplayBuffer
 from emonav_drake.learning.run_state import (
@@ -37,6 +36,7 @@ from emonav_drake.learning.run_state import (
     set_rng_state,
     write_run_state,
 )
+from emonav_drake.learning.sac_config import FinetuneConfig
 from emonav_drake.params import ConfigError, EmoNavConfig
 
 FINETUNE_FORMAT = "emonav-finetune-state/1"

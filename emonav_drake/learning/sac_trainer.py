@@ -35,7 +35,6 @@ from tqdm import tqdm
 
 from emonav_drake.core.metrics import record_from_json, summarize
 from emonav_drake.errors import RunInterrupted
-from emonav_drake.learning.config import SacConfig
 from emonav_drake.learning.env import EmoNavLIPEnv
 from emonav_drake.learning.env_pool import EnvPool, make_env, make_envs
 from emonav_drake.learning.replay import FrameReplayBuffer
@@ -52,6 +51,7 @@ from emonav_drake.learning.run_state import (
     write_run_state,
 )
 from emonav_drake.learning.sac import SacAgent
+from emonav_drake.learning.sac_config import SacConfig
 from emonav_drake.learning.sac_curve import (
     CHECKPOINT,
     CURVE,
