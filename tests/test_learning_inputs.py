@@ -37,6 +37,7 @@ from emonav_drake.learning.sac_config import SacConfig
 from emonav_drake.learning.sac_trainer import train_sac
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import PolicyError, load_policy
+from emonav_drake.planners.specs import DwaSpec
 from tests.cli_errors import assert_user_error, run
 from tests.state_equality import assert_equal_state
 
@@ -113,6 +114,30 @@ def _damaged_copy(src, dst, change):
     change(state)
     write_run_state(dst / "dagger_state.pt", DAGGER_FORMAT, state, tensors)
     return dst
+
+
+def _as_an_earlier_version_saved_it(state: dict) -> None:
+    """The expert as runs saved it before it was one spec: a name and flat fields."""
+    state["config"].pop("expert")
+    state["config"].update(
+        expert="dwa",
+        expert_margin=0.05,
+        expert_clearance=0.0,
+        expert_policy="",
+        expert_cells=1,
+        expert_shield=False,
+    )
+
+
+def test_a_dagger_state_an_earlier_version_saved_reads_with_its_expert(tmp_path, dagger_run):
+    """`--resume` and the Digit rounds read a state with the earlier flat expert fields as
+    the spec they meant: the same configuration as the run's own."""
+    run_dir = _damaged_copy(dagger_run, tmp_path / "run", _as_an_earlier_version_saved_it)
+    state, _ = read_run_state(run_dir / "dagger_state.pt", DAGGER_FORMAT)
+    assert state["config"]["expert"] == "dwa"  # really the earlier form on disk
+    old = read_dagger_state(run_dir / "dagger_state.pt")[0]
+    assert old == read_dagger_state(dagger_run / "dagger_state.pt")[0]
+    assert old.expert == DwaSpec(margin=0.05)
 
 
 @pytest.mark.parametrize(
