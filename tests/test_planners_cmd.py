@@ -2,6 +2,8 @@
 
 import json
 
+import pytest
+
 from emonav_drake.cli import main
 from emonav_drake.cli.planners_cmd import planner_rows
 from emonav_drake.planners import planner_names
@@ -31,3 +33,16 @@ def test_the_command_prints_text_and_json(capsys):
     assert main(["planners", "--json"]) == 0
     rows = json.loads(capsys.readouterr().out)
     assert {r["name"] for r in rows} == set(planner_names())
+
+
+@pytest.mark.parametrize("name", ["mpc_digit", "dwa_digit", "policy_shield_digit", "rgl"])
+def test_a_planners_spec_as_listed_is_a_routes_expert_as_written(name):
+    """The spec `emonav planners` prints is the YAML a route writes for that expert: read
+    back, it is the registered spec."""
+    from emonav_drake.config_yaml import load_typed_yaml
+    from emonav_drake.learning.config import DaggerConfig
+    from emonav_drake.planners import planner_kind
+
+    (row,) = [r for r in planner_rows() if r.name == name]
+    route = load_typed_yaml(DaggerConfig, data=f"expert: {row.spec}\n")
+    assert route.expert == planner_kind(name).spec

@@ -5,7 +5,9 @@ emonav planners [--json]
 One row per registered planner (`planners/__init__.py`): its name, one line on what it
 is, what it reads of the world, whether that is privileged (the simulator's exact crowd:
 no robot has it) or deployable (the robot's own LiDAR, or the crowd it tracks with
-`--state-source lidar`), and the checkpoint it runs by default. The planner `sim` and
+`--state-source lidar`), the checkpoint it runs by default, and its spec as a route's
+YAML writes it (`planners/specs.py`: `expert: !PlannerSpec {name: NAME}` takes any of them
+by name). The planner `sim` and
 `eval` run without `--planner` and the default learned policy are marked.
 """
 
@@ -33,6 +35,7 @@ class PlannerRow:
     privileged: str
     checkpoint: str  # the default checkpoint (package-relative path), or "-"
     default: str  # "" or why it is marked
+    spec: str  # the registry's spec in YAML form (`describe_spec`), e.g. "!MpcSpec {}"
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -50,6 +53,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 def planner_rows() -> list[PlannerRow]:
     """The rows, in registration order."""
     from emonav_drake.planners import MPC_STEERED, SHIELDED, planner_kind, planner_names
+    from emonav_drake.planners.specs import describe_spec
 
     rows = []
     for name in planner_names():
@@ -73,7 +77,8 @@ def planner_rows() -> list[PlannerRow]:
             default = "sim/eval default"
         elif name == DEFAULT_POLICY_NAME:
             default = "default learned policy"
-        rows.append(PlannerRow(name, kind.summary, reads, privileged, checkpoint, default))
+        spec = describe_spec(kind.spec)
+        rows.append(PlannerRow(name, kind.summary, reads, privileged, checkpoint, default, spec))
     return rows
 
 
@@ -128,4 +133,5 @@ def cmd_planners(args: argparse.Namespace) -> int:
         print(f"    reads: {r.reads} — {r.privileged}")
         if r.checkpoint != "-":
             print(f"    checkpoint: {r.checkpoint}")
+        print(f"    spec: {r.spec}")
     return 0
