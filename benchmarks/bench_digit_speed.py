@@ -63,7 +63,7 @@ def main() -> None:
             )
             for seed in args.nav_seeds:
                 t0 = time.perf_counter()
-                rec = run_digit_episode(sample_scenario(seed, cfg), cfg, DwaPlanner(cfg))
+                rec, _ = run_digit_episode(sample_scenario(seed, cfg), cfg, DwaPlanner(cfg))
                 wall = time.perf_counter() - t0
                 sim = rec.steps * cfg.robot.step_time
                 nav[name].append(sim / wall)

@@ -37,10 +37,10 @@ def _crosses(p: np.ndarray, q: np.ndarray, centres: np.ndarray, radii: np.ndarra
 
 def collision(runner: TrialRunner, method: str, seed: int, steps: int) -> dict:
     """What one collision hit, and how long it was visible (module docstring)."""
-    scenario, _, log = runner.replay(method, seed)
+    scenario, _, trace = runner.replay(method, seed)
     cfg = runner.config
-    robot = np.asarray(log.robot)
-    peds = [np.asarray(p, float).reshape(-1, 2) for p in log.pedestrians]
+    robot = np.asarray(trace.robot)
+    peds = [np.asarray(p, float).reshape(-1, 2) for p in trace.pedestrians]
     k = len(robot) - 1
     x = robot[k, :2]
     centres = np.array([o.center for o in scenario.obstacles], float).reshape(-1, 2)
@@ -62,7 +62,7 @@ def collision(runner: TrialRunner, method: str, seed: int, steps: int) -> dict:
     return {
         "seed": seed,
         "hit": "pedestrian",
-        "emotion": EMOTION_NAMES[int(log.emotions[k][j])],
+        "emotion": EMOTION_NAMES[int(trace.emotions[k][j])],
         "visible": "".join("1" if s else "0" for s in seen),
         "towards_robot": float(v_ped @ away / max(np.linalg.norm(away), 1e-9)),
         "robot_speed": float(robot[k, 3]),

@@ -23,15 +23,15 @@ from emonav_drake.evaluation.run_directory import replay_outcomes
 
 def stall(runner: TrialRunner, method: str, seed: int) -> dict:
     """The freeze of one timeout (see the module)."""
-    scenario, record, log = runner.replay(method, seed)
-    robot, commands = np.asarray(log.robot), np.asarray(log.commands)
+    scenario, record, trace = runner.replay(method, seed)
+    robot, commands = np.asarray(trace.robot), trace.commands
     k = len(commands)
     while k > 0 and abs(commands[k - 1, 0]) < 1e-9:
         k -= 1
     x, goal = robot[k, :2], np.asarray(scenario.robot_goal, float)
     centres = np.array([o.center for o in scenario.obstacles], float).reshape(-1, 2)
     radii = np.array([o.radius for o in scenario.obstacles], float)
-    peds = np.asarray(log.pedestrians[k], float).reshape(-1, 2)
+    peds = np.asarray(trace.pedestrians[k], float).reshape(-1, 2)
     seg = goal - x
     t = np.clip((centres - x) @ seg / max(seg @ seg, 1e-12), 0.0, 1.0)
     line = np.hypot(*(centres - (x + np.outer(t, seg))).T) - radii

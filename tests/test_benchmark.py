@@ -15,7 +15,7 @@ import pytest
 
 from emonav_drake.cli import main
 from emonav_drake.configs import SETTINGS, load_setting, setting_path
-from emonav_drake.diagrams.trials import BenchmarkSpec, MethodSpec, TrialRunner, parse_methods
+from emonav_drake.diagrams.trials import BenchmarkSpec, MethodSpec, TrialRunner, method_specs
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.evaluation import tables
 from emonav_drake.evaluation.benchmark import run_benchmark
@@ -107,7 +107,7 @@ def test_wilson_and_mcnemar_values():
 def test_ray_equals_serial_and_a_ray_run_survives_ctrl_c(reference, tmp_path):
     """2 Ray workers: Ctrl-C after 2 trials keeps them and writes the tables; the same call
     continues; the result is the serial run, record for record."""
-    methods = parse_methods(METHODS)
+    methods = method_specs(METHODS)
     out = tmp_path / "ray"
 
     def stop_after_two(trial: dict, n: int) -> None:
@@ -146,7 +146,7 @@ def test_interrupted_serial_run_resumes_to_the_same_result(reference, tmp_path):
     with pytest.raises(RunInterrupted, match="3 of 6"):
         run_benchmark(
             out,
-            parse_methods(METHODS),
+            method_specs(METHODS),
             "lip",
             TRIALS,
             FIRST,

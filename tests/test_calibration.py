@@ -103,7 +103,7 @@ def test_the_shipped_model_predicts_a_fresh_digit_episode_within_its_reported_er
 
 def test_the_routes_expert_is_a_planner_by_name():
     from emonav_drake.config_yaml import ConfigError, load_typed_yaml
-    from emonav_drake.diagrams.trials import parse_methods
+    from emonav_drake.diagrams.trials import method_specs
     from emonav_drake.learning.config import DaggerConfig
     from emonav_drake.params import EmoNavConfig
     from emonav_drake.planners import DWA_DIGIT, make_planner
@@ -117,7 +117,7 @@ def test_the_routes_expert_is_a_planner_by_name():
         load_response("digit").to_plain()
     )
     assert make_planner("dwa", EmoNavConfig()).response is None
-    (spec,) = parse_methods("dwa_digit")
+    (spec,) = method_specs("dwa_digit")
     assert (spec.planner, spec.checkpoint) == ("dwa_digit", None)
     with pytest.raises(ConfigError, match="only learned policies take a checkpoint"):
-        parse_methods("dwa_digit", ["dwa_digit=x.pt"])
+        method_specs("dwa_digit", ["dwa_digit=x.pt"])

@@ -7,7 +7,7 @@ import pytest
 
 from emonav_drake.cli import main
 from emonav_drake.configs import load_setting
-from emonav_drake.diagrams.trials import parse_methods
+from emonav_drake.diagrams.trials import method_specs
 from emonav_drake.evaluation.benchmark import run_benchmark
 from emonav_drake.evaluation.combine import combine_runs
 from emonav_drake.evaluation.run_directory import BenchmarkSettingsError, load_run
@@ -15,7 +15,7 @@ from emonav_drake.params import load_config
 
 
 def _run(path, planners, first_seed=5, trials=2, config=None, checkpoints=()):
-    methods = parse_methods(planners, list(checkpoints))
+    methods = method_specs(planners, list(checkpoints))
     run_benchmark(
         path, methods, "lip", trials, first_seed, config or load_config(), workers=1,
         progress=False,

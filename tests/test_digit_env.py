@@ -55,11 +55,10 @@ def test_same_seed_and_actions_give_the_diagrams_trajectory():
         if terminated or truncated:
             break
     assert truncated and info["outcome"] == "timeout" and len(rewards) == 6
-    trace: list[dict] = []
-    record = run_digit_episode(sample_scenario(seed, cfg), cfg, ReplayPlanner(actions), trace=trace)
-    np.testing.assert_allclose(
-        np.array(robots), np.array([e["robot"] for e in trace[1:7]]), atol=1e-9
+    record, trace = run_digit_episode(
+        sample_scenario(seed, cfg), cfg, ReplayPlanner(actions), trace=True
     )
+    np.testing.assert_allclose(np.array(robots), np.array(trace.robot[1:7]), atol=1e-9)
     env_record = info["episode_record"]
     assert env_record["steps"] == record.steps == 6
     assert env_record["total_reward"] == pytest.approx(record.total_reward, abs=1e-9)

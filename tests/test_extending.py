@@ -25,7 +25,7 @@ from emonav_drake.core.observations import (
     unregister_observation,
 )
 from emonav_drake.diagrams.plants import PLANTS, Plant, register_plant, unregister_plant
-from emonav_drake.diagrams.trials import parse_methods
+from emonav_drake.diagrams.trials import method_specs
 from emonav_drake.planners import PlannerKind, register, unregister
 
 SECTORS = 8
@@ -138,7 +138,7 @@ def test_a_registered_planner_runs_in_sim_on_both_plants(toys, tmp_path, planner
 
 
 def test_a_registered_planner_and_observation_run_in_benchmark_on_both_plants(toys, tmp_path):
-    methods = parse_methods("toy_straight,toy_sectors")
+    methods = method_specs("toy_straight,toy_sectors")
     assert [(m.name, m.planner, m.checkpoint) for m in methods] == [
         ("toy_straight", "toy_straight", None),
         ("toy_sectors", "toy_sectors", None),
@@ -191,15 +191,26 @@ class HalfSpeed:
         return np.array([0.5 * command[0], command[1]]), memory
 
 
-def _run_half_speed(scenario, config, planner, grid_kind, goal_radius, estimate):
+def _simulate_half_speed(request):
+    """A plant of its own: the LIP's `simulate` on the request with the slow planner."""
     lip = PLANTS["lip"]
-    return lip.run(scenario, config, HalfSpeed(planner), grid_kind, goal_radius, estimate)
+    return lip.simulate(dataclasses.replace(request, planner=HalfSpeed(request.planner)))
+
+
+def _record_only_half_speed(request):
+    """The same robot, as a plant that keeps no trace and draws nothing (no `viewers`)."""
+    plain = dataclasses.replace(request, meshcat=None, record_html=None, rates=None, trace=False)
+    record, _ = _simulate_half_speed(plain)
+    return record, None
 
 
 @pytest.fixture
 def half_speed_plant():
-    register_plant(Plant("lip_half", "LIP at half speed", _run_half_speed, False, True, False))
-    yield
+    plant = Plant(
+        "lip_half", "LIP at half speed", _record_only_half_speed, can_fall=False, footsteps=True
+    )
+    register_plant(plant)
+    yield plant
     unregister_plant("lip_half")
 
 
@@ -214,6 +225,7 @@ def test_a_registered_plant_runs_in_sim_eval_and_benchmark(half_speed_plant, tmp
     again = tmp_path / "again.json"
     assert main(["sim", "--plant", "lip_half", "--seed", "5", "--json", str(again)]) == 0
     assert json.loads(again.read_text()) == runs["lip_half"]
+    assert "trajectory" not in runs["lip_half"]  # it gave no trace
     assert main(["sim", "--plant", "lip_half", "--record", str(tmp_path / "r.html")]) == 2
     assert "--record need --plant lip or digit" in capsys.readouterr().err
     ev = tmp_path / "eval.json"
@@ -229,37 +241,28 @@ def test_a_registered_plant_runs_in_sim_eval_and_benchmark(half_speed_plant, tmp
     assert trial["record"]["steps"] == runs["lip_half"]["steps"]
 
 
-def _simulate_half_speed(request):
-    lip = PLANTS["lip"]
-    return lip.simulate(dataclasses.replace(request, planner=HalfSpeed(request.planner)))
-
-
-def _run_half_speed_logged(scenario, config, planner, grid_kind, goal_radius, estimate):
-    lip = PLANTS["lip"]
-    return lip.run_logged(scenario, config, HalfSpeed(planner), grid_kind, goal_radius, estimate)
-
-
 @pytest.fixture
 def half_speed_plant_with_outputs():
     plant = Plant(
         "lip_half_sim",
         "LIP at half speed",
-        _run_half_speed,
-        False,
-        True,
-        False,
+        _simulate_half_speed,
+        can_fall=False,
+        footsteps=True,
         rays=True,
-        run_logged=_run_half_speed_logged,
-        simulate=_simulate_half_speed,
+        viewers=True,
     )
     register_plant(plant)
     yield plant
     unregister_plant("lip_half_sim")
 
 
-def test_a_registered_plant_with_simulate_gets_the_sim_outputs(
+def test_a_registered_plant_with_viewers_gets_the_sim_outputs_and_replays(
     half_speed_plant, half_speed_plant_with_outputs, tmp_path
 ):
+    from emonav_drake.diagrams.trials import BenchmarkSpec, MethodSpec, TrialRunner
+    from emonav_drake.params import EmoNavConfig, dump_config
+
     runs = {}
     for plant in ("lip_half", "lip_half_sim"):
         out = tmp_path / f"{plant}.json"
@@ -268,11 +271,17 @@ def test_a_registered_plant_with_simulate_gets_the_sim_outputs(
     steps = runs["lip_half"]["steps"]
     assert runs["lip_half_sim"]["steps"] == steps
     assert "trajectory" in runs["lip_half_sim"] and "trajectory" not in runs["lip_half"]
+    assert runs["lip_half_sim"]["trajectory"]["plant"] == "lip_half_sim"
     csv = tmp_path / "steps.csv"
     argv = ["sim", "--plant", "lip_half_sim", "--seed", "5", "--steps-out", str(csv)]
     assert main(argv) == 0
     assert len(csv.read_text().splitlines()) == steps + 1  # header + one row a step
-    assert half_speed_plant_with_outputs.step_log and not half_speed_plant_with_outputs.traces
+    # a trial of either replays on its plant; the one without a trace gives None
+    for plant, traced in (("lip_half_sim", True), ("lip_half", False)):
+        spec = BenchmarkSpec([MethodSpec("dwa", "dwa")], plant, dump_config(EmoNavConfig()))
+        _, record, trace = TrialRunner(spec).replay("dwa", 5)
+        assert record.steps == steps and (trace is not None) == traced
+        assert trace is None or trace.steps == steps
 
 
 def test_a_plant_without_a_training_environment_is_refused(half_speed_plant):

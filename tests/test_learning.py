@@ -191,7 +191,7 @@ def test_policy_drives_the_drake_diagram_within_bounds(tmp_path):
     planner = make_planner("sac", cfg, checkpoint=path)
     cfg, kind = configure_for(planner, cfg)  # the diagram's LGM builder follows the checkpoint
     assert (cfg.lidar.num_frames, cfg.lidar.grid_size, kind) == (4, 60, "lgm")
-    record, log = run_episode(sample_scenario(3, cfg), cfg, planner, grid_kind=kind)
+    record, log = run_episode(sample_scenario(3, cfg), cfg, planner, grid_kind=kind, trace=True)
     cmds = np.array(log.commands)
     assert len(cmds) == record.steps == 8
     assert (cmds[:, 0] >= 0).all() and (cmds[:, 0] <= 0.4).all()
@@ -257,7 +257,7 @@ def test_planner_names_say_what_the_policy_is(tmp_path, capsys):
     """`policy` runs the shipped DAgger student and says so; `sac` is kept for SAC actors:
     without a checkpoint, or with a DAgger student's, it is refused naming `policy`."""
     from emonav_drake.cli import main
-    from emonav_drake.diagrams.trials import parse_methods
+    from emonav_drake.diagrams.trials import method_specs
     from emonav_drake.planners.policy import DEFAULT_POLICY, describe_policy, load_policy
 
     _, meta = load_policy(DEFAULT_POLICY, "cpu")
@@ -271,10 +271,10 @@ def test_planner_names_say_what_the_policy_is(tmp_path, capsys):
         err = capsys.readouterr().err
         assert "--planner policy" in err and "DAgger student" in err, err
     with pytest.raises(ValueError, match="SAC-trained checkpoint"):
-        parse_methods("sac")
+        method_specs("sac")
     with pytest.raises(ValueError, match="not a SAC actor"):
-        parse_methods("sac", [f"sac={DEFAULT_POLICY}"])
-    assert parse_methods("policy")[0].checkpoint == str(DEFAULT_POLICY)
+        method_specs("sac", [f"sac={DEFAULT_POLICY}"])
+    assert method_specs("policy")[0].checkpoint == str(DEFAULT_POLICY)
 
 
 def test_an_mpc_expert_labels_every_state_with_its_nearest_grid_command():

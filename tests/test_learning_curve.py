@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from emonav_drake.diagrams.trials import parse_methods
+from emonav_drake.diagrams.trials import method_specs
 from emonav_drake.evaluation import tables
 from emonav_drake.evaluation.benchmark import run_benchmark
 from emonav_drake.evaluation.learning_curve import (
@@ -29,7 +29,7 @@ def runs(tmp_path_factory) -> tuple[Path, Path, Path]:
         from emonav_drake.configs import load_setting
 
         run_benchmark(
-            root / name, parse_methods(planners), "lip", trials, first,
+            root / name, method_specs(planners), "lip", trials, first,
             load_setting(setting), setting=setting, progress=False,
         )  # fmt: skip
         return root / name

@@ -258,7 +258,9 @@ def test_works_as_a_policy_on_the_gymnasium_env_and_in_the_diagram():
             break
     assert info["outcome"] == "success"
     # the Drake diagram with the same planner walks the same episode
-    record, log = run_episode(sample_scenario(4, env.config), env.config, mpc, goal_radius=0.2)
+    record, log = run_episode(
+        sample_scenario(4, env.config), env.config, mpc, goal_radius=0.2, trace=True
+    )
     assert record.outcome == "success" and record.steps == len(commands)
     assert np.array_equal(np.array(log.commands), np.array(commands))
 

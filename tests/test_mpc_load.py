@@ -14,7 +14,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from emonav_drake.diagrams.trials import parse_methods
+from emonav_drake.diagrams.trials import method_specs
 from emonav_drake.evaluation.benchmark import run_benchmark
 from emonav_drake.evaluation.run_directory import comparable, read_trials
 from emonav_drake.params import load_config
@@ -77,7 +77,7 @@ def _records(run: Path) -> set[str]:
 
 
 def test_benchmark_mpc_on_ray_beside_a_cpu_hog_equals_serial(tmp_path):
-    kwargs = dict(methods=parse_methods("mpc"), plant="lip", trials=3, first_seed=SEED)
+    kwargs = dict(methods=method_specs("mpc"), plant="lip", trials=3, first_seed=SEED)
     run_benchmark(
         out=tmp_path / "serial", config=load_config(), workers=1, progress=False, **kwargs
     )

@@ -53,13 +53,14 @@ def test_diagram_and_gymnasium_env_give_the_same_trajectory(time_varying):
     actions = np.column_stack([rng.uniform(0.2, 0.4, 40), rng.uniform(-0.2, 0.2, 40)])
     robots, peds, rewards, _, _, info = _env_rollout(seed, cfg, actions=actions)
     record, log = run_episode(
-        sample_scenario(seed, cfg), cfg, ReplayPlanner(actions), goal_radius=0.2
+        sample_scenario(seed, cfg), cfg, ReplayPlanner(actions), goal_radius=0.2, trace=True
     )
     assert record.outcome == info["outcome"] and record.steps == len(rewards)
     assert np.array_equal(np.array(log.robot), np.array(robots))
     for a, b in zip(log.pedestrians, peds, strict=True):
         assert np.array_equal(a, b)
-    assert log.rewards == rewards
+    assert log.rewards[1:] == rewards and np.isnan(log.rewards[0])  # none before step 0
+    assert np.array_equal(log.commands, actions[: record.steps])
 
 
 def test_dwa_episode_matches_and_the_lgm_stack_is_the_envs():
@@ -91,7 +92,7 @@ def test_diagram_clips_out_of_range_commands_with_a_warning_and_rejects_nan(capl
     cfg.episode.max_steps = 4
     sc = sample_scenario(0, cfg)
     with caplog.at_level(logging.WARNING):
-        record, log = run_episode(sc, cfg, ReplayPlanner([[0.9, 0.5]] * 4))
+        record, log = run_episode(sc, cfg, ReplayPlanner([[0.9, 0.5]] * 4), trace=True)
     assert "clipped" in caplog.text
     assert np.allclose(log.robot[2][2], 0.4)  # heading changed by the bound 0.2 per step
     assert log.robot[2][3] == pytest.approx(0.4)  # speed clipped to 0.4

@@ -8,10 +8,8 @@ from pydrake.systems.analysis import Simulator
 
 from emonav_drake.cli import main
 from emonav_drake.core.scenario import Scenario, StaticDiscSpec, sample_scenario
-from emonav_drake.diagrams.navigation_digit import (
-    build_digit_navigation_diagram,
-    simulate_digit_episode,
-)
+from emonav_drake.diagrams.episode import simulate_episode
+from emonav_drake.diagrams.navigation_digit import build_digit_navigation_diagram
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner
 from tests.test_digit_station import kneeling_positions
@@ -42,7 +40,8 @@ def test_two_runs_from_fresh_default_contexts_give_identical_records():
     records = []
     for _ in range(2):
         sim = Simulator(nd.diagram)  # a fresh default context; no reset() anywhere
-        records.append(simulate_digit_episode(sim, nd, cfg).to_json())
+        record, _ = simulate_episode(sim, nd.systems(), cfg)
+        records.append(record.to_json())
     assert records[0] == records[1]
     assert records[0]["steps"] == 5 and records[0]["path_length"] > 0.3
 
@@ -55,7 +54,7 @@ def _fall_episode(setup) -> tuple[str, str, float]:
     sim = Simulator(nd.diagram)
     plant = nd.station.plant
     setup(nd, plant, plant.GetMyMutableContextFromRoot(sim.get_mutable_context()))
-    record = simulate_digit_episode(sim, nd, cfg)
+    record, _ = simulate_episode(sim, nd.systems(), cfg)
     ctx = sim.get_context()
     fall = nd.station.GetOutputPort("fall").Eval(nd.station.GetMyContextFromRoot(ctx))
     assert record.to_json()["fall_reason"] == fall.reason
@@ -139,11 +138,50 @@ def test_a_command_turns_the_step_it_was_planned_for_on_both_plants():
     commands = np.array([[0.3, 0.0]] * 8)
     commands[5, 1] = 0.2
     scenario = Scenario(robot_start=[-4.0, 0.0], robot_goal=[4.0, 0.0])
-    _, log = run_episode(scenario, cfg, ReplayPlanner(commands))
+    _, log = run_episode(scenario, cfg, ReplayPlanner(commands), trace=True)
     lip = np.diff([r[2] for r in log.robot])  # heading change of steps 0, 1, ...
     np.testing.assert_allclose(lip[[4, 5, 6]], [0.0, 0.2, 0.0], atol=1e-12)
-    trace: list[dict] = []
-    run_digit_episode(scenario, cfg, ReplayPlanner(commands), trace=trace)
-    digit = np.diff([e["robot"][2] for e in trace])
+    _, trace = run_digit_episode(scenario, cfg, ReplayPlanner(commands), trace=True)
+    digit = np.diff([r[2] for r in trace.robot])
     assert abs(digit[5] - 0.2) < 0.03, digit
     assert abs(digit[4]) < 0.03 and abs(digit[6]) < 0.03, digit
+
+
+def test_both_plants_give_the_same_trace_of_one_row_per_planner_instant():
+    """`Plant.simulate` with `trace=True` on the same scenario: an `EpisodeTrace` of rows
+    k = 0 … steps at t_k = kT, robot (4,), held (2,), pedestrians (P, 2), emotions (P,),
+    rewards of the steps (NaN at k = 0); its path, rewards and end agree with the record
+    (which keeps no final position: its path length and total reward)."""
+    from emonav_drake.core.episode_trace import EpisodeTrace
+    from emonav_drake.diagrams.episode import EpisodeRequest
+    from emonav_drake.diagrams.plants import PLANTS
+
+    cfg = _short_config(4)
+    scenario = sample_scenario(2, cfg)
+    p = len(scenario.pedestrians)
+    T = cfg.robot.step_time
+    for name in ("lip", "digit"):
+        request = EpisodeRequest(scenario, cfg, DwaPlanner(cfg), trace=True)
+        record, trace = PLANTS[name].simulate(request)
+        assert isinstance(trace, EpisodeTrace), name
+        n = record.steps + 1
+        assert len(trace) == n and trace.steps == record.steps == 4, name
+        assert trace.k == list(range(n)) and trace.t == [k * T for k in range(n)], name
+        for i in range(n):
+            assert trace.robot[i].shape == (4,) and trace.held[i].shape == (2,), name
+            assert trace.pedestrians[i].shape == (p, 2) and trace.emotions[i].shape == (p,)
+        assert np.array_equal(trace.held[0], [0.0, 0.0]) and trace.commands.shape == (4, 2)
+        # the monitor measures the path from the scenario's start (Digit's CoM stands a
+        # few centimetres off it at t_0) through the robot at t_1 … t_K
+        xy = np.vstack([scenario.robot_start, np.asarray(trace.robot)[1:, :2]])
+        path = np.hypot(*np.diff(xy, axis=0).T).sum()
+        assert math.isclose(path, record.path_length, rel_tol=1e-9), name
+        assert math.isnan(trace.rewards[0])
+        assert math.isclose(sum(trace.rewards[1:]), record.total_reward, rel_tol=1e-9), name
+        assert math.isclose(trace.t[-1], record.nav_time, rel_tol=1e-9), name
+        rows = trace.rows()  # the calibration files' form, and back
+        assert list(rows[0]) == ["k", "t", "robot", "held", "pedestrians", "emotions"]
+        again = EpisodeTrace.from_rows(json.loads(json.dumps(rows)))
+        assert again.rows() == rows
+        record_only, none = PLANTS[name].simulate(EpisodeRequest(scenario, cfg, DwaPlanner(cfg)))
+        assert none is None and record_only.to_json() == record.to_json(), name

@@ -446,7 +446,7 @@ def test_digit_replay_marks_each_footstep_target(tmp_path):
     cfg.episode.max_steps = 4
     out = tmp_path / "digit.html"
     meshcat = make_meshcat(live=False)
-    record = run_digit_episode(
+    record, _ = run_digit_episode(
         sample_scenario(1, cfg), cfg, DwaPlanner(cfg), meshcat=meshcat, record_html=out
     )
     assert record.outcome == "timeout" and record.steps == 4

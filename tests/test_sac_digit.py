@@ -96,5 +96,5 @@ def test_tiny_sac_on_digit_writes_a_loadable_actor_and_resumes_bit_for_bit(tmp_p
     cfg2, kind = configure_for(planner, cfg)
     assert kind == "lgm" and cfg2.lidar.num_frames == 2
     assert cfg.lidar.num_frames == EmoNavConfig().lidar.num_frames  # not modified
-    record = run_digit_episode(sample_scenario(0, cfg2), cfg2, planner)
+    record, _ = run_digit_episode(sample_scenario(0, cfg2), cfg2, planner)
     assert record.steps == 3 and record.outcome in ("timeout", "collision", "success")

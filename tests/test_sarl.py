@@ -189,13 +189,13 @@ def test_sarl_runs_on_both_plants_through_emonav_sim_deterministically(
 
 
 def test_a_benchmark_runs_sarl_beside_a_policy(tiny_runs, tmp_path):
-    from emonav_drake.diagrams.trials import parse_methods
+    from emonav_drake.diagrams.trials import method_specs
     from emonav_drake.evaluation.benchmark import run_benchmark
     from emonav_drake.evaluation.run_directory import load_run
     from emonav_drake.params import load_config
 
     root, _ = tiny_runs
-    methods = parse_methods("sarl,dwa", [f"sarl={root / 'whole' / 'policy.pt'}"])
+    methods = method_specs("sarl,dwa", [f"sarl={root / 'whole' / 'policy.pt'}"])
     run_benchmark(tmp_path / "b", methods, "lip", 2, 5, load_config(), workers=1, progress=False)
     settings, trials = load_run(tmp_path / "b")
     assert sorted(t["method"] for t in trials) == ["dwa", "dwa", "sarl", "sarl"]

@@ -216,11 +216,11 @@ def test_a_lip_episode_carries_the_metrics_and_the_diagram_gives_the_same():
     world = _world_episode(seed, ReplayPlanner(commands), cfg)
     rec = world.record
     record, log = run_episode(
-        sample_scenario(seed, cfg), cfg, ReplayPlanner(commands), goal_radius=0.2
+        sample_scenario(seed, cfg), cfg, ReplayPlanner(commands), goal_radius=0.2, trace=True
     )
     assert record.to_json() == rec.to_json()  # the Drake monitor, command port included
     assert all(getattr(rec, f) is not None for f in SOCIAL_FIELDS if f != "intrusion_clearance")
-    # recomputed here from the step log, by a second route
+    # recomputed here from the episode's trace, by a second route
     robot = np.array(log.robot)
     turning = np.abs(np.angle(np.exp(1j * np.diff(robot[:, 2])))).sum()
     (x0, y0, theta0, _), (gx, gy) = robot[0], world.goal_xy

@@ -110,15 +110,15 @@ def test_sim_digit_steps_out_matches_the_trace(tmp_path, capsys):
     cfg = load_config(cfg_file)
     planner = make_planner("dwa", cfg)
     cfg, grid_kind = configure_for(planner, cfg)
-    trace: list[dict] = []
-    record = run_digit_episode(
+    record, episode = run_digit_episode(
         sample_scenario(seed, cfg),
         cfg,
         planner,
         grid_kind=grid_kind,
         goal_radius=cfg.episode.eval_goal_radius,
-        trace=trace,
+        trace=True,
     )
+    trace = episode.rows()  # the calibration files' row dicts
     assert record.steps == 5 and len(trace) == 6
     c = _check_desired_and_errors(header, rows, cfg.robot.omega, cfg.robot.step_time, 1e-12)
     robot = np.array([e["robot"] for e in trace])

@@ -14,6 +14,7 @@ from emonav_drake.cli.common import (
     add_emotion_flags,
     check_workers,
     emotion_estimate_of,
+    parse_methods,
 )
 from emonav_drake.cli.config import (
     add_config_choice,
@@ -115,7 +116,6 @@ def _emotion_estimate_yaml(args: argparse.Namespace) -> str | None:
 def cmd_benchmark(args: argparse.Namespace) -> int:
     """Run or continue a benchmark; print where the tables are."""
     from emonav_drake.atomic_io import check_output_dir
-    from emonav_drake.diagrams.trials import parse_methods
     from emonav_drake.evaluation.benchmark import run_benchmark
 
     # every flag checked before the first trial (planners are built in run_benchmark)

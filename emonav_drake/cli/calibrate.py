@@ -10,7 +10,7 @@ import argparse
 import json
 from pathlib import Path
 
-from emonav_drake.cli.common import SeedArg, check_workers
+from emonav_drake.cli.common import SeedArg, check_workers, parse_methods
 from emonav_drake.params import ConfigError
 
 DESCRIPTION = """\
@@ -73,7 +73,7 @@ def cmd_collect(args: argparse.Namespace) -> int:
     check_workers(args.workers, args.ray_address)
     summary = collect_traces(
         args.out,
-        args.planners,
+        parse_methods(args.planners),
         args.episodes,
         args.first_seed,
         explore=args.explore,

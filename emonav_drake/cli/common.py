@@ -3,7 +3,8 @@
 Seed flags (`SeedArg`, `parse_seed`, `check_seed_range`), the Meshcat host option
 (`add_meshcat_host`, `meshcat_host`), output-file checks (`check_outputs`), the planner and
 emotion-estimate flags of `sim` and `eval` (`add_episode_flags`, `check_planner_flags`,
-`load_emotion_estimate`), `check_workers`, and the per-step tracking table written by
+`load_emotion_estimate`), `check_workers`, the methods of `--planners` / `--checkpoint`
+(`parse_methods`, for benchmark and calibrate), and the per-step tracking table written by
 `sim --steps-out` and `walk --steps-out` (`episode_steps_table`, `write_steps_csv`).
 """
 
@@ -21,6 +22,9 @@ from emonav_drake.planners import is_learned
 
 if TYPE_CHECKING:
     import numpy as np
+
+    from emonav_drake.core.episode_trace import EpisodeTrace
+    from emonav_drake.diagrams.trials import MethodSpec
 
 
 PLANNER_HELP = (
@@ -249,6 +253,23 @@ def load_emotion_estimate(path: Path | None) -> Any:
     return params
 
 
+FLAG_NAMES = {"planners": "--planners", "checkpoint": "--checkpoint"}
+
+
+def parse_methods(
+    planners: str | Sequence[str], checkpoints: Sequence[str] = ()
+) -> list[MethodSpec]:
+    """`--planners policy,mpc,dwa` and `--checkpoint NAME=PATH …` → the validated methods
+    (`diagrams.trials.method_specs`, a list of `MethodSpec`); a refusal is a `ConfigError`
+    naming the flag."""
+    from emonav_drake.diagrams.trials import MethodError, method_specs
+
+    try:
+        return method_specs(planners, checkpoints)
+    except MethodError as e:
+        raise ConfigError(e.worded(FLAG_NAMES)) from None
+
+
 def write_steps_csv(path: str | Path, table: np.ndarray) -> int:
     """Write a tracking table (`core.tracking.COLUMNS`, one row per step) as CSV, atomically.
 
@@ -272,23 +293,11 @@ def write_steps_csv(path: str | Path, table: np.ndarray) -> int:
     return len(rows)
 
 
-def episode_steps_table(
-    config: EmoNavConfig,
-    trace: Sequence[dict] | None = None,
-    robot: Sequence[np.ndarray] | None = None,
-    commands: Sequence[np.ndarray] | None = None,
-) -> np.ndarray:
-    """The tracking table of a navigation episode against the planner's LIP (ω = √(g/H) of
-    `config.robot`): from a Digit episode's `trace` (`run_digit_episode(trace=...)`), or
-    from the LIP diagram's `StepLog` lists `robot` (t_k = kT) and `commands`."""
-    import numpy as np
-
-    from emonav_drake.core.tracking import sequence_tracking, trace_tracking
+def episode_steps_table(config: EmoNavConfig, trace: EpisodeTrace) -> np.ndarray:
+    """The tracking table of a navigation episode, on either plant, against the planner's
+    LIP (ω = √(g/H) of `config.robot`), from its `EpisodeTrace` (`Plant.simulate` with
+    `trace=True`): one row per step (`core.tracking.trace_tracking`)."""
+    from emonav_drake.core.tracking import trace_tracking
 
     r = config.robot
-    if trace is not None:
-        return trace_tracking(trace, r.omega, r.step_time)
-    states = np.asarray(robot, float).reshape(-1, 4)
-    u = np.asarray(commands, float).reshape(-1, 2)[: max(len(states) - 1, 0)]
-    n = len(u) + 1
-    return sequence_tracking(np.arange(n) * r.step_time, states[:n], u, r.omega, r.step_time)
+    return trace_tracking(trace, r.omega, r.step_time)

@@ -75,6 +75,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     cfg = resolved.config
     estimate = emotion_estimate_of(args)
     from emonav_drake.core.metrics import format_summary, summarize
+    from emonav_drake.diagrams.episode import EpisodeRequest
     from emonav_drake.diagrams.evaluation_episode import run_evaluation_episode
     from emonav_drake.planners import configure_for, make_planner
     from emonav_drake.progress import progress_bar
@@ -94,9 +95,10 @@ def cmd_eval(args: argparse.Namespace) -> int:
         try:
             for seed in seeds:
                 scenario = sample(seed, resolved)
-                rec = run_evaluation_episode(
-                    args.plant, scenario, cfg, planner, grid_kind, estimate
+                request = EpisodeRequest(
+                    scenario, cfg, planner, grid_kind, emotion_estimate=estimate
                 )
+                rec = run_evaluation_episode(args.plant, request)
                 records.append(rec)
                 bar.update(1)
         except KeyboardInterrupt:

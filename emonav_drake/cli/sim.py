@@ -33,7 +33,8 @@ from emonav_drake.cli.common import (
 )
 from emonav_drake.cli.config import resolve_config, resolve_scenario
 from emonav_drake.core.metrics import format_idt
-from emonav_drake.diagrams.plants import DEFAULT_PLANT, PLANTS, Plant, SimRequest, plant_named
+from emonav_drake.diagrams.episode import EpisodeRequest
+from emonav_drake.diagrams.plants import DEFAULT_PLANT, PLANTS, Plant, plant_named
 from emonav_drake.params import ConfigError
 from emonav_drake.planners import planner_names
 
@@ -113,8 +114,6 @@ def cmd_sim(args: argparse.Namespace) -> int:
         raise ConfigError(
             "--camera-gif needs the camera as the emotion source: --emotion-source camera"
         )
-    if robot.simulate is None:  # a plant without viewers and per-step outputs: its record
-        return _sim_registered_plant(args, robot, cfg, scenario, estimate)
     from emonav_drake.planners import configure_for, make_planner
 
     planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
@@ -127,23 +126,22 @@ def cmd_sim(args: argparse.Namespace) -> int:
         from emonav_drake.diagrams.rates import RateMeasurement
 
         rates = RateMeasurement()
-    request = SimRequest(
+    request = EpisodeRequest(  # at the evaluation goal radius
         scenario,
         cfg,
         planner,
         grid_kind,
-        estimate,
+        emotion_estimate=estimate,
         meshcat=meshcat,
         show_rays=args.rays,
         realtime_rate=1.0 if args.meshcat else 0.0,
         rates=rates,
-        per_step=bool(args.json or args.steps_out),
         progress=True,  # drawn only where `emonav` allows bars: a terminal, no --quiet
         camera_frames=[] if args.camera_gif is not None else None,
+        trace=bool(args.json or args.steps_out),
     )
     t0 = time.perf_counter()
-    result = _run_sim_episode(args, robot, request)
-    record = result.record
+    record, trace = _run_sim_episode(args, robot, request)
     wall = time.perf_counter() - t0
     out = record.to_json()
     out["seed"] = scenario.seed
@@ -166,7 +164,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
         with atomic_output(args.camera_gif) as path:
             n = write_camera_gif(request.camera_frames, path)
         print(f"camera: {n} classified images written to {Path(args.camera_gif).resolve()}")
-    _write_sim_outputs(args, request, result, out)
+    _write_sim_outputs(args, request, record, trace, out)
     if caption is not None:  # live: the outcome in Meshcat, served until Ctrl-C
         from emonav_drake.diagrams.meshcat_viewing import finish_live_view
 
@@ -176,10 +174,16 @@ def cmd_sim(args: argparse.Namespace) -> int:
 
 
 def _check_plant_flags(args: argparse.Namespace, robot: Plant) -> None:
-    """Refuse --rays on a plant with a `simulate` that cannot draw them (a plant without
-    one is checked by `_sim_registered_plant`)."""
-    if robot.simulate is None:
-        return
+    """Refuse the viewer and per-step flags on a plant without `viewers` (its `simulate`
+    gives the record, and --json, only), and --rays on one that cannot draw them."""
+    if not robot.viewers:
+        viewer_flags = {"--meshcat": args.meshcat, "--record": args.record, "--rays": args.rays}
+        viewer_flags |= {"--steps-out": args.steps_out, "--rates": args.rates}
+        viewer_flags |= {"--camera-gif": args.camera_gif}
+        given = [flag for flag, value in viewer_flags.items() if value]
+        if given:
+            able = " or ".join(p for p in PLANTS if PLANTS[p].viewers)
+            raise ConfigError(f"--plant {args.plant}: {', '.join(given)} need --plant {able}")
     if args.rays and not robot.rays:
         able = [p for p in PLANTS if PLANTS[p].rays]
         raise ConfigError(
@@ -217,9 +221,11 @@ def _open_viewer(
     return meshcat, caption
 
 
-def _run_sim_episode(args: argparse.Namespace, robot: Plant, request: SimRequest) -> Any:
+def _run_sim_episode(
+    args: argparse.Namespace, robot: Plant, request: EpisodeRequest
+) -> tuple[Any, Any]:
     """Run the episode with the plant's `simulate`, the replay (--record) going to a
-    temporary sibling renamed when complete; its `SimResult`."""
+    temporary sibling renamed when complete; (its record, its trace or None)."""
     with contextlib.ExitStack() as stack:
         if args.record:
             request.record_html = stack.enter_context(atomic_output(args.record))
@@ -227,29 +233,23 @@ def _run_sim_episode(args: argparse.Namespace, robot: Plant, request: SimRequest
 
 
 def _write_sim_outputs(
-    args: argparse.Namespace, request: SimRequest, result: Any, out: dict
+    args: argparse.Namespace, request: EpisodeRequest, record: Any, trace: Any, out: dict
 ) -> None:
-    """Write --json (`out` with the trajectory) and --steps-out of a finished episode, from
-    its LIP step log or else its per-step trace."""
-    cfg, scenario, record = request.config, request.scenario, result.record
-    step_log, trace = result.step_log, result.trace
+    """Write --json (`out`, with the trajectory when the plant gave the trace) and
+    --steps-out of a finished episode, from its `EpisodeTrace` on either plant."""
+    cfg, scenario = request.config, request.scenario
     if args.json:  # the episode step by step, drawn by `emonav plot`
-        from emonav_drake.evaluation import trajectory as tj
+        from emonav_drake.evaluation.trajectory import trajectory_from_trace
 
-        goal_r = cfg.episode.eval_goal_radius
-        out["trajectory"] = (
-            tj.trajectory_from_step_log(scenario, cfg, record, step_log, args.planner, goal_r)
-            if step_log is not None
-            else tj.trajectory_from_digit_trace(scenario, cfg, record, trace, args.planner, goal_r)
-        ).to_json()
+        if trace is not None:
+            out["trajectory"] = trajectory_from_trace(
+                scenario, cfg, record, trace, args.planner, args.plant, request.goal_radius
+            ).to_json()
         write_json(args.json, out)
     if args.steps_out:  # per planner step: the planner's LIP step vs the robot
-        table = (
-            episode_steps_table(cfg, robot=step_log.robot, commands=step_log.commands)
-            if step_log is not None
-            else episode_steps_table(cfg, trace=trace)
-        )
-        n = write_steps_csv(args.steps_out, table)
+        if trace is None:
+            raise ConfigError(f"--steps-out: --plant {args.plant} gave no per-step trace")
+        n = write_steps_csv(args.steps_out, episode_steps_table(cfg, trace))
         print(f"{n} steps written to {args.steps_out}")
 
 
@@ -260,36 +260,6 @@ def _scene_label(args: argparse.Namespace, config: Any, seed: int) -> str:
         return f"scenario {Path(args.scenario).stem} (seed {seed})"
     family = config.crowd.family
     return f"seed {seed}" if family == "paper" else f"family {family}, seed {seed}"
-
-
-def _sim_registered_plant(
-    args: argparse.Namespace, robot: Plant, cfg: Any, scenario: Any, estimate: Any
-) -> int:
-    """`sim` on a plant without `simulate` (`diagrams.plants`): its episode runner gives
-    the record (printed, and --json); the viewers and per-step outputs need a plant's
-    `simulate` (the LIP's and Digit's)."""
-    from emonav_drake.planners import configure_for, make_planner
-
-    viewer_flags = {"--meshcat": args.meshcat, "--record": args.record, "--rays": args.rays}
-    viewer_flags |= {"--steps-out": args.steps_out, "--rates": args.rates}
-    viewer_flags |= {"--camera-gif": args.camera_gif}
-    given = [flag for flag, value in viewer_flags.items() if value]
-    if given:
-        able = " or ".join(p for p in PLANTS if PLANTS[p].simulate is not None)
-        raise ConfigError(f"--plant {args.plant}: {', '.join(given)} need --plant {able}")
-    planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
-    cfg, grid_kind = configure_for(planner, cfg)
-    goal_radius = cfg.episode.eval_goal_radius
-    record = robot.run(scenario, cfg, planner, grid_kind, goal_radius, estimate)
-    out = record.to_json()
-    out["seed"] = scenario.seed
-    print(
-        f"{_scene_label(args, cfg, scenario.seed)} on {robot.label}: {record.outcome} "
-        f"after {record.steps} steps"
-    )
-    if args.json:
-        write_json(args.json, out)
-    return 0
 
 
 def _format_rates(report: Any) -> str:

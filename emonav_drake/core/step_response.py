@@ -33,6 +33,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
+from emonav_drake.core.episode_trace import EpisodeTrace, trace_columns
 from emonav_drake.core.lip import LipState, held_plans, lip_steps, wrap_angle, wrap_angles
 
 FEATURES = (
@@ -99,10 +100,11 @@ class Transitions:
 
 
 def transitions_from_trace(
-    trace: Sequence[dict], step_time: float, episode: int = 0, skip: int = 2
+    trace: EpisodeTrace | Sequence[dict], step_time: float, episode: int = 0, skip: int = 2
 ) -> Transitions:
-    """The transitions of one episode's trace (entries {"robot", "held"} per planner
-    instant, as `diagrams.navigation_digit.simulate_digit_episode` writes them).
+    """The transitions of one episode's trace: an `EpisodeTrace` (`core/episode_trace.py`)
+    or its row dicts (entries {"robot", "held"} per planner instant, as in the calibration
+    trace files).
 
     Entry k holds the robot at t_k and the command held before t_k's update, u_{k−1}, so
     u_k is entry k + 1's "held". The speed of a state is the step-averaged one, v̄_k =
@@ -114,8 +116,7 @@ def transitions_from_trace(
     """
     if skip < 1:
         raise ValueError(f"skip = {skip}: must be >= 1 (v̄ needs the previous step)")
-    robot = np.array([e["robot"] for e in trace], float).reshape(-1, 4)
-    held = np.array([e["held"] for e in trace], float).reshape(-1, 2)
+    robot, held = trace_columns(trace, "robot", "held")
     if len(robot) >= 2:
         robot[1:, 3] = outcome(robot[:-1], robot[1:])[:, 0] / step_time
     n = len(trace) - 2  # transitions k → k + 1 with u_k known: k = 0 … len − 3

@@ -12,10 +12,11 @@ Two kinds of step use this table (`COLUMNS`, one row per step):
   one foot switch to the next; the LIP starts from the measured CoM and speed at the
   first switch and from the *accumulated commanded* heading, so heading errors do not
   reset every step (the paper's "desired vs actual" figure);
-* navigation (`emonav sim --plant digit`, `trace_tracking`): a step runs from the planner
-  instant t_k = kT to t_{k+1}; the LIP starts from the robot exactly as the planner saw it
-  at t_k and u is the command u_k the planner computed there and held until t_{k+1}: the
-  step the planner expected. Headings are unwrapped along the episode.
+* navigation (`emonav sim --steps-out`, `trace_tracking` of an episode's `EpisodeTrace`
+  on either plant): a step runs from the planner instant t_k = kT to t_{k+1}; the LIP
+  starts from the robot exactly as the planner saw it at t_k and u is the command u_k the
+  planner computed there and held until t_{k+1}: the step the planner expected. Headings
+  are unwrapped along the episode.
 
 Everything here is NumPy; `error_statistics` summarises the error columns (mean, std,
 RMS, median / 95th percentile / maximum of the absolute error).
@@ -27,6 +28,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from emonav_drake.core.episode_trace import EpisodeTrace, trace_columns
 from emonav_drake.core.lip import lip_steps, wrap_angles
 
 COLUMNS = (
@@ -169,19 +171,20 @@ def sequence_tracking(
     )
 
 
-def trace_tracking(trace: Sequence[dict], omega: float, step_time: float) -> np.ndarray:
-    """The tracking table of a navigation episode's trace (one entry per planner instant
-    t_k, as `diagrams.navigation_digit.simulate_digit_episode` writes it: "k", "t" [s],
-    "robot" [x, y, θ, v] at t_k, "held" = u_{k−1}; other keys are ignored).
+def trace_tracking(
+    trace: EpisodeTrace | Sequence[dict], omega: float, step_time: float
+) -> np.ndarray:
+    """The tracking table of a navigation episode's trace, on either plant: an
+    `EpisodeTrace` (`core/episode_trace.py`, one row per planner instant t_k) or its row
+    dicts ("k", "t" [s], "robot" [x, y, θ, v] at t_k, "held" = u_{k−1}; other keys are
+    ignored).
 
-    Step k goes from entry k to entry k + 1 under u_k = entry k + 1's "held". The last
-    entry is the episode's end; after a fall it is the instant of the fall, so the last
-    step can be shorter than T (its `t` says so)."""
+    Step k goes from row k to row k + 1 under u_k = row k + 1's "held". The last row is
+    the episode's end; after a fall it is the instant of the fall, so the last step can be
+    shorter than T (its `t` says so)."""
     if len(trace) < 2:
         return np.empty((0, len(COLUMNS)))
-    robot = np.array([e["robot"] for e in trace], float).reshape(-1, 4)
-    held = np.array([e["held"] for e in trace], float).reshape(-1, 2)
-    times = np.array([e["t"] for e in trace], float)
+    k, times, robot, held = trace_columns(trace, "k", "t", "robot", "held")
     return sequence_tracking(
         times,
         robot,
@@ -189,7 +192,7 @@ def trace_tracking(trace: Sequence[dict], omega: float, step_time: float) -> np.
         omega,
         step_time,
         initial_command=held[0],
-        first_step=int(trace[0]["k"]),
+        first_step=int(k[0]),
     )
 
 

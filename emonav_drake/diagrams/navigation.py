@@ -32,7 +32,8 @@ Gymnasium env's, so any policy checkpoint runs here with its training observatio
 ignore it.
 
 `build_navigation_diagram` wires it; `run_episode` simulates one episode walking step
-by walking step and returns its `EpisodeRecord` and a per-step trajectory log.
+by walking step (the loop both plants share, `diagrams/episode.py`) and returns its
+`EpisodeRecord` and, with `trace=True`, its `EpisodeTrace` (`core/episode_trace.py`).
 With `progress=True` it shows `progress.SimulationProgress`, a bar over simulated time.
 """
 
@@ -40,29 +41,27 @@ from __future__ import annotations
 
 import dataclasses as dc
 import logging
-from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
 from pydrake.geometry import Meshcat
-from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import Context, Diagram, DiagramBuilder, OutputPort
+from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 
+from emonav_drake.core.episode_trace import EpisodeTrace
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
-from emonav_drake.diagrams.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
+from emonav_drake.diagrams.episode import (
+    EpisodeRequest,
+    EpisodeSystems,
+    run_navigation_episode,
+    training_request,
+)
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
-from emonav_drake.progress import SimulationProgress
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.crowd_tracker_system import CrowdTrackerSystem
 from emonav_drake.systems.emotion_estimate_source import AddEmotionEstimateSource
-from emonav_drake.systems.episode_monitor import (
-    EpisodeMonitor,
-    EpisodeStatus,
-    episode_monitor_callback,
-)
+from emonav_drake.systems.episode_monitor import EpisodeMonitor
 from emonav_drake.systems.head_camera import CameraMount, lip_camera_mount
 from emonav_drake.systems.lidar_grid_map_builder import LidarGridMapBuilder
 from emonav_drake.systems.lip_robot_plant import LipRobotPlant
@@ -71,7 +70,6 @@ from emonav_drake.systems.navigation_planner import NavigationPlanner
 
 if TYPE_CHECKING:
     from emonav_drake.diagrams.camera_perception import CameraPerception
-    from emonav_drake.diagrams.rates import RateMeasurement
 
 log = logging.getLogger(__name__)
 
@@ -88,15 +86,23 @@ class NavigationDiagram:
     monitor: EpisodeMonitor
     visualizer: NavigationMeshcatVisualizer | None
 
+    def systems(self) -> EpisodeSystems:
+        """What the episode loop reads (`diagrams.episode.simulate_episode`)."""
+        nav = (self.diagram, self.robot, self.crowd, self.planner, self.monitor)
+        return EpisodeSystems(*nav, "LIP", stop_when_done=True)
+
 
 @dc.dataclass
 class NavigationStack:
-    """The robot-independent part of a navigation diagram."""
+    """The robot-independent part of a navigation diagram, and what it was built for."""
 
     crowd: CrowdSystem
     grid_maps: LidarGridMapBuilder
     planner: NavigationPlanner
     monitor: EpisodeMonitor
+    scenario: Scenario
+    config: EmoNavConfig
+    goal_radius: float | None  # the monitor's [m]; None: config.episode.goal_radius
     perception: CameraPerception | None = None  # mode "camera": the camera chain
     tracker: CrowdTrackerSystem | None = None  # perception.state_source "lidar"
 
@@ -170,7 +176,44 @@ def AddNavigationStack(
     b.Connect(crowd.GetOutputPort("crowd"), monitor.GetInputPort("crowd"))
     b.Connect(plan.GetOutputPort("command"), monitor.GetInputPort("command"))  # for the jerk
     b.Connect(maps.GetOutputPort("lgm_stack"), plan.GetInputPort("lgm_stack"))
-    return NavigationStack(crowd, maps, plan, monitor, perception, tracker)
+    return NavigationStack(
+        crowd, maps, plan, monitor, scenario, config, goal_radius, perception, tracker
+    )
+
+
+def AddNavigationVisualizer(
+    builder: DiagramBuilder,
+    stack: NavigationStack,
+    robot_state: OutputPort,
+    meshcat: Meshcat,
+    name: str = "visualizer",
+    **options: Any,
+) -> NavigationMeshcatVisualizer:
+    """Add the drawing of a navigation stack (`NavigationMeshcatVisualizer`, named `name`,
+    its goal pad the stack's goal radius [m]) wired to the robot's `robot_state` (x [m],
+    y [m], θ [rad], v [m/s], world frame), the true crowd and, with LiDAR tracking, the
+    tracked crowd the planner reads beside it; with the camera, its rendered heads and
+    faces (`draw_in_meshcat`). `options` go to the visualizer (`show_rays`,
+    `draw_robot`); the caller connects the plant's own inputs (`scan`, `footstep_targets`)."""
+    from emonav_drake.diagrams.camera_perception import draw_in_meshcat
+
+    b = builder
+    vis = b.AddNamedSystem(
+        name,
+        NavigationMeshcatVisualizer(
+            meshcat,
+            stack.scenario,
+            stack.config,
+            goal_radius=stack.goal_radius,
+            **options,
+            **draw_in_meshcat(b, stack.perception, meshcat),
+        ),
+    )
+    b.Connect(robot_state, vis.GetInputPort("robot_state"))
+    b.Connect(stack.crowd.GetOutputPort("crowd"), vis.GetInputPort("crowd"))
+    if stack.tracker is not None:  # the crowd the planner reads, beside the true one
+        b.Connect(stack.tracker.GetOutputPort("crowd"), vis.GetInputPort("tracks"))
+    return vis
 
 
 def build_navigation_diagram(
@@ -228,158 +271,42 @@ def build_navigation_diagram(
     b.Connect(plan.GetOutputPort("command"), robot.GetInputPort("command"))
     vis = None
     if meshcat is not None:
-        from emonav_drake.diagrams.camera_perception import draw_in_meshcat
-
-        vis = b.AddNamedSystem(
-            "visualizer",
-            NavigationMeshcatVisualizer(
-                meshcat,
-                scenario,
-                config,
-                show_rays=show_rays,
-                goal_radius=goal_radius,
-                **draw_in_meshcat(b, stack.perception, meshcat),
-            ),
-        )
-        b.Connect(state, vis.GetInputPort("robot_state"))
-        b.Connect(crowd.GetOutputPort("crowd"), vis.GetInputPort("crowd"))
+        vis = AddNavigationVisualizer(b, stack, state, meshcat, show_rays=show_rays)
         b.Connect(maps.GetOutputPort("scan"), vis.GetInputPort("scan"))
-        if stack.tracker is not None:  # the crowd the planner reads, beside the true one
-            b.Connect(stack.tracker.GetOutputPort("crowd"), vis.GetInputPort("tracks"))
     diagram = b.Build()
     diagram.set_name("emonav_navigation")
     return NavigationDiagram(diagram, robot, crowd, maps, plan, monitor, vis)
 
 
-@dc.dataclass
-class StepLog:
-    """The world at every walking step t_k (k = 0 … steps)."""
-
-    robot: list[np.ndarray] = dc.field(default_factory=list)  # (x, y, θ, v)
-    pedestrians: list[np.ndarray] = dc.field(default_factory=list)  # (P, 2)
-    emotions: list[np.ndarray] = dc.field(default_factory=list)  # (P,) true codes in force
-    commands: list[np.ndarray] = dc.field(default_factory=list)  # u_k, k = 0 … steps − 1
-    rewards: list[float] = dc.field(default_factory=list)  # reward of the step ending at t_k
-
-
 def run_episode(
-    scenario: Scenario,
-    config: EmoNavConfig,
-    planner: Planner,
-    meshcat: Meshcat | None = None,
-    record_html: str | Path | None = None,
-    show_rays: bool = False,
-    grid_kind: str = "lgm",
-    goal_radius: float | None = None,
-    realtime_rate: float = 0.0,
-    emotion_estimate: EmotionEstimateParams | None = None,
-    rates: RateMeasurement | None = None,
-    progress: bool = False,
-    camera_frames: list | None = None,
-) -> tuple[EpisodeRecord, StepLog]:
-    """Simulate one episode of the navigation diagram.
+    scenario: Scenario, config: EmoNavConfig, planner: Planner, **options: Any
+) -> tuple[EpisodeRecord, EpisodeTrace | None]:
+    """Simulate one episode of the LIP navigation diagram; (its record, its
+    `EpisodeTrace` with `trace=True`, else None).
 
-    Returns the episode's record (outcome, metrics) and the per-step log. With
-    `record_html` the run is recorded in Meshcat and written as a self-contained HTML
-    replay (a Meshcat is created if none is given). With `rates`, the simulation runs
-    under the profiler of `diagrams.rates` and the per-system rates and wall-time shares
-    are left in `rates.report`. With `progress`, a `SimulationProgress` bar on stderr
-    follows the simulated time step by step (the same steps either way: the results do
-    not change). The planner's memory starts from `planner.initial_memory()` in the new
-    diagram's Context (no `reset()` needed). `camera_frames`: see `AddNavigationStack`.
+    `options` are the other fields of `EpisodeRequest` (`diagrams/episode.py`): grid_kind,
+    emotion_estimate, meshcat, record_html, show_rays, realtime_rate, rates, progress,
+    camera_frames, trace. `goal_radius` [m] defaults to `config.episode.goal_radius` (the
+    training threshold; `Plant.simulate`'s request defaults to the evaluation one). The
+    loop, replay, profiler and progress bar are `diagrams.episode.run_navigation_episode`'s:
+    the results do not depend on them. The planner's memory starts from
+    `planner.initial_memory()` in the new diagram's Context (no `reset()` needed).
     """
-    if record_html is not None and meshcat is None:
-        meshcat = make_meshcat(live=False)  # loopback only
+    request = training_request(scenario, config, planner, **options)
+    return run_navigation_episode(request, _build_episode)
+
+
+def _build_episode(r: EpisodeRequest) -> EpisodeSystems:
+    """The LIP diagram of a request, as the episode loop reads it."""
     nav = build_navigation_diagram(
-        scenario,
-        config,
-        planner,
-        meshcat,
-        show_rays,
-        grid_kind,
-        goal_radius,
-        emotion_estimate,
-        camera_frames,
+        r.scenario,
+        r.config,
+        r.planner,
+        r.meshcat,
+        r.show_rays,
+        r.grid_kind,
+        r.goal_radius,
+        r.emotion_estimate,
+        r.camera_frames,
     )
-    sim = start_episode_simulator(nav, realtime_rate, meshcat if record_html is not None else None)
-    ctx = sim.get_mutable_context()
-    T = config.robot.step_time
-    log_ = StepLog()
-    snapshot = _Snapshots(nav, ctx, log_)
-    bar = SimulationProgress(config.episode.max_steps * T, "LIP episode", progress)
-
-    def walk() -> None:
-        done = snapshot(0)
-        k = 0
-        while not done:
-            k += 1
-            sim.AdvanceTo(k * T)
-            bar.update(ctx.get_time())
-            done = snapshot(k)
-
-    try:
-        if rates is not None:
-            rates.run(sim, nav.diagram, walk)
-        else:
-            walk()
-    except BaseException:  # Ctrl-C included: end the bar's line
-        bar.close(ctx.get_time())
-        raise
-    record = snapshot.status().record
-    bar.close(ctx.get_time(), record.outcome)
-    if record_html is not None:
-        meshcat.StopRecording()
-        meshcat.PublishRecording()
-        tracks = config.perception.state_source == "lidar"
-        caption = ReplayCaption.for_episode(
-            planner, "LIP", scenario, record, show_rays, tracks=tracks
-        )
-        write_replay_html(meshcat, record_html, caption)
-    return record, log_
-
-
-def start_episode_simulator(
-    nav: NavigationDiagram, realtime_rate: float, recording: Meshcat | None
-) -> Simulator:
-    """The episode's simulator, initialized, with the episode monitor's termination; with a
-    `recording` Meshcat, its recording started first."""
-    sim = Simulator(nav.diagram)
-    sim.set_target_realtime_rate(realtime_rate)
-    sim.set_monitor(episode_monitor_callback(nav.diagram, nav.monitor))
-    if recording is not None:
-        # a browser already watching sees the episode while it is recorded
-        live = recording.GetNumActiveConnections() > 0
-        recording.StartRecording(set_visualizations_while_recording=live)
-    sim.Initialize()
-    return sim
-
-
-class _Snapshots:
-    """Logs the world at each t_k into a `StepLog` (`__call__`); reads the episode status."""
-
-    def __init__(self, nav: NavigationDiagram, ctx: Context, log_: StepLog) -> None:
-        self._nav, self._ctx, self._log = nav, ctx, log_
-        self._robot_port = nav.robot.GetOutputPort("robot_state")
-        self._crowd_port = nav.crowd.GetOutputPort("crowd")
-        self._cmd_port = nav.planner.GetOutputPort("command")
-        self._status_port = nav.monitor.GetOutputPort("status")
-
-    def status(self) -> EpisodeStatus:
-        """The episode monitor's status now (`status.record` is the episode's record)."""
-        return self._status_port.Eval(self._nav.monitor.GetMyContextFromRoot(self._ctx))
-
-    def __call__(self, k: int) -> bool:
-        """Log the world at t_k, before the updates at t_k (the planner still holds
-        u_{k−1}: the command of the step that just ended); whether the episode is done."""
-        nav, ctx, log_ = self._nav, self._ctx, self._log
-        rc = nav.robot.GetMyContextFromRoot(ctx)
-        log_.robot.append(self._robot_port.Eval(rc).copy())
-        crowd = self._crowd_port.Eval(nav.crowd.GetMyContextFromRoot(ctx))
-        log_.pedestrians.append(crowd.positions.copy())
-        log_.emotions.append(crowd.emotions.copy())
-        status = self.status()
-        if k > 0:
-            log_.commands.append(self._cmd_port.Eval(nav.planner.GetMyContextFromRoot(ctx)).copy())
-            if status.last_step is not None:
-                log_.rewards.append(status.last_step.reward)
-        return status.done
+    return nav.systems()

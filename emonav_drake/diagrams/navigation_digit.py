@@ -29,32 +29,38 @@ have. The heading change of step k follows u_Δθ,k.
 
 A fall (the station's `FallMonitor`) ends the episode with the outcome "fall": an
 outcome, never an exception.
+
+`run_digit_episode` simulates one episode with the loop both plants share
+(`diagrams/episode.py`); on a simulator of your own (e.g. a context set up first),
+`diagrams.episode.simulate_episode(sim, nd.systems(), config)`.
 """
 
 from __future__ import annotations
 
 import dataclasses as dc
-from pathlib import Path
+from typing import Any
 
 from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams, Role
-from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.framework import Context, Diagram, DiagramBuilder
 
+from emonav_drake.core.episode_trace import EpisodeTrace
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
-from emonav_drake.diagrams.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
-from emonav_drake.diagrams.navigation import AddNavigationStack
-from emonav_drake.diagrams.rates import RateMeasurement
+from emonav_drake.diagrams.episode import (
+    EpisodeRequest,
+    EpisodeSystems,
+    FallCheck,
+    run_navigation_episode,
+    training_request,
+)
+from emonav_drake.diagrams.navigation import AddNavigationStack, AddNavigationVisualizer
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
-from emonav_drake.progress import SimulationProgress
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.episode_monitor import EpisodeMonitor
-from emonav_drake.systems.fall_monitor import FALL
 from emonav_drake.systems.head_camera import body_camera_mount
-from emonav_drake.systems.navigation_meshcat import NavigationMeshcatVisualizer
 from emonav_drake.systems.navigation_planner import NavigationPlanner
 
 
@@ -71,6 +77,12 @@ class DigitNavigationDiagram:
     @property
     def model(self):
         return self.station.model
+
+    def systems(self) -> EpisodeSystems:
+        """What the episode loop reads (`diagrams.episode.simulate_episode`), with the
+        station's fall check."""
+        nav = (self.diagram, self.station, self.crowd, self.planner, self.monitor)
+        return EpisodeSystems(*nav, "Digit", fall=_fall_check(self.station), footsteps=True)
 
 
 def build_digit_navigation_diagram(
@@ -132,160 +144,62 @@ def build_digit_navigation_diagram(
         b.Connect(nav.GetOutputPort("command"), obs.GetInputPort("last_action"))
         b.ExportOutput(obs.GetOutputPort("observation"), "observation")
     if meshcat is not None:
-        from emonav_drake.diagrams.camera_perception import draw_in_meshcat
-
         MeshcatVisualizer.AddToBuilder(
             b,
             station.GetOutputPort("query_object"),
             meshcat,
             MeshcatVisualizerParams(role=Role.kIllustration),
         )
-        vis = b.AddNamedSystem(
-            "navigation_visualizer",
-            NavigationMeshcatVisualizer(
-                meshcat,
-                scenario,
-                config,
-                draw_robot=False,
-                goal_radius=goal_radius,
-                **draw_in_meshcat(b, stack.perception, meshcat),
-            ),
+        vis = AddNavigationVisualizer(
+            b, stack, robot_state, meshcat, "navigation_visualizer", draw_robot=False
         )
-        b.Connect(robot_state, vis.GetInputPort("robot_state"))
-        b.Connect(crowd.GetOutputPort("crowd"), vis.GetInputPort("crowd"))
         b.Connect(station.GetOutputPort("targets"), vis.GetInputPort("footstep_targets"))
-        if stack.tracker is not None:  # the crowd the planner reads, beside the true one
-            b.Connect(stack.tracker.GetOutputPort("crowd"), vis.GetInputPort("tracks"))
     diagram = b.Build()
     diagram.set_name("emonav_navigation_digit")
     return DigitNavigationDiagram(diagram, station, crowd, nav, monitor)
 
 
 def run_digit_episode(
-    scenario: Scenario,
-    config: EmoNavConfig,
-    planner: Planner,
-    meshcat: Meshcat | None = None,
-    grid_kind: str = "lgm",
-    goal_radius: float | None = None,
-    realtime_rate: float = 0.0,
-    record_html: str | Path | None = None,
-    rates: RateMeasurement | None = None,
-    trace: list[dict] | None = None,
-    progress: bool = False,
-    emotion_estimate: EmotionEstimateParams | None = None,
-    camera_frames: list | None = None,
-) -> EpisodeRecord:
-    """Simulate one navigation episode with the full-order Digit; returns its record
-    (outcome success | collision | timeout | fall). `emotion_estimate`: where the
-    perceived emotions come from (default the ground truth; `build_navigation_diagram`);
-    `camera_frames` collects the camera's classified images (`AddNavigationStack`).
+    scenario: Scenario, config: EmoNavConfig, planner: Planner, **options: Any
+) -> tuple[EpisodeRecord, EpisodeTrace | None]:
+    """Simulate one navigation episode with the full-order Digit; (its record, outcome
+    success | collision | timeout | fall; its `EpisodeTrace` with `trace=True`, else None).
 
-    With `rates`, the simulation runs under the profiler of `diagrams.rates` and the
-    per-system rates and wall-time shares are left in `rates.report`. With `trace`, the
-    robot state and held command at every planner instant are appended to it
-    (`simulate_digit_episode`). With `progress`, a progress bar on stderr follows the
-    simulated time (`SimulationProgress`; the record does not change)."""
-    if record_html is not None and meshcat is None:
-        meshcat = make_meshcat(live=False)  # loopback only
+    As `diagrams.navigation.run_episode` (the same arguments, the same loop:
+    `diagrams.episode.run_navigation_episode`): `options` are the other fields of
+    `EpisodeRequest` — grid_kind, emotion_estimate, meshcat, record_html, realtime_rate,
+    rates, progress, camera_frames (the camera rides on Digit's torso), trace; Digit draws
+    no LiDAR rays (`show_rays`). `goal_radius` [m] defaults to `config.episode.goal_radius`.
+    The trace's robot state is Digit's CoM [m], torso yaw [rad] and sagittal CoM speed
+    [m/s] (world frame W); after a fall its last row is the instant the fall was seen.
+    """
+    request = training_request(scenario, config, planner, **options)
+    return run_navigation_episode(request, _build_episode)
+
+
+def _build_episode(r: EpisodeRequest) -> EpisodeSystems:
+    """The Digit diagram of a request, as the episode loop reads it."""
+    if r.show_rays:
+        raise ValueError("the Digit diagram draws no LiDAR rays: show_rays must be False")
     nd = build_digit_navigation_diagram(
-        scenario, config, planner, meshcat, grid_kind, goal_radius, emotion_estimate, camera_frames
+        r.scenario,
+        r.config,
+        r.planner,
+        r.meshcat,
+        r.grid_kind,
+        r.goal_radius,
+        r.emotion_estimate,
+        r.camera_frames,
     )
-    sim = Simulator(nd.diagram)
-    sim.set_target_realtime_rate(realtime_rate)
-    if record_html is not None:
-        # a browser already watching sees the episode while it is recorded
-        live = meshcat.GetNumActiveConnections() > 0
-        meshcat.StartRecording(set_visualizations_while_recording=live)
-    if rates is not None:
-        record = rates.run(
-            sim, nd.diagram, lambda: simulate_digit_episode(sim, nd, config, trace, progress)
-        )
-    else:
-        record = simulate_digit_episode(sim, nd, config, trace, progress)
-    if record_html is not None:
-        meshcat.StopRecording()
-        meshcat.PublishRecording()
-        tracks = config.perception.state_source == "lidar"
-        caption = ReplayCaption.for_episode(
-            planner, "Digit", scenario, record, footsteps=True, tracks=tracks
-        )
-        write_replay_html(meshcat, record_html, caption)
-    return record
+    return nd.systems()
 
 
-def simulate_digit_episode(
-    sim: Simulator,
-    nd: DigitNavigationDiagram,
-    config: EmoNavConfig,
-    trace: list[dict] | None = None,
-    progress: bool = False,
-) -> EpisodeRecord:
-    """Run `sim` (built on `nd`, its context at the episode's start) walking step by
-    walking step until the episode monitor ends the episode or the robot falls.
+def _fall_check(station: DigitStation) -> FallCheck:
+    """The station's fall port as the episode loop's fall check: the reason, or None."""
+    port = station.GetOutputPort("fall")
 
-    With `trace`, one entry per planner instant t_k = kT is appended, taken before the
-    updates at t_k (what the planner sees): {"k", "t" [s], "robot": [x, y, θ, v] (CoM
-    [m], torso yaw [rad], sagittal CoM speed [m/s], world frame W), "held": the command
-    held since t_{k−1}, u_{k−1} = [u_v, u_Δθ], "pedestrians": [[x, y], ...] (world [m]),
-    "emotions": [code, ...] (true emotion codes in force)}; the last entry is the
-    episode's end. With `progress`, a `SimulationProgress` bar on stderr is updated after
-    every walking step and ended with the outcome (it only reads the time: the record is
-    the same)."""
-    ctx = sim.get_mutable_context()
-    T = config.robot.step_time
-    sim.Initialize()
-    bar = SimulationProgress(config.episode.max_steps * T, "Digit episode", progress)
-    try:
-        record = _walk_episode(sim, nd, T, trace, bar)
-    except BaseException:  # Ctrl-C included: end the bar's line
-        bar.close(ctx.get_time())
-        raise
-    bar.close(ctx.get_time(), record.outcome)
-    return record
+    def fall_reason(ctx: Context) -> str | None:
+        fall = port.Eval(station.GetMyContextFromRoot(ctx))
+        return fall.reason if fall.fallen else None
 
-
-def _walk_episode(
-    sim: Simulator,
-    nd: DigitNavigationDiagram,
-    T: float,
-    trace: list[dict] | None,
-    bar: SimulationProgress,
-) -> EpisodeRecord:
-    """The loop of `simulate_digit_episode`: one `AdvanceTo` per walking step."""
-    ctx = sim.get_mutable_context()
-    status_port = nd.monitor.GetOutputPort("status")
-    fall_port = nd.station.GetOutputPort("fall")
-    robot_port = nd.station.GetOutputPort("robot_state")
-    command_port = nd.planner.GetOutputPort("command")
-    crowd_port = nd.crowd.GetOutputPort("crowd")
-    k = round(ctx.get_time() / T)
-    while True:
-        if trace is not None:
-            crowd = crowd_port.Eval(nd.crowd.GetMyContextFromRoot(ctx))
-            trace.append(
-                {
-                    "k": k,
-                    "t": ctx.get_time(),
-                    "robot": robot_port.Eval(nd.station.GetMyContextFromRoot(ctx)).tolist(),
-                    "held": command_port.Eval(nd.planner.GetMyContextFromRoot(ctx)).tolist(),
-                    "pedestrians": crowd.positions.tolist(),
-                    "emotions": [int(e) for e in crowd.emotions],
-                }
-            )
-        status = status_port.Eval(nd.monitor.GetMyContextFromRoot(ctx))
-        fall = fall_port.Eval(nd.station.GetMyContextFromRoot(ctx))
-        if fall.fallen:
-            record = status.record
-            record.outcome, record.fall_reason = FALL, fall.reason
-            return record
-        if status.done:
-            return status.record
-        k += 1
-        try:
-            sim.AdvanceTo(k * T)
-        except RuntimeError as e:  # the contact solver gives up only on a robot in a heap
-            record = status_port.Eval(nd.monitor.GetMyContextFromRoot(ctx)).record
-            record.outcome, record.fall_reason = FALL, f"simulation stopped: {e}"
-            return record
-        bar.update(ctx.get_time())
+    return fall_reason

@@ -253,8 +253,8 @@ def record_event_times(
 
 
 class RateMeasurement:
-    """Asks a run function (e.g. `run_digit_episode(..., rates=m)`) to profile its
-    simulation; the `RateReport` is in `report` afterwards."""
+    """Asks an episode (`EpisodeRequest.rates`, e.g. `run_digit_episode(..., rates=m)`) to
+    profile its simulation; the `RateReport` is in `report` afterwards."""
 
     def __init__(self) -> None:
         self.report: RateReport | None = None

@@ -6,7 +6,9 @@ for calibration, the Digit DAgger rounds):
 * `MethodSpec` / `BenchmarkSpec`: what a worker needs to run any trial of a run — the
   methods (a planner kind and, for learned policies, the checkpoint and its hash), the
   plant ("lip" or "digit"), the configuration as YAML, the emotion estimate.
-* `parse_methods`: `--planners` and `--checkpoint NAME=PATH` → validated methods.
+* `method_specs`: methods by name and NAME=PATH checkpoints → validated methods (its
+  errors name its inputs; `cli.common.parse_methods` words them as `--planners` and
+  `--checkpoint`).
 * `TrialRunner`: runs trials in one process, each method's planner built once and
   reused (a planner's memory lives in the diagram's Context, so reuse changes no command).
 * `TrialWorker` / `run_trials`: the same on Ray actors (`parallel.run_tasks`), or serially
@@ -19,9 +21,9 @@ import copy
 import dataclasses as dc
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from emonav_drake.atomic_io import json_safe
 from emonav_drake.parallel import Worker, run_tasks
@@ -29,6 +31,12 @@ from emonav_drake.params import ConfigError, EmoNavConfig, load_config
 from emonav_drake.planners import is_registered, model_planner_names, planner_kind
 from emonav_drake.planners.variants import VARIANTS
 from emonav_drake.provenance import sha256_file
+
+if TYPE_CHECKING:
+    from emonav_drake.core.episode_trace import EpisodeTrace
+    from emonav_drake.core.metrics import EpisodeRecord
+    from emonav_drake.core.scenario import Scenario
+    from emonav_drake.diagrams.episode import EpisodeRequest
 
 # --trials at most (per method): every scenario is sampled (~0.2 ms per seed, ~20 s at the
 # maximum) and every (method, seed) task listed before the first trial.
@@ -65,44 +73,54 @@ class BenchmarkSpec:
         raise KeyError(name)
 
 
-def parse_methods(
+class MethodError(ConfigError):
+    """A method list `method_specs` refuses. Its message names the inputs as
+    `method_specs` calls them (`planners`, `checkpoint`); `worded(names)` is the same
+    message with other names for them (the CLI's: `--planners`, `--checkpoint`)."""
+
+    template: str = ""
+    values: dict = {}  # set per instance by `_refused`
+
+    def worded(self, names: Mapping[str, str]) -> str:
+        """The message with `names["planners"]` and `names["checkpoint"]` for the inputs."""
+        return self.template.format(**names, **self.values)
+
+
+# what `method_specs`' errors call its inputs
+INPUT_NAMES = {"planners": "planners", "checkpoint": "checkpoint"}
+
+
+def _refused(template: str, **values: object) -> MethodError:
+    """The `MethodError` of `template` ({planners}, {checkpoint} and `values` filled in)."""
+    e = MethodError(template.format(**INPUT_NAMES, **values))
+    e.template, e.values = template, values
+    return e
+
+
+def method_specs(
     planners: str | Sequence[str], checkpoints: Sequence[str] = ()
 ) -> list[MethodSpec]:
-    """`--planners policy,mpc,dwa` and `--checkpoint NAME=PATH …` → the methods (validated).
+    """Methods by name (a comma-separated string or a list) and "NAME=PATH" checkpoints →
+    the validated methods; `MethodError` (a `ConfigError`) naming the input otherwise
+    (`cli.common.parse_methods` words it as the flags `--planners`, `--checkpoint`).
 
     A method is any registered planner (`planners.planner_names()`): a model planner
     (`dwa`, `mpc`, …), a learned one with its default checkpoint unless one is given
     (`policy`: the shipped policy; a variant: its shipped policy; `sac`: a SAC-trained
-    checkpoint must be given with `--checkpoint sac=PATH`), or any other name given a
-    checkpoint with `--checkpoint NAME=PATH` (another learned policy).
+    checkpoint must be given, sac=PATH), or any other name given a checkpoint NAME=PATH
+    (another learned policy).
     """
     names = planners.split(",") if isinstance(planners, str) else list(planners)
     names = [n.strip() for n in names]
+    listed = ",".join(names)
     if not names or any(not n for n in names):
-        raise ConfigError(f"--planners {','.join(names)!r}: give a comma-separated list of methods")
+        raise _refused(
+            "{planners} {listed!r}: give a comma-separated list of methods", listed=listed
+        )
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
-        raise ConfigError(f"--planners: {dup[0]} is listed twice")
-    ckpt: dict[str, Path] = {}
-    for item in checkpoints:
-        name, sep, path = item.partition("=")
-        name = name.strip()
-        if not sep or not name or not path:
-            raise ConfigError(
-                f"--checkpoint {item!r}: expected NAME=PATH (e.g. policy=runs/x/policy.pt)"
-            )
-        if name in ckpt:
-            raise ConfigError(f"--checkpoint {name}: given twice")
-        if name not in names:
-            raise ConfigError(
-                f"--checkpoint {name}=…: {name} is not among --planners ({','.join(names)})"
-            )
-        if is_registered(name) and not planner_kind(name).learned:
-            raise ConfigError(f"--checkpoint {name}=…: only learned policies take a checkpoint")
-        p = Path(path)
-        if not p.is_file():
-            raise ConfigError(f"--checkpoint {name}={path}: no such file")
-        ckpt[name] = p
+        raise _refused("{planners}: {name} is listed twice", name=dup[0])
+    ckpt = _checkpoints(checkpoints, names)
     methods = []
     for n in names:
         kind = planner_kind(n) if is_registered(n) else None
@@ -111,25 +129,59 @@ def parse_methods(
         elif kind is not None or n in ckpt:
             path = ckpt.get(n)
             if path is None and n == "sac":
-                raise ConfigError(
-                    "--planners sac: a SAC-trained checkpoint is needed (--checkpoint "
+                raise _refused(
+                    "{planners} sac: a SAC-trained checkpoint is needed ({checkpoint} "
                     "sac=PATH); the shipped policy is a DAgger student: use policy"
                 )
             if path is None:
                 if kind is None or kind.default_checkpoint is None:
-                    raise ConfigError(f"--planners {n}: give its checkpoint, --checkpoint {n}=PATH")
+                    raise _refused(
+                        "{planners} {n}: give its checkpoint, {checkpoint} {n}=PATH", n=n
+                    )
                 path = kind.default_checkpoint()
             if n == "sac":
                 _check_sac_actor(path)
             runs_as = kind.runs_as if kind is not None else "policy"
             methods.append(MethodSpec(n, runs_as, str(path), sha256_file(path)))
         else:
-            raise ConfigError(
-                f"--planners: unknown method {n!r}; use {', '.join(model_planner_names())}, "
-                f"policy, sac, a variant ({', '.join(VARIANTS)}), or name a learned policy "
-                f"with --checkpoint {n}=PATH"
+            raise _refused(
+                "{planners}: unknown method {n!r}; use {models}, policy, sac, a variant "
+                "({variants}), or name a learned policy with {checkpoint} {n}=PATH",
+                n=n,
+                models=", ".join(model_planner_names()),
+                variants=", ".join(VARIANTS),
             )
     return methods
+
+
+def _checkpoints(checkpoints: Sequence[str], names: list[str]) -> dict[str, Path]:
+    """The "NAME=PATH" checkpoints of `method_specs` by method name, checked."""
+    ckpt: dict[str, Path] = {}
+    for item in checkpoints:
+        name, sep, path = item.partition("=")
+        name = name.strip()
+        if not sep or not name or not path:
+            raise _refused(
+                "{checkpoint} {item!r}: expected NAME=PATH (e.g. policy=runs/x/policy.pt)",
+                item=item,
+            )
+        if name in ckpt:
+            raise _refused("{checkpoint} {name}: given twice", name=name)
+        if name not in names:
+            raise _refused(
+                "{checkpoint} {name}=…: {name} is not among {planners} ({listed})",
+                name=name,
+                listed=",".join(names),
+            )
+        if is_registered(name) and not planner_kind(name).learned:
+            raise _refused(
+                "{checkpoint} {name}=…: only learned policies take a checkpoint", name=name
+            )
+        p = Path(path)
+        if not p.is_file():
+            raise _refused("{checkpoint} {name}={path}: no such file", name=name, path=path)
+        ckpt[name] = p
+    return ckpt
 
 
 def _check_sac_actor(path: str | Path) -> None:
@@ -138,9 +190,11 @@ def _check_sac_actor(path: str | Path) -> None:
 
     _, meta = load_policy(Path(path), "cpu")
     if policy_kind(meta) != "sac":
-        raise ConfigError(
-            f"--checkpoint sac={path}: not a SAC actor but a {describe_policy(meta)}; "
-            "give it another method name (e.g. policy)"
+        raise _refused(
+            "{checkpoint} sac={path}: not a SAC actor but a {what}; give it another method "
+            "name (e.g. policy)",
+            path=path,
+            what=describe_policy(meta),
         )
 
 
@@ -210,37 +264,36 @@ class TrialRunner:
         planner, _, kind = self.planner(name)
         return kind.upper() if hasattr(planner, "expected_shape") else "state"
 
-    def replay(self, method: str, seed: int):
-        """Re-simulate one trial of a plant with a step log (the LIP): (scenario,
-        `EpisodeRecord`, `StepLog`) — for plots."""
+    def request(self, method: str, seed: int, trace: bool = False) -> EpisodeRequest:
+        """The `EpisodeRequest` of one trial: method `method` (its planner, configuration
+        and observation) on the scenario of `seed`, with the run's emotion estimate, at
+        the evaluation goal radius; `trace`: keep the per-step trace."""
         from emonav_drake.core.scenario import sample_scenario
-        from emonav_drake.diagrams.plants import PLANTS, plant_named
+        from emonav_drake.diagrams.episode import EpisodeRequest
 
-        robot = plant_named(self.spec.plant)
-        if robot.run_logged is None:
-            able = " or ".join(p for p in PLANTS if PLANTS[p].step_log)
-            raise ConfigError(
-                f"replay draws trials of --plant {able} only (the {robot.label} run keeps "
-                "no step log)"
-            )
         planner, cfg, grid_kind = self.planner(method)
         scenario = sample_scenario(seed, self.config)
-        record, step_log = robot.run_logged(
-            scenario, cfg, planner, grid_kind, cfg.episode.eval_goal_radius, self.estimate
+        return EpisodeRequest(
+            scenario, cfg, planner, grid_kind, emotion_estimate=self.estimate, trace=trace
         )
-        return scenario, record, step_log
+
+    def replay(self, method: str, seed: int) -> tuple[Scenario, EpisodeRecord, EpisodeTrace | None]:
+        """Re-simulate one trial on the run's plant with its per-step trace: (scenario,
+        `EpisodeRecord`, `EpisodeTrace`; None from a plant that keeps no trace) — for
+        plots, diagnoses."""
+        from emonav_drake.diagrams.plants import plant_named
+
+        request = self.request(method, seed, trace=True)
+        record, trace = plant_named(self.spec.plant, "plant =").simulate(request)
+        return request.scenario, record, trace
 
     def run(self, method: str, seed: int) -> dict:
         """One trial: method `method` on the scenario of `seed`; the `trials.jsonl` line."""
-        from emonav_drake.core.scenario import sample_scenario
         from emonav_drake.diagrams.evaluation_episode import run_evaluation_episode
 
-        planner, cfg, grid_kind = self.planner(method)
-        scenario = sample_scenario(seed, self.config)
+        request = self.request(method, seed)
         t0 = time.perf_counter()
-        record = run_evaluation_episode(
-            self.spec.plant, scenario, cfg, planner, grid_kind, self.estimate
-        )
+        record = run_evaluation_episode(self.spec.plant, request)
         wall = time.perf_counter() - t0
         rec = record.to_json()
         rec["seed"] = seed

@@ -3,7 +3,8 @@ intervals and the trajectories of chosen trials.
 
 * `plot_summary(trials, methods, labels)`: SR per method with its Wilson interval; DT and
   IDT per trial (mean over the trials with a 95 % Student-t interval of the mean).
-* `plot_trajectory(ax, scenario, step_log, config)`: the robot's path, every pedestrian's
+* `plot_trajectory(ax, scenario, trace, config)`: from an episode's `EpisodeTrace`
+  (`TrialRunner.replay`, either plant), the robot's path, every pedestrian's
   path coloured by its emotion at each step (a time-varying emotion changes colour along
   the path), the static discs with their discomfort rings, start and goal.
 * `run_labels(settings)`: the name each method of a run is shown under (the LIP-trained
@@ -22,6 +23,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from emonav_drake.core import palette
+from emonav_drake.core.episode_trace import EpisodeTrace
 from emonav_drake.core.palette import (
     EMOTION_RGB,
     GOAL_RADIUS_RGB,
@@ -154,19 +156,20 @@ def _emotion_at(ped, k: int, step_time: float, period: float) -> str:
 def plot_trajectory(
     ax,
     scenario,
-    step_log,
+    trace: EpisodeTrace,
     config: EmoNavConfig,
     title: str = "",
     goal_radius: float | None = None,
 ) -> None:
-    """Draw one episode: robot path, pedestrians coloured by emotion, discs, start, goal
-    (with its goal radius: `goal_radius`, default `config.episode.eval_goal_radius`)."""
+    """Draw one episode from its `EpisodeTrace` (world frame, metres): robot path,
+    pedestrians coloured by emotion, discs, start, goal (with its goal radius:
+    `goal_radius`, default `config.episode.eval_goal_radius`)."""
     from matplotlib.collections import LineCollection
     from matplotlib.lines import Line2D
     from matplotlib.patches import Circle
 
-    robot = np.array([r[:2] for r in step_log.robot])
-    peds = np.array(step_log.pedestrians)  # (K + 1, P, 2)
+    robot = np.array([r[:2] for r in trace.robot])
+    peds = np.array(trace.pedestrians)  # (K + 1, P, 2)
     T = config.robot.step_time
     rd = config.reward
     for ob in scenario.obstacles:

@@ -12,9 +12,10 @@ each again.
 `diagnose_run` (`--out`) simulates every failed trial (outcome collision, timeout or
 fall) again from its seed (the benchmark is deterministic: the same record, checked), on
 the run's plant. On a LIP run that gives each failure its cause (the records of runs
-made before `collided_with` was recorded do not say what a collision hit). On a Digit run
-it does so with a trace of the robot and the held command at every planner instant, and
-each failure gets:
+made before `collided_with` was recorded do not say what a collision hit). On a run of a
+plant with a step-response model (`Plant.response`: Digit) it does so with the episode's
+`EpisodeTrace` (the robot and the held command at every planner instant), and each
+failure gets:
 
 * its cause: "collision: static" or "collision: <emotion>" (the pedestrian's emotion at
   the collision), "fall: <reason>", "timeout";
@@ -42,13 +43,17 @@ from pathlib import Path
 import numpy as np
 
 from emonav_drake.core import step_response as sr
+from emonav_drake.core.episode_trace import EpisodeTrace
 from emonav_drake.evaluation.failures import failure_cause, format_failures, write_run_files
 from emonav_drake.params import ConfigError, EmoNavConfig
 
 
-def tracking_errors(trace: list[dict], config: EmoNavConfig, last: int, model=None) -> dict:
-    """Per-step errors over the last `last` transitions of a trace: position [m] and
-    heading [rad] of the LIP driven by u_k (and of `model`, if given) against Digit."""
+def tracking_errors(
+    trace: EpisodeTrace | list[dict], config: EmoNavConfig, last: int, model=None
+) -> dict:
+    """Per-step errors over the last `last` transitions of a trace (an `EpisodeTrace` or
+    its row dicts): position [m] and heading [rad] of the LIP driven by u_k (and of
+    `model`, if given) against the robot."""
     r = config.robot
     data = sr.transitions_from_trace(trace, r.step_time, skip=1)
     if len(data) == 0:
@@ -68,27 +73,18 @@ def tracking_errors(trace: list[dict], config: EmoNavConfig, last: int, model=No
 
 
 def diagnose_trial(runner, method: str, seed: int, last: int, model) -> dict:
-    """Simulate one trial of `runner`'s run again: its cause, and on a plant that traces its
-    episodes (Digit, `Plant.traces`) the tracking errors over the last `last` steps
-    (`tracking` is None on another plant)."""
+    """Simulate one trial of `runner`'s run again: its cause, and on a plant with a
+    response model (`Plant.response`, Digit's) the tracking errors over the last `last`
+    steps, from the episode's `EpisodeTrace` (`tracking` is None on another plant, or
+    when the plant keeps no trace)."""
     from emonav_drake.diagrams.plants import plant_named
 
     plant = runner.spec.plant
-    robot = plant_named(plant)
-    if robot.run_traced is not None:
-        from emonav_drake.core.scenario import sample_scenario
-
-        planner, cfg, grid_kind = runner.planner(method)
-        trace: list[dict] = []
-        record = robot.run_traced(
-            sample_scenario(seed, runner.config),
-            cfg,
-            planner,
-            grid_kind,
-            cfg.episode.eval_goal_radius,
-            trace,
-        ).to_json()
-        tracking = tracking_errors(trace, cfg, last, model)
+    if plant_named(plant).response is not None:
+        _, rec, trace = runner.replay(method, seed)
+        record = rec.to_json()
+        cfg = runner.planner(method)[1]
+        tracking = None if trace is None else tracking_errors(trace, cfg, last, model)
     else:  # the benchmark's own trial: the same record, nothing to compare the robot with
         record, tracking = runner.run(method, seed)["record"], None
     return {
@@ -136,11 +132,11 @@ def diagnose_run(
     methods = check_methods(settings, methods)
     robot = plant_named(settings["plant"], flag=f"{where}: plant")
     model = None
-    if robot.traces and robot.response is not None:
+    if robot.response is not None:
         from emonav_drake.planners.model_aware import load_response
 
         model = load_response(robot.response)
-    if not robot.traces:  # successes are the reference of the tracking comparison only
+    else:  # successes are the reference of the tracking comparison only
         reference = 0
     todo = []
     for m in methods:

@@ -197,16 +197,18 @@ def episode_samples(
     the updates at that instant (what the camera rendered); the estimate is the
     classifier's result of that instant, read one walking step later.
     """
-    from emonav_drake.diagrams.navigation import (
-        build_navigation_diagram,
-        start_episode_simulator,
-    )
+    from pydrake.systems.analysis import Simulator
+
+    from emonav_drake.diagrams.navigation import build_navigation_diagram
+    from emonav_drake.systems.episode_monitor import episode_monitor_callback
 
     params = (params or EmotionEstimateParams(mode="camera")).validate()
     if params.mode != "camera":
         raise ValueError(f"episode_samples needs mode 'camera', not {params.mode!r}")
     nav = build_navigation_diagram(scenario, config, planner, emotion_estimate=params)
-    sim = start_episode_simulator(nav, 0.0, None)
+    sim = Simulator(nav.diagram)
+    sim.set_monitor(episode_monitor_callback(nav.diagram, nav.monitor))
+    sim.Initialize()
     ctx = sim.get_mutable_context()
     d = nav.diagram
     classifier = d.GetSubsystemByName("emotion_classifier")

@@ -1,9 +1,8 @@
 """One episode's trajectory as plain data: the `"trajectory"` section of `emonav sim --json`.
 
-Built from what the diagrams log — the LIP diagram's `StepLog` (`run_episode`) or the
-Digit diagram's per-step trace (`run_digit_episode(..., trace=...)`) — by one function,
-`build_trajectory`, and read back, checked, by `load_trajectory` (what `emonav plot`
-draws).
+Built from the `EpisodeTrace` either plant gives (`Plant.simulate` with `trace=True`;
+`trajectory_from_trace`) by one function, `build_trajectory`, and read back, checked, by
+`load_trajectory` (what `emonav plot` draws).
 
 Layout (world frame W: x towards the goal, y left; metres, radians, seconds), one row per
 walking instant t_k = kT, k = 0 … K (K = the record's `steps`), taken before the updates
@@ -45,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
+from emonav_drake.core.episode_trace import EpisodeTrace
 from emonav_drake.core.metrics import COLLISION, EpisodeRecord
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.json_input import JsonInputError, read_json
@@ -221,56 +221,24 @@ def build_trajectory(
     return traj
 
 
-def trajectory_from_step_log(
+def trajectory_from_trace(
     scenario: Scenario,
     config: EmoNavConfig,
     record: EpisodeRecord,
-    step_log: object,
+    trace: EpisodeTrace,
     planner: str,
+    plant: str,
     goal_radius: float | None = None,
 ) -> Trajectory:
-    """The trajectory of a LIP episode from `diagrams.navigation.run_episode`'s `StepLog`."""
-    n = len(step_log.robot)
-    return build_trajectory(
-        scenario,
-        config,
-        record,
-        t=np.arange(n) * config.robot.step_time,
-        robot=step_log.robot,
-        command=step_log.commands,
-        pedestrians=step_log.pedestrians,
-        emotions=step_log.emotions,
-        planner=planner,
-        plant="lip",
-        goal_radius=goal_radius,
-    )
-
-
-def trajectory_from_digit_trace(
-    scenario: Scenario,
-    config: EmoNavConfig,
-    record: EpisodeRecord,
-    trace: Sequence[dict],
-    planner: str,
-    goal_radius: float | None = None,
-) -> Trajectory:
-    """The trajectory of a Digit episode from `run_digit_episode(..., trace=trace)`
-    (entry k holds u_{k−1} as "held": the commands are the entries 1 … K's)."""
-    if not trace:
-        raise ValueError("the Digit trace is empty")
-    return build_trajectory(
-        scenario,
-        config,
-        record,
-        t=[e["t"] for e in trace],
-        robot=[e["robot"] for e in trace],
-        command=[e["held"] for e in trace[1:]],
-        pedestrians=[e["pedestrians"] for e in trace],
-        emotions=[e["emotions"] for e in trace],
-        planner=planner,
-        plant="digit",
-        goal_radius=goal_radius,
-    )
+    """The trajectory of an episode on any plant from its `EpisodeTrace` (`Plant.simulate`
+    with `trace=True`): row k's time, robot, pedestrians and emotions, and u_k = row
+    k + 1's held command; `plant` is the plant's name (shown in the figures' titles)."""
+    if len(trace) == 0:
+        raise ValueError("the trace is empty")
+    steps = {"t": trace.t, "robot": trace.robot, "command": trace.commands}
+    steps |= {"pedestrians": trace.pedestrians, "emotions": trace.emotions}
+    names = {"planner": planner, "plant": plant, "goal_radius": goal_radius}
+    return build_trajectory(scenario, config, record, **steps, **names)
 
 
 def collision_contact(traj: Trajectory) -> dict:

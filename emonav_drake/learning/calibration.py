@@ -8,7 +8,8 @@
 maps, planner) on training seeds, each planner's command replaced by a uniformly random
 one on a fraction `explore` of the steps (seeded) so that the fit sees every command,
 and appends one JSON line per episode: the planner, seed, outcome, wall time and the trace
-of `simulate_digit_episode` (robot state and held command at every planner instant).
+of the episode (`core.episode_trace.EpisodeTrace.rows`: robot state and held command at
+every planner instant).
 Episodes run one per Ray task (`--workers`), each worker simulating its own diagrams; the
 file is resumable (episodes already in it are not run again) and its lines are sorted
 by (planner, seed) whatever the order they finished in, so a parallel run writes the same
@@ -24,10 +25,15 @@ The shipped model is `emonav_drake/data/digit_response.json` (`response: digit` 
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from emonav_drake.json_input import JsonInputError, parse_json
 from emonav_drake.params import ConfigError, EmoNavConfig
+
+if TYPE_CHECKING:
+    from emonav_drake.diagrams.trials import MethodSpec
 
 
 # ------------------------------------------------------------------------ collection
@@ -71,15 +77,14 @@ def _trace_episode(runner, method: str, seed: int, explore: float) -> dict:
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
 
     planner, cfg, grid_kind = runner.planner(method)
-    trace: list[dict] = []
     t0 = time.perf_counter()
-    record = run_digit_episode(
+    record, trace = run_digit_episode(
         sample_scenario(seed, runner.config),
         cfg,
         ExploringPlanner(planner, explore, seed, cfg),
         grid_kind=grid_kind,
         goal_radius=cfg.episode.eval_goal_radius,
-        trace=trace,
+        trace=True,
     )
     wall = time.perf_counter() - t0
     return {
@@ -87,9 +92,9 @@ def _trace_episode(runner, method: str, seed: int, explore: float) -> dict:
         "seed": seed,
         "explore": explore,
         "outcome": record.outcome,
-        "steps": len(trace) - 1,
+        "steps": trace.steps,
         "wall_seconds": round(wall, 3),
-        "trace": trace,
+        "trace": trace.rows(),  # the file's format: `EpisodeTrace.rows`
     }
 
 
@@ -106,7 +111,7 @@ def _trace_worker(explore: float) -> type:
 
 def collect_traces(
     out: str | Path,
-    planners: str,
+    planners: str | Sequence[MethodSpec],
     episodes: int,
     first_seed: int,
     explore: float = 0.3,
@@ -115,8 +120,10 @@ def collect_traces(
     progress: bool = True,
     config: EmoNavConfig | None = None,
 ) -> dict:
-    """Traced, exploring Digit episodes into the JSONL file `out` (module docstring);
-    `config` (default: the defaults) is the navigation configuration of the episodes.
+    """Traced, exploring Digit episodes into the JSONL file `out` (module docstring) of
+    `planners` (methods by name, comma-separated, or validated `MethodSpec`s:
+    `diagrams.trials.method_specs`); `config` (default: the defaults) is the navigation
+    configuration of the episodes.
 
     Returns {"episodes", "steps", "wall_seconds", "steps_per_second_per_worker"} of the
     episodes run now (the throughput of the Digit simulation, per worker).
@@ -127,7 +134,7 @@ def collect_traces(
         MAX_TRIALS,
         BenchmarkSpec,
         TrialRunner,
-        parse_methods,
+        method_specs,
         run_trials,
     )
     from emonav_drake.params import dump_config
@@ -143,7 +150,7 @@ def collect_traces(
             "must be in [0, 2**64 - 1]"
         )
     out = Path(out)
-    methods = parse_methods(planners)
+    methods = method_specs(planners) if isinstance(planners, str) else list(planners)
     spec = BenchmarkSpec(methods, "digit", dump_config(config or EmoNavConfig()))
     have = read_trace_lines(out) if out.is_file() else []
     if any(h.get("explore") != explore for h in have):

@@ -117,7 +117,7 @@ def _labelled_episode(
     expert = rounds.expert.build(cfg)
     planner = LabellingPlanner(student, expert, beta, seed)
     t0 = time.perf_counter()
-    record = run_digit_episode(
+    record, _ = run_digit_episode(
         sample_scenario(seed, runner.config), cfg, planner, grid_kind=grid_kind
     )
     return {
