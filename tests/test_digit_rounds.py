@@ -8,11 +8,8 @@ import pytest
 from emonav_drake.config_yaml import load_typed_yaml
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.dagger import train_dagger
-from emonav_drake.learning.digit_dagger import (
-    DIGIT_ROUNDS_FORMAT,
-    DigitRoundsConfig,
-    run_digit_rounds,
-)
+from emonav_drake.learning.digit_dagger import DIGIT_ROUNDS_FORMAT, run_digit_rounds
+from emonav_drake.learning.digit_rounds_config import DigitRoundsConfig
 from emonav_drake.learning.run_state import read_run_state
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import PolicyPlanner

@@ -56,7 +56,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 
 def cmd_digit_rounds(args: argparse.Namespace) -> int:
     """Run (or --resume) the Digit DAgger rounds from --from's run; print the policy path."""
-    from emonav_drake.learning.digit_dagger import DigitRoundsConfig, run_digit_rounds
+    from emonav_drake.learning.digit_dagger import run_digit_rounds
+    from emonav_drake.learning.digit_rounds_config import DigitRoundsConfig
 
     cfg = DigitRoundsConfig(
         rounds=args.rounds,
