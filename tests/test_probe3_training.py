@@ -264,10 +264,10 @@ def test_a_run_state_with_nan_is_refused_naming_the_tensor(tmp_path):
 def test_every_numeric_training_field_has_a_bounded_range(schema):
     # a new numeric field without a range in its `setting(...)` fails here (or without a doc)
     from emonav_drake.config_fields import field_range
-    from emonav_drake.learning import config
+    from emonav_drake.learning import config, sac_config
     from tests.test_probe3_resources import field_problems
 
-    cls = getattr(config, schema)
+    cls = getattr(config, schema, None) or getattr(sac_config, schema)
     problems = field_problems(cls)
     assert not problems, f"{schema}: {problems}"
     assert field_range(cls, "seed") == (0, 2**64 - 1)
