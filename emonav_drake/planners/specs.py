@@ -52,11 +52,10 @@ class _Learned:
     """What every spec with a checkpoint shares: which file it runs.
 
     `checkpoint` given: that file ("shipped", a variant's name or a path); otherwise the
-    shipped policy of `variant` ("" = the package's default policy,
+    shipped policy of the spec's `variant` ("" = the package's default policy,
     `planners.policy.DEFAULT_POLICY`)."""
 
     checkpoint: str
-    variant: str
 
     def checkpoint_file(self) -> Path:
         """The checkpoint this spec runs (`ConfigError` for a variant with none shipped)."""
@@ -64,8 +63,9 @@ class _Learned:
 
         if self.checkpoint:
             return resolve_policy_file(self.checkpoint, "checkpoint")
-        if self.variant:
-            return shipped_checkpoint(self.variant)
+        variant = getattr(self, "variant", "")
+        if variant:
+            return shipped_checkpoint(variant)
         from emonav_drake.planners.policy import DEFAULT_POLICY
 
         return DEFAULT_POLICY
@@ -129,7 +129,6 @@ class SacSpec(_Learned):
     """A SAC-trained actor (`emonav train --algo sac`); the checkpoint must be given."""
 
     checkpoint: str = setting("", "the SAC-trained actor it runs (required)")
-    variant: str = setting("", "not used: a SAC actor runs only from a given checkpoint")
 
     def checkpoint_file(self) -> Path:
         if not self.checkpoint:
