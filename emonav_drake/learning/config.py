@@ -1,9 +1,9 @@
 """Training configurations: every hyper-parameter of a run in one typed object.
 
-The public module of the training configurations: `DaggerConfig` and `SarlConfig` (the
-routes that learn from an expert, a planner spec) are here; `SacConfig` and
-`FinetuneConfig` (the soft actor-critic routes) are in `learning/sac_config.py` and the
-ranges and rules they share in `learning/config_common.py`; import all of them from here.
+`DaggerConfig` and `SarlConfig` (the routes that learn from an expert, a planner spec) are
+here; `SacConfig` and `FinetuneConfig` (the soft actor-critic routes) are in
+`learning/sac_config.py`, and the ranges and rules they all share in
+`learning/config_common.py`.
 Loadable from YAML with `config_yaml.load_typed_yaml` (no `from __future__ import
 annotations` here: Drake's typed loader needs real types). Each field declares its
 default, doc, unit and allowed range (`config_fields.setting`); `validate()` checks the
