@@ -7,7 +7,7 @@ with `setting`, so that one line says all there is to know of a field:
     step_time: float = setting(0.4, "T, one walking step", "s", (0.05, 2.0))
 
 `setting` is `dataclasses.field` with the doc, unit and range as the field's metadata,
-which Drake's typed YAML loader ignores. They are read by `config_yaml.validate_fields`
+which Drake's typed YAML loader ignores. They are read by `typed_yaml.validate_fields`
 (every value against its range), by the annotated dump (`dump_annotated_yaml`, `emonav
 config --dump`: each field's doc, unit and range as a trailing YAML comment) and by the
 configuration reference of the documentation (`reference_rows`, `scripts/docs_hooks.py`).
@@ -29,7 +29,7 @@ import typing
 from collections.abc import Iterator
 from typing import Any
 
-from emonav_drake.config_yaml import dump_typed_yaml
+from emonav_drake.typed_yaml import dump_typed_yaml
 
 # Seeds are 64-bit unsigned integers (numpy's generators take them; a larger one would
 # alias a smaller one).

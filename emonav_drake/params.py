@@ -13,7 +13,7 @@ and dumping, and every name of its sections, which live by concept in
 `params_planners.py` (DWA, the MPC): import them from here. Each field declares its
 default, doc, unit and allowed range (`config_fields.setting`); the schema-agnostic YAML
 machinery (typed loading and dumping, error messages naming the field, the range check
-`validate_fields`, `ConfigError`) is `config_yaml.py`, shared with the training
+`validate_fields`, `ConfigError`) is `typed_yaml.py`, shared with the training
 configurations and the scenarios. `ConfigError` is importable from here too.
 
 Units are SI throughout (metres, seconds, radians).
@@ -24,13 +24,6 @@ import dataclasses as dc
 from pathlib import Path
 
 from emonav_drake.config_fields import setting
-from emonav_drake.config_yaml import (
-    ConfigError,
-    dump_typed_yaml,
-    load_typed_yaml,
-    require,
-    validate_fields,
-)
 from emonav_drake.params_crowd import (
     EMOTION_NAMES,
     HAPPY,
@@ -50,6 +43,13 @@ from emonav_drake.params_robot import (
     RobotParams,
     WalkingParams,
     pendulum_frequency,
+)
+from emonav_drake.typed_yaml import (
+    ConfigError,
+    dump_typed_yaml,
+    load_typed_yaml,
+    require,
+    validate_fields,
 )
 
 __all__ = [

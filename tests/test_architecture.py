@@ -25,7 +25,7 @@ LAYERS: list[tuple[str, frozenset[str]]] = [
                 "__init__",
                 "errors",
                 "params",
-                "config_yaml",
+                "typed_yaml",
                 "config_fields",
                 "params_robot",
                 "params_crowd",

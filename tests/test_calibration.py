@@ -102,12 +102,12 @@ def test_the_shipped_model_predicts_a_fresh_digit_episode_within_its_reported_er
 
 
 def test_the_routes_expert_is_a_planner_by_name():
-    from emonav_drake.config_yaml import ConfigError, load_typed_yaml
     from emonav_drake.diagrams.trials import method_specs
     from emonav_drake.learning.config import DaggerConfig
     from emonav_drake.params import EmoNavConfig
     from emonav_drake.planners import DWA_DIGIT, make_planner
     from emonav_drake.planners.variants import variant
+    from emonav_drake.typed_yaml import ConfigError, load_typed_yaml
 
     route = load_typed_yaml(DaggerConfig, path=variant("emobipednav_digit").config)
     assert route.expert == DWA_DIGIT  # the registered planner is the route's teacher

@@ -285,7 +285,7 @@ def test_a_confusion_runs_recorded_estimate_is_unchanged_by_the_camera(tmp_path)
     import argparse
 
     from emonav_drake.cli.benchmark import _emotion_estimate_yaml
-    from emonav_drake.config_yaml import load_typed_yaml
+    from emonav_drake.typed_yaml import load_typed_yaml
 
     f = tmp_path / "confusion.yaml"
     f.write_text("mode: confusion\nconfusion: [[0.8, 0.1, 0.1], [0.1, 0.8, 0.1], [0, 0.2, 0.8]]\n")

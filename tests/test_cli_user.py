@@ -76,7 +76,7 @@ def test_sim_names_the_scene_it_ran(capsys, tmp_path):
 
 
 def test_config_list_descriptions_are_whole_sentences(capsys):
-    from emonav_drake.cli.config_cmd import LIST_WIDTH
+    from emonav_drake.cli.config import LIST_WIDTH
 
     assert main(["config", "--list"]) == 0
     lines = capsys.readouterr().out.splitlines()

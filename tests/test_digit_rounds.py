@@ -5,7 +5,6 @@ model-aware expert labels; the round writes a loadable policy and a resumable st
 import numpy as np
 import pytest
 
-from emonav_drake.config_yaml import load_typed_yaml
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.dagger import train_dagger
 from emonav_drake.learning.digit_dagger import DIGIT_ROUNDS_FORMAT, run_digit_rounds
@@ -15,6 +14,7 @@ from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import PolicyPlanner
 from emonav_drake.planners.specs import MpcNearbySpec, MpcSpec, ShieldSpec, describe_spec
 from emonav_drake.planners.variants import CONFIG_DIR as ROUTES
+from emonav_drake.typed_yaml import load_typed_yaml
 
 
 @pytest.mark.parametrize(

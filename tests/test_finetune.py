@@ -366,8 +366,8 @@ def test_resume_errors_are_clear(tmp_path, capsys):
 
 
 def test_the_digit_route_file_holds_the_defaults_in_the_calibrated_world():
-    from emonav_drake.config_yaml import load_typed_yaml
     from emonav_drake.configs import CONFIG_DIR
+    from emonav_drake.typed_yaml import load_typed_yaml
 
     cfg = load_typed_yaml(FinetuneConfig, path=CONFIG_DIR / "finetune_digit.yaml").validate()
     assert cfg == FinetuneConfig(response="digit")

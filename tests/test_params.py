@@ -13,8 +13,8 @@ from emonav_drake.config_fields import (
     setting,
     undocumented_fields,
 )
-from emonav_drake.config_yaml import validate_fields
 from emonav_drake.params import ConfigError, EmoNavConfig, dump_config, load_config
+from emonav_drake.typed_yaml import validate_fields
 
 
 def test_defaults_are_the_papers_table_1():

@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.config_yaml import ConfigError
 from emonav_drake.core.crowd import Crowd, CrowdState
 from emonav_drake.core.pedestrian_routes import WAYPOINT_TOLERANCE
 from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.typed_yaml import ConfigError
 
 FAR = np.array([40.0, 40.0])  # the robot, out of everyone's way
 STILL = np.zeros(2)

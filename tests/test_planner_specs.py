@@ -6,7 +6,6 @@ import dataclasses as dc
 import numpy as np
 import pytest
 
-from emonav_drake.config_yaml import ConfigError, from_plain, load_typed_yaml, to_plain
 from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.learning.config import DaggerConfig, SarlConfig
@@ -23,6 +22,7 @@ from emonav_drake.planners.specs import (
     ShieldSpec,
     describe_spec,
 )
+from emonav_drake.typed_yaml import ConfigError, from_plain, load_typed_yaml, to_plain
 
 
 def _walk(planner, config: EmoNavConfig, seed: int, steps: int) -> list[np.ndarray]:

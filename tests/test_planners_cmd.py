@@ -39,9 +39,9 @@ def test_the_command_prints_text_and_json(capsys):
 def test_a_planners_spec_as_listed_is_a_routes_expert_as_written(name):
     """The spec `emonav planners` prints is the YAML a route writes for that expert: read
     back, it is the registered spec."""
-    from emonav_drake.config_yaml import load_typed_yaml
     from emonav_drake.learning.config import DaggerConfig
     from emonav_drake.planners import planner_kind
+    from emonav_drake.typed_yaml import load_typed_yaml
 
     (row,) = [r for r in planner_rows() if r.name == name]
     route = load_typed_yaml(DaggerConfig, data=f"expert: {row.spec}\n")

@@ -29,7 +29,6 @@ import numpy as np
 import pytest
 
 from emonav_drake.config_fields import SEED_RANGE, WORLD_POINT, field_range
-from emonav_drake.config_yaml import MAX_YAML_BYTES, MAX_YAML_VALUES, ConfigError
 from emonav_drake.core.scenario import (
     MAX_SCHEDULE,
     PedestrianSpec,
@@ -42,6 +41,7 @@ from emonav_drake.params import EmoNavConfig, load_config
 from emonav_drake.perception.image_io import HARD_MAX_PIXELS, image_header_size
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams, HeadCameraParams
 from emonav_drake.planners.specs import EXPERT_SPECS
+from emonav_drake.typed_yaml import MAX_YAML_BYTES, MAX_YAML_VALUES, ConfigError
 from tests.cli_errors import assert_user_error, run
 
 PACKAGE = Path(__file__).resolve().parent.parent / "emonav_drake"
@@ -681,12 +681,12 @@ def test_the_largest_reward_keeps_the_total_reward_finite():
 
 
 def test_every_shipped_configuration_and_scenario_still_loads():
-    from emonav_drake.config_yaml import load_typed_yaml
     from emonav_drake.configs import SETTINGS, load_setting
     from emonav_drake.learning.config import DaggerConfig, SarlConfig
     from emonav_drake.learning.sac_config import FinetuneConfig
     from emonav_drake.planners.variants import VARIANTS
     from emonav_drake.scenarios import EXAMPLES, scenario_path
+    from emonav_drake.typed_yaml import load_typed_yaml
 
     for name in SETTINGS:
         load_setting(name)

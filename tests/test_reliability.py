@@ -359,7 +359,7 @@ def test_crowd_that_does_not_fit_is_an_error_not_fewer_objects(tmp_path, capsys)
 def test_time_varying_with_a_scenario_file(tmp_path, capsys, tiny):
     import argparse
 
-    from emonav_drake.cli.config import resolve_config, resolve_scenario
+    from emonav_drake.cli.resolve import resolve_config, resolve_scenario
 
     sc = tmp_path / "scene.yaml"
     sc.write_text("pedestrians:\n  - {start: [0.0, 4.0], goal: [0.0, -4.0], emotion: negative}\n")

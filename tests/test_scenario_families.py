@@ -6,7 +6,6 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.config_yaml import ConfigError
 from emonav_drake.core.scenario import (
     PedestrianSpec,
     Scenario,
@@ -18,6 +17,7 @@ from emonav_drake.core.scenario import (
 )
 from emonav_drake.core.scenario_families import FAMILIES, goal_reachable, sample_family
 from emonav_drake.params import SCENARIO_FAMILIES, EmoNavConfig
+from emonav_drake.typed_yaml import ConfigError
 
 CFG = EmoNavConfig()
 SEEDS = range(12)

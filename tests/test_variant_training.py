@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from emonav_drake.cli import main
-from emonav_drake.config_yaml import ConfigError, load_typed_yaml
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.planners.policy import load_policy
 from emonav_drake.planners.variants import VARIANTS, PolicyVariant, shipped_checkpoint, variant
+from emonav_drake.typed_yaml import ConfigError, load_typed_yaml
 
 
 @pytest.fixture(scope="module")

@@ -11,9 +11,9 @@ emonav planners   every planner: what it reads (privileged or deployable), its c
 emonav SUB-COMMAND --help   for every other one
 
 One module per sub-command in emonav_drake/cli/ (sim.py, eval.py, lgm.py, plot.py, walk.py,
-emotion.py, train.py, export.py, benchmark.py, compare.py, diagnose.py, config_cmd.py,
-calibrate.py, digit_rounds.py); --config / --setting / --scenario are resolved in one
-place, config.py.
+emotion.py, train.py, export.py, benchmark.py, compare.py, diagnose.py, config.py,
+calibrate.py, digit_rounds.py, planners_cmd.py); --config / --setting / --scenario are
+resolved in one place, resolve.py.
 
 Errors: a bad flag, file or field is one line `emonav: error: ...` naming it, exit code 2
 (`--debug` shows the traceback instead). Ctrl-C: one line, exit code 130; `eval` keeps
@@ -38,7 +38,7 @@ from emonav_drake.cli import (
     benchmark,
     calibrate,
     compare,
-    config_cmd,
+    config,
     diagnose,
     digit_rounds,
     emotion,
@@ -78,7 +78,7 @@ SUBCOMMANDS = (
     benchmark,
     compare,
     diagnose,
-    config_cmd,
+    config,
     calibrate,
     digit_rounds,
 )

@@ -1,6 +1,6 @@
 """`emonav benchmark`: methods × seeded trials, resumable, on Ray (paper Tables II-III).
 
-`DESCRIPTION` is its `--help` text (it also names `emonav config`, in config_cmd.py).
+`DESCRIPTION` is its `--help` text (it also names `emonav config`, in config.py).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from emonav_drake.cli.common import (
     emotion_estimate_of,
     parse_methods,
 )
-from emonav_drake.cli.config import (
+from emonav_drake.cli.resolve import (
     add_config_choice,
     add_family,
     add_state_source,
@@ -105,7 +105,7 @@ def _emotion_estimate_yaml(args: argparse.Namespace) -> str | None:
     params = emotion_estimate_of(args)
     if params is None:
         return None
-    from emonav_drake.config_yaml import dump_typed_yaml
+    from emonav_drake.typed_yaml import dump_typed_yaml
 
     text = dump_typed_yaml(params)
     if params.mode != "camera":  # as written before the camera existed: old runs resume

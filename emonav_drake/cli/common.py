@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from emonav_drake.atomic_io import check_distinct, check_output_file, write_text_atomic
-from emonav_drake.cli.config import add_config_choice, add_family, add_state_source
+from emonav_drake.cli.resolve import add_config_choice, add_family, add_state_source
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners import is_learned
 
@@ -234,8 +234,8 @@ def load_emotion_estimate(path: Path | None) -> Any:
     """
     if not path:
         return None
-    from emonav_drake.config_yaml import load_typed_yaml
     from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+    from emonav_drake.typed_yaml import load_typed_yaml
 
     params = load_typed_yaml(EmotionEstimateParams, path=path)  # its errors name the file
     where = f"--emotion-estimate {path}"

@@ -20,7 +20,7 @@ from emonav_drake.cli.common import (
     check_seed_range,
     emotion_estimate_of,
 )
-from emonav_drake.cli.config import resolve_config, sample
+from emonav_drake.cli.resolve import resolve_config, sample
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.params import ConfigError

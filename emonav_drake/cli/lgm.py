@@ -11,7 +11,7 @@ from pathlib import Path
 
 from emonav_drake.atomic_io import atomic_output
 from emonav_drake.cli.common import SeedArg, check_outputs
-from emonav_drake.cli.config import CONFIG_HELP, resolve_config, resolve_scenario
+from emonav_drake.cli.resolve import CONFIG_HELP, resolve_config, resolve_scenario
 from emonav_drake.params import ConfigError
 
 

@@ -31,7 +31,7 @@ from emonav_drake.cli.common import (
     meshcat_host,
     write_steps_csv,
 )
-from emonav_drake.cli.config import resolve_config, resolve_scenario
+from emonav_drake.cli.resolve import resolve_config, resolve_scenario
 from emonav_drake.core.metrics import format_idt
 from emonav_drake.diagrams.episode import EpisodeRequest
 from emonav_drake.diagrams.plants import DEFAULT_PLANT, PLANTS, Plant, plant_named

@@ -162,7 +162,7 @@ def _apply_variant(args: argparse.Namespace) -> None:
 
 def _training_config(args: argparse.Namespace):
     """The typed configuration with the command-line overrides, validated (field named)."""
-    from emonav_drake.config_yaml import load_typed_yaml
+    from emonav_drake.typed_yaml import load_typed_yaml
 
     if args.algo == "dagger":
         from emonav_drake.learning.config import DaggerConfig as schema
@@ -241,8 +241,8 @@ def _saved_config(run: Path, algo: str, schema: type):
     checked as a --config file would be; `RunStateError` if the state cannot be read."""
     import json
 
-    from emonav_drake.config_yaml import load_typed_yaml
     from emonav_drake.learning.run_state import RunStateError, read_state_config
+    from emonav_drake.typed_yaml import load_typed_yaml
 
     name = STATE_FILES[algo]
     if not (run / name).is_file():

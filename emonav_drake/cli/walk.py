@@ -25,7 +25,7 @@ from emonav_drake.atomic_io import (
     write_json,
 )
 from emonav_drake.cli.common import SeedArg, add_meshcat_host, meshcat_host, write_steps_csv
-from emonav_drake.cli.config import CONFIG_HELP, resolve_config
+from emonav_drake.cli.resolve import CONFIG_HELP, resolve_config
 from emonav_drake.params import ConfigError
 
 STEPS_OUT_HELP = (

@@ -12,7 +12,6 @@ import math
 
 import numpy as np
 
-from emonav_drake.config_yaml import ConfigError
 from emonav_drake.core.scenario_spec import (
     MAX_SEED,
     PedestrianSpec,
@@ -21,6 +20,7 @@ from emonav_drake.core.scenario_spec import (
     StaticDiscSpec,
 )
 from emonav_drake.params import EMOTION_NAMES, CrowdParams, EmoNavConfig
+from emonav_drake.typed_yaml import ConfigError
 
 PLACEMENT_TRIES = 1000  # rejection-sampling draws per object
 

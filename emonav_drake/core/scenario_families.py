@@ -30,7 +30,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from emonav_drake.config_yaml import ConfigError
 from emonav_drake.core.paper_scenario import (
     _sample_obstacles,
     _sample_pedestrians,
@@ -44,6 +43,7 @@ from emonav_drake.core.scenario_spec import (
     WallSpec,
 )
 from emonav_drake.params import EMOTION_NAMES, SCENARIO_FAMILIES, EmoNavConfig
+from emonav_drake.typed_yaml import ConfigError
 
 SCENE_TRIES = 200  # whole-scene draws before a family gives up on a seed
 REACH_CELL = 0.1  # [m] grid cell of the reachability check

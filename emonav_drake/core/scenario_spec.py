@@ -24,14 +24,14 @@ import math
 from pathlib import Path
 
 from emonav_drake.config_fields import SEED_RANGE, WORLD_POINT, field_range, setting
-from emonav_drake.config_yaml import (
+from emonav_drake.params import EMOTION_NAMES, CrowdParams, EmoNavConfig
+from emonav_drake.typed_yaml import (
     ConfigError,
     dump_typed_yaml,
     load_typed_yaml_raw,
     short_repr,
     validate_fields,
 )
-from emonav_drake.params import EMOTION_NAMES, CrowdParams, EmoNavConfig
 
 # The most a scenario may hold: what the sampler can be configured to draw
 # (crowd.max_pedestrians, crowd.max_static <= 20); the crowd's ORCA step is quadratic in it.

@@ -222,8 +222,8 @@ class TrialRunner:
         self.config = load_config(data=spec.config_yaml)
         self.estimate = None
         if spec.emotion_estimate_yaml is not None:
-            from emonav_drake.config_yaml import load_typed_yaml
             from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+            from emonav_drake.typed_yaml import load_typed_yaml
 
             self.estimate = load_typed_yaml(
                 EmotionEstimateParams, data=spec.emotion_estimate_yaml

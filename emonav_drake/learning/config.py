@@ -4,10 +4,10 @@
 here; `SacConfig` and `FinetuneConfig` (the soft actor-critic routes) are in
 `learning/sac_config.py`, and the ranges and rules they all share in
 `learning/config_common.py`.
-Loadable from YAML with `config_yaml.load_typed_yaml` (no `from __future__ import
+Loadable from YAML with `typed_yaml.load_typed_yaml` (no `from __future__ import
 annotations` here: Drake's typed loader needs real types). Each field declares its
 default, doc, unit and allowed range (`config_fields.setting`); `validate()` checks the
-ranges (`config_yaml.validate_fields`, the expert's own fields included) and the
+ranges (`typed_yaml.validate_fields`, the expert's own fields included) and the
 cross-field rules, raising `ConfigError` naming the field.
 """
 
@@ -15,7 +15,6 @@ import dataclasses as dc
 
 from emonav_drake.config_fields import SEED_RANGE
 from emonav_drake.config_fields import setting as _setting  # DaggerConfig has a `setting`
-from emonav_drake.config_yaml import ConfigError, from_plain, validate_fields
 from emonav_drake.configs import SETTINGS
 from emonav_drake.core.goal_input import GOAL_INPUTS
 from emonav_drake.core.sarl_state import VALUE_NETWORKS
@@ -48,6 +47,7 @@ from emonav_drake.planners.specs import (
     describe_spec,
     is_soft,
 )
+from emonav_drake.typed_yaml import ConfigError, from_plain, validate_fields
 
 __all__ = ["DaggerConfig", "SarlConfig"]
 

@@ -8,9 +8,9 @@ refused instead of started). The ranges of what a training configuration shares 
 """
 
 from emonav_drake.config_fields import field_range
-from emonav_drake.config_yaml import ConfigError
 from emonav_drake.core.observations import observation_kind, observation_kinds
 from emonav_drake.params import EpisodeParams, LidarParams
+from emonav_drake.typed_yaml import ConfigError
 
 # The 4-conv encoder (3 x 3, strides 2-1-1-1) needs an input of at least this many cells.
 MIN_ENCODER_INPUT = 15

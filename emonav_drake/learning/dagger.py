@@ -53,7 +53,6 @@ import numpy as np
 import torch
 
 from emonav_drake.atomic_io import write_text_atomic
-from emonav_drake.config_yaml import to_plain
 from emonav_drake.configs import load_setting
 from emonav_drake.core.metrics import format_summary
 from emonav_drake.core.observations import observation_dtype, observation_shape
@@ -89,6 +88,7 @@ from emonav_drake.planners.model_aware import load_response
 from emonav_drake.planners.policy import save_policy
 from emonav_drake.planners.protocol import Planner
 from emonav_drake.progress import progress_bar
+from emonav_drake.typed_yaml import to_plain
 
 log = logging.getLogger(__name__)
 

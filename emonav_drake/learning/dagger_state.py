@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 
-from emonav_drake.config_yaml import to_plain
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.dagger_student import Student
 from emonav_drake.learning.demonstrations import Demonstrations
@@ -31,6 +30,7 @@ from emonav_drake.learning.run_state import (
 )
 from emonav_drake.learning.teacher import LEGACY_EXPERT_FIELDS
 from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.typed_yaml import to_plain
 
 STATE_FILE = "dagger_state.pt"
 # What a DAgger state holds (`DaggerRunState.save`).

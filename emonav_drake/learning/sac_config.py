@@ -1,17 +1,16 @@
 """The soft actor-critic routes' configurations: SAC on the grid maps (`SacConfig`) and the
 discrete SAC fine-tuning of a categorical student (`FinetuneConfig`).
 
-Loadable from YAML with `config_yaml.load_typed_yaml` (no `from __future__ import
+Loadable from YAML with `typed_yaml.load_typed_yaml` (no `from __future__ import
 annotations` here: Drake's typed loader needs real types); re-exported by
 `learning/config.py`. Each field declares its default, doc, unit and allowed range
-(`config_fields.setting`); `validate()` checks the ranges (`config_yaml.validate_fields`)
+(`config_fields.setting`); `validate()` checks the ranges (`typed_yaml.validate_fields`)
 and the cross-field rules, raising `ConfigError` naming the field.
 """
 
 import dataclasses as dc
 
 from emonav_drake.config_fields import SEED_RANGE, setting
-from emonav_drake.config_yaml import ConfigError, validate_fields
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.learning.config_common import (
     COUNT,
@@ -33,6 +32,7 @@ from emonav_drake.learning.config_common import (
     check_observation,
 )
 from emonav_drake.params import NUM_BEAMS, EpisodeParams
+from emonav_drake.typed_yaml import ConfigError, validate_fields
 
 _ADAM_BETA1 = (0.0, 0.999999)
 

@@ -18,7 +18,6 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from emonav_drake.config_yaml import to_plain
 from emonav_drake.core.metrics import summarize
 from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.sarl_state import NUM_FEATURES, current_rows, step_discount
@@ -27,6 +26,7 @@ from emonav_drake.learning.config import SarlConfig
 from emonav_drake.learning.run_state import rng_state, set_rng_state, write_run_state
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.sarl import action_values, command_grid, value_network
+from emonav_drake.typed_yaml import to_plain
 
 STATE_FILE = "sarl_state.pt"  # in the run directory: what `--resume` reads
 SARL_STATE_FORMAT = "emonav-sarl-state/1"

@@ -37,7 +37,6 @@ import torch
 from tqdm import tqdm
 
 from emonav_drake.atomic_io import write_text_atomic
-from emonav_drake.config_yaml import to_plain
 from emonav_drake.core.metrics import format_summary
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import SarlConfig
@@ -54,6 +53,7 @@ from emonav_drake.learning.sarl_run import SARL_STATE_FORMAT, STATE_FILE, SarlRu
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.sarl import save_sarl
 from emonav_drake.progress import progress_bar
+from emonav_drake.typed_yaml import to_plain
 
 log = logging.getLogger(__name__)
 

@@ -83,7 +83,7 @@ def named_expert_from_legacy(saved: dict) -> dict:
 def expert_from_legacy(saved: dict) -> dict:
     """A saved configuration with an earlier version's flat expert (a name in `expert`,
     `expert_margin`, …) turned into one with the spec it meant (tagged plain data, as
-    `config_yaml.to_plain` writes it); any other configuration unchanged.
+    `typed_yaml.to_plain` writes it); any other configuration unchanged.
 
     The names meant: "dwa" = DWA with `expert_margin` planning with the route's
     `response`; "mpc" = the MPC on the LIP widened by `expert_clearance`; "shield" =

@@ -22,9 +22,9 @@ import dataclasses as dc
 import numpy as np
 
 from emonav_drake.config_fields import SEED_RANGE, setting
-from emonav_drake.config_yaml import validate_fields
 from emonav_drake.core.crowd import CrowdSnapshot
 from emonav_drake.params import EMOTION_NAMES, ConfigError
+from emonav_drake.typed_yaml import validate_fields
 
 NUM_EMOTIONS = len(EMOTION_NAMES)
 ESTIMATE_MODES = ("ground_truth", "confusion", "classifier", "camera")

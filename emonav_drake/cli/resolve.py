@@ -1,0 +1,146 @@
+"""The one configuration resolver of the command line (no sub-command of its own).
+
+Every sub-command that runs on an `EmoNavConfig` resolves it here, in one order:
+`--setting NAME` (a shipped setting, `emonav_drake/configs/NAME.yaml`), else
+`--config F.yaml`, else the defaults; then `--time-varying`, `--state-source` and
+`--family` on top.
+`--setting` and `--config` are mutually exclusive (`add_config_choice`); a sub-command
+without one of these flags resolves as if it were not given. `sim` and `lgm` also take a scenario
+(`--scenario NAME|F.yaml`, else one sampled from the seed): `resolve_scenario`.
+
+`sim`, `eval`, `benchmark` and `config` take `--setting`; `lgm` and `walk` only `--config`.
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from emonav_drake.configs import SETTINGS
+from emonav_drake.params import EmoNavConfig, load_config
+
+if TYPE_CHECKING:
+    from emonav_drake.core.scenario import Scenario
+
+CONFIG_HELP = "YAML configuration overriding the defaults"
+SETTING_HELP = (
+    "a named setting of the paper shipped with the package: no_emotion (0.2 m for "
+    "every emotion), constant_0.5, var_dd (happy 0.2, neutral 0.35, negative 0.5 m: the "
+    "defaults), time_varying (var_dd + one emotion changing every 2 s)"
+)
+
+
+@dataclass
+class ResolvedConfig:
+    """A sub-command's configuration and where it came from."""
+
+    config: EmoNavConfig
+    setting: str | None  # the --setting name, if one was given
+    origin: str  # "--setting NAME", "--config F" or "the default configuration"
+    time_varying: bool  # --time-varying was given (applied to `config` already)
+    state_source: str | None = None  # --state-source, if given (applied to `config`)
+    family: str | None = None  # --family, if given (applied to `config`)
+
+    @property
+    def source(self) -> str:
+        """`origin` plus " --time-varying" / " --state-source S" / " --family F" when given
+        (recorded by `benchmark`, printed by `config`)."""
+        flags = " --time-varying" if self.time_varying else ""
+        if self.state_source is not None:
+            flags += f" --state-source {self.state_source}"
+        if self.family is not None:
+            flags += f" --family {self.family}"
+        return self.origin + flags
+
+
+def resolve_config(args: argparse.Namespace) -> ResolvedConfig:
+    """The configuration of `--setting` / `--config` / the defaults, with `--time-varying`.
+
+    A flag the sub-command does not have counts as not given. An unknown setting name
+    (only possible without argparse's `choices`) is a `ConfigError` naming the choices."""
+    from emonav_drake.configs import load_setting
+
+    setting = getattr(args, "setting", None)
+    config_file = getattr(args, "config", None)
+    if setting is not None:
+        cfg, origin = load_setting(setting), f"--setting {setting}"
+    elif config_file is not None:
+        cfg, origin = load_config(config_file), f"--config {config_file}"
+    else:
+        cfg, origin = load_config(), "the default configuration"
+    time_varying = bool(getattr(args, "time_varying", False))
+    if time_varying:
+        cfg.crowd.time_varying_emotions = True
+    state_source = getattr(args, "state_source", None)
+    if state_source is not None:
+        cfg.perception.state_source = state_source
+    family = getattr(args, "family", None)
+    if family is not None:
+        cfg.crowd.family = family
+    return ResolvedConfig(cfg, setting, origin, time_varying, state_source, family)
+
+
+def add_config_choice(p: argparse.ArgumentParser) -> None:
+    """`--config F.yaml | --setting NAME`, mutually exclusive (argparse refuses both, and
+    an unknown setting name with the list of choices: usage and one error line, exit 2)."""
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--config", type=Path, help=CONFIG_HELP)
+    g.add_argument("--setting", choices=SETTINGS, help=SETTING_HELP)
+
+
+STATE_SOURCE_HELP = (
+    "what the state-based planners (dwa, mpc, sarl, rgl) read of the crowd: truth (the "
+    "simulator's exact crowd, privileged) or lidar (pedestrians and obstacles detected in "
+    "the LiDAR scan and tracked: what a robot can run); default: the configuration's "
+    "perception.state_source, truth"
+)
+
+
+def add_state_source(p: argparse.ArgumentParser) -> None:
+    """`--state-source truth|lidar` (`PerceptionParams.state_source`)."""
+    from emonav_drake.params import STATE_SOURCES
+
+    p.add_argument("--state-source", choices=STATE_SOURCES, help=STATE_SOURCE_HELP)
+
+
+FAMILY_HELP = (
+    "the scenario family the seeds sample (emonav config --list shows them with one line "
+    "each): paper (the paper's arena), crossing and traffic patterns, a blocker, a group, "
+    "corridors, dense and fast crowds; default: the configuration's crowd.family, paper"
+)
+
+
+def add_family(p: argparse.ArgumentParser) -> None:
+    """`--family NAME` (`CrowdParams.family`, `core/scenario_families.py`)."""
+    from emonav_drake.params import SCENARIO_FAMILIES
+
+    p.add_argument("--family", choices=SCENARIO_FAMILIES, metavar="NAME", help=FAMILY_HELP)
+
+
+def sample(seed: int, resolved: ResolvedConfig) -> Scenario:
+    """`sample_scenario`, its error naming where the configuration came from."""
+    from emonav_drake.core.scenario import ScenarioSamplingError, sample_scenario
+
+    try:
+        return sample_scenario(seed, resolved.config)
+    except ScenarioSamplingError as e:
+        raise ScenarioSamplingError(f"{resolved.origin}: {e}") from None
+
+
+def resolve_scenario(args: argparse.Namespace, resolved: ResolvedConfig) -> Scenario:
+    """The episode's scenario: `--scenario` (a file or a shipped example's name; its seed,
+    else `--seed`; `--time-varying` gives one of its pedestrians a changing emotion), else
+    the one sampled from `--seed`."""
+    from emonav_drake.core.scenario import add_time_varying_emotion, load_scenario
+
+    if getattr(args, "scenario", None):
+        from emonav_drake.scenarios import scenario_path
+
+        sc = load_scenario(scenario_path(args.scenario), resolved.config)
+        sc.seed = args.seed if sc.seed < 0 else sc.seed
+        if resolved.time_varying:
+            add_time_varying_emotion(sc, sc.seed, resolved.config)
+        return sc
+    return sample(args.seed, resolved)
