@@ -163,7 +163,14 @@ def _check_yaml_value(name: str, value: Any, kind: Any, max_items: int = MAX_LIS
     if origin in (typing.Union, types.UnionType) and all(
         dc.is_dataclass(k) for k in typing.get_args(kind)
     ):
-        member = _union_member(name, value, typing.get_args(kind))
+        kinds = typing.get_args(kind)
+        if not isinstance(value, dict):
+            tags = ", ".join(f"!{k.__name__}" for k in kinds)
+            raise ConfigError(
+                f"{name} = {short_repr(value)} is invalid: expected a mapping tagged with one "
+                f"of {tags}, e.g. `{name.rpartition('.')[2]}: !{kinds[0].__name__} {{}}`"
+            )
+        member = _union_member(name, value, kinds)
         if isinstance(value, dict):
             value = {k: v for k, v in value.items() if k != "_tag"}
         _check_yaml_mapping(member, value, name)
@@ -202,7 +209,13 @@ def _check_yaml_mapping(schema: type, data: Any, prefix: str) -> None:
                 f"{dot}{name}: unknown field; {schema.__name__} has {', '.join(fields)}"
             )
         limit = max_items.get(key, MAX_LIST_ITEMS)
-        _check_yaml_value(f"{dot}{key}", value, fields[key].type, limit)
+        hint = getattr(schema, "_HINTS", {}).get(key)  # for a scalar where a mapping goes
+        try:
+            _check_yaml_value(f"{dot}{key}", value, fields[key].type, limit)
+        except ConfigError as e:
+            if hint is None or isinstance(value, dict):
+                raise
+            raise ConfigError(f"{e}; {hint}") from None
     missing = [k for k in required_fields(schema) if k not in data]
     if missing:
         raise ConfigError(

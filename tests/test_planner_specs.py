@@ -109,7 +109,11 @@ def test_a_routes_expert_is_one_typed_field_in_yaml(text, spec):
         ("expert: !PlannerSpec {name: nobody}", "no planner 'nobody' is registered"),
         ("expert: !PlannerSpec {name: dwa, checkpoint: x.pt}", "'dwa' runs no checkpoint"),
         ("expert: !MpcSpec {}\nsoft_labels: true", "soft_labels needs a ShieldSpec or"),
-        ("expert: mpc", "expert = 'mpc' is invalid: expected a mapping of DwaSpec fields"),
+        (
+            "expert: mpc",
+            r"expert = 'mpc' is invalid: expected a mapping tagged with one of !DwaSpec, .*"
+            r"`expert: !PlannerSpec \{name: mpc\}`",
+        ),
         ("expert_margin: 0.1", "expert_margin: no longer a field: .*!DwaSpec"),
         ("expert_shield: true", "expert_shield: no longer a field"),
     ],

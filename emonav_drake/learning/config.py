@@ -52,6 +52,8 @@ from emonav_drake.typed_yaml import ConfigError, from_plain, validate_fields
 __all__ = ["DaggerConfig", "SarlConfig"]
 
 _EXPERT_TAGS = ", ".join(f"`!{spec.__name__}`" for spec in EXPERT_SPECS)
+# What a YAML file that names its expert by a word is told (`typed_yaml`, `_HINTS`).
+EXPERT_BY_NAME = "a registered planner by its name: `expert: !PlannerSpec {name: mpc}`"
 
 
 @dc.dataclass
@@ -157,7 +159,9 @@ class DaggerConfig:
     threads: int = _setting(1, "torch threads: batch-1 acting is fastest on one", "", THREADS)
 
     # Fields of earlier versions, now parts of `expert` (a YAML file naming one is refused
-    # with this hint; a saved run's state is converted, `from_saved`).
+    # with this hint; a saved run's state is converted, `from_saved`). `expert` itself was a
+    # word then ("dwa", "mpc", ...): that is refused by the typed check with `_HINTS`.
+    _HINTS = {"expert": EXPERT_BY_NAME}
     _MOVED = {
         name: "the expert's settings are now one field, e.g. `expert: !DwaSpec {margin: 0.1, "
         "response: digit}` or `expert: !MpcSpec {clearance: 0.1}` (docs/learning.md)"
@@ -253,6 +257,8 @@ class SarlConfig:
     )
     device: str = _setting("cpu", "the torch device")
     threads: int = _setting(1, "torch threads", "", THREADS)
+
+    _HINTS = {"expert": EXPERT_BY_NAME}
 
     def validate(self) -> "SarlConfig":
         """Raise `ConfigError` naming the field if a value is out of range."""
