@@ -107,6 +107,7 @@ def test_a_routes_expert_is_one_typed_field_in_yaml(text, spec):
         ("expert: !MpcNearbySpec {cells: 11}", "expert.cells = 11 is out of range"),
         ("expert: !ShieldSpec {}", "needs the policy it wraps"),
         ("expert: !PlannerSpec {name: nobody}", "no planner 'nobody' is registered"),
+        ("expert: !SarlSpec {network: gcn}", "expert.network = 'gcn' is invalid: must be one"),
         ("expert: !PlannerSpec {name: dwa, checkpoint: x.pt}", "'dwa' runs no checkpoint"),
         ("expert: !MpcSpec {}\nsoft_labels: true", "soft_labels needs a ShieldSpec or"),
         (

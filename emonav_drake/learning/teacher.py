@@ -44,6 +44,12 @@ def expert_for_route(spec: object, init_policy: str, planner_modules: list[str])
             f"expert = {spec!r} is invalid: must be one of "
             f"{', '.join('!' + c.__name__ for c in EXPERT_SPECS)}"
         )
+    check = getattr(spec, "check", None)  # a spec's own rules (`SarlSpec.network`)
+    if check is not None:
+        try:
+            check()
+        except ConfigError as e:
+            raise ConfigError(f"expert.{e}") from None
     if is_soft(spec) and not spec.checkpoint:
         if not init_policy:
             raise ConfigError(

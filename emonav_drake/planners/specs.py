@@ -226,9 +226,17 @@ class SarlSpec:
     checkpoint: str = setting("", 'the value network\'s file ("" = the shipped one of `network`)')
     network: str = setting("sarl", '"sarl" or "rgl": whose shipped checkpoint runs by default')
 
+    def check(self) -> None:
+        """`ConfigError` for a network without a shipped checkpoint of that kind."""
+        if self.network not in VALUE_CHECKPOINTS:
+            raise ConfigError(
+                f"network = {self.network!r} is invalid: must be one of {list(VALUE_CHECKPOINTS)}"
+            )
+
     def checkpoint_file(self) -> Path:
         if self.checkpoint:
             return Path(self.checkpoint)
+        self.check()
         path = VALUE_CHECKPOINTS[self.network]
         if not path.is_file():
             raise ConfigError(
