@@ -89,6 +89,33 @@ def test_a_registered_planner_of_ones_own_is_a_dagger_expert(tmp_path):
     assert meta["provenance"]["config"]["planner_modules"] == [str(EXAMPLE.resolve())]
 
 
+def test_a_planner_of_ones_own_labels_the_digit_rounds_on_ray_workers_too():
+    """The Digit rounds label with the calibrated run's expert: a planner of the user's own
+    (its module recorded in the run) is imported by every Ray worker, and two workers give
+    the serial round's labels bit for bit."""
+    import numpy as np
+
+    from emonav_drake.learning.digit_dagger import collect_round
+    from emonav_drake.learning.digit_rounds_config import DigitRoundsConfig
+    from emonav_drake.params import EmoNavConfig
+    from emonav_drake.planners.policy import DEFAULT_POLICY
+    from emonav_drake.planners.specs import PlannerSpec
+
+    short = EmoNavConfig()
+    short.episode.max_steps = 3
+    cfg = DigitRoundsConfig(
+        episodes=2, beta=1.0, expert=PlannerSpec("cautious"), planner_modules=[str(EXAMPLE)]
+    )
+    import_planner_module(str(EXAMPLE))
+    serial = collect_round(DEFAULT_POLICY, cfg, 0, 1, None, short)
+    ray = collect_round(DEFAULT_POLICY, cfg, 0, 2, None, short)
+    assert [e["seed"] for e in ray] == [e["seed"] for e in serial]
+    for a, b in zip(serial, ray, strict=True):
+        assert len(a["labels"]) >= 3
+        for key in ("frames", "states", "labels"):
+            assert np.array_equal(a[key], b[key]), key
+
+
 def test_an_installed_plug_in_registers_through_its_entry_point(tmp_path, monkeypatch):
     """A distribution on the path that declares an `emonav_drake.planners` entry point."""
     (tmp_path / "fake_plug.py").write_text(

@@ -151,6 +151,7 @@ def collect_round(
         [MethodSpec("student", "policy", str(policy), sha256_file(policy))],
         "digit",
         dump_config(env_config or EmoNavConfig()),
+        planner_modules=list(cfg.planner_modules),
     )
     beta = cfg.beta * 0.5**rnd
     first = cfg.first_seed + rnd * cfg.episodes
@@ -207,7 +208,7 @@ def run_digit_rounds(
     out, source = Path(out), Path(source)
     n, calibrated, digit, student, start_policy, dcfg = _start_from(source)
     # the calibrated run's teacher labels here too
-    cfg = dc.replace(cfg, expert=dcfg.teacher())
+    cfg = dc.replace(cfg, expert=dcfg.teacher(), planner_modules=list(dcfg.planner_modules))
     if env_config is None:  # the calibrated run's setting (var_dd unless it trained in another)
         from emonav_drake.configs import load_setting
 

@@ -29,6 +29,9 @@ class DigitRoundsConfig:
     # to the calibrated run's (`DaggerConfig.teacher()`), so both kinds of demonstrations
     # have one teacher. None until then.
     expert: ExpertSpec | None = None
+    # The calibrated run's planner modules from outside the package (`planner_modules`):
+    # every worker imports them, so an expert of the user's own labels on Digit too.
+    planner_modules: list[str] = dc.field(default_factory=list)
 
     def validate(self) -> DigitRoundsConfig:
         """Raise `ConfigError` naming the flag (or field) of a value out of range."""
