@@ -116,6 +116,25 @@ def test_a_planner_of_ones_own_labels_the_digit_rounds_on_ray_workers_too():
             assert np.array_equal(a[key], b[key]), key
 
 
+def test_a_planner_of_ones_own_is_sarls_imitation_expert(tmp_path):
+    """SARL imitates a planner named by its module (`--planner-module`, recorded in the
+    run's configuration, so `--resume` finds the expert again)."""
+    from emonav_drake.learning.run_state import read_state_config
+    from emonav_drake.learning.sarl_run import STATE_FILE
+
+    route = tmp_path / "sarl.yaml"
+    route.write_text(
+        "expert: !PlannerSpec {name: cautious}\nil_episodes: 2\nil_epochs: 1\n"
+        "rl_episodes: 1\ntrain_batches: 1\neval_episodes: 1\neval_every: 1\n"
+    )
+    out = tmp_path / "run"
+    argv = ["train", "--algo", "sarl", "--config", str(route), "--out", str(out), "-q"]
+    assert main([*argv, "--planner-module", str(EXAMPLE)]) == 0
+    saved = read_state_config(out / STATE_FILE)
+    assert saved["planner_modules"] == [str(EXAMPLE.resolve())]
+    assert saved["expert"] == {"_tag": "!PlannerSpec", "name": "cautious", "checkpoint": ""}
+
+
 def test_an_installed_plug_in_registers_through_its_entry_point(tmp_path, monkeypatch):
     """A distribution on the path that declares an `emonav_drake.planners` entry point."""
     (tmp_path / "fake_plug.py").write_text(

@@ -149,7 +149,7 @@ PLANNER_MODULE_COMMANDS = ("sim", "eval", "benchmark", "train", "planners")
 PLANNER_MODULE_HELP = (
     "a module of your own that registers planners (a .py file or a dotted module name; "
     "repeatable): its planners become names for --planner / --planners and, with train, "
-    "for a DAgger route's expert (docs/howto/planner.md)"
+    "for a DAgger or SARL route's expert (docs/howto/planner.md)"
 )
 
 

@@ -214,8 +214,10 @@ def _training_config(args: argparse.Namespace):
     if args.plant is not None:
         cfg.plant = args.plant
     if args.planner_modules:
-        if args.algo != "dagger":
-            raise ConfigError("--planner-module applies to --algo dagger (a planner as expert)")
+        if args.algo not in ("dagger", "sarl"):
+            raise ConfigError(
+                "--planner-module applies to --algo dagger and sarl (a planner as expert)"
+            )
         from emonav_drake.planners.plugins import import_planner_modules
 
         recorded = import_planner_modules(args.planner_modules)

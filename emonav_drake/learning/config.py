@@ -213,6 +213,11 @@ class SarlConfig:
         "cannot follow: its steps are bounded by Eq. 2)",
         factory=MpcSpec,
     )
+    planner_modules: list[str] = _setting(
+        [],
+        "planner modules from outside the package imported before the expert is built (as "
+        "`DaggerConfig.planner_modules`); `emonav train --planner-module` adds to it",
+    )
     il_episodes: int = _setting(1000, "imitation episodes (CrowdNav: 3 000)", "", COUNT_OR_NONE)
     il_epochs: int = _setting(50, "imitation epochs over their states", "", COUNT_OR_NONE)
     il_lr: float = _setting(0.01, "SGD learning rate of the imitation", "", LEARNING_RATE)
@@ -263,7 +268,7 @@ class SarlConfig:
     def validate(self) -> "SarlConfig":
         """Raise `ConfigError` naming the field if a value is out of range."""
         validate_fields(self)
-        expert_for_route(self.expert, "", [])
+        expert_for_route(self.expert, "", self.planner_modules)
         check_choice("network", self.network, VALUE_NETWORKS)
         return self
 

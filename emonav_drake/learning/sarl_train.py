@@ -68,7 +68,7 @@ def _selection_key(s: dict) -> list:
 
 
 # SarlConfig fields added after runs were saved, with the value those runs used.
-FIELDS_ADDED_LATER = {"network": "sarl"}
+FIELDS_ADDED_LATER = {"network": "sarl", "planner_modules": []}
 
 
 def train_sarl(
