@@ -74,6 +74,14 @@ class PerceptionParams:
     """
 
     state_source: str = setting("truth", '"truth" (the simulator\'s crowd) or "lidar" (tracked)')
+    still_duration: float = setting(
+        2.0,
+        'with "lidar": a track slower than 0.1 m/s for this long is reported as a static '
+        "obstacle (before that, as a pedestrian at rest: a static disc too, in its first "
+        "seconds; docs/perception.md)",
+        "s",
+        (0.1, 60.0),
+    )
 
 
 @dc.dataclass

@@ -84,6 +84,31 @@ def test_the_planner_reads_the_tracks_and_they_follow_the_pedestrians():
     assert np.allclose(seen.static_radii[order], [0.3, 0.4], atol=0.05)
 
 
+@pytest.mark.parametrize("still, static_at_1_5_s", [(2.0, 0), (1.0, 1)])
+def test_the_still_duration_decides_when_a_disc_is_a_static_obstacle(still, static_at_1_5_s):
+    """`perception.still_duration` [s]: a disc in view from the start is a pedestrian at
+    rest until its track has been still that long, then a static obstacle (at 1.5 s: still
+    a pedestrian with the default 2 s, a static disc with 1 s)."""
+    config = EmoNavConfig()
+    config.perception.state_source = "lidar"
+    config.perception.still_duration = still
+    scenario = Scenario(
+        seed=0,
+        pedestrians=[PedestrianSpec(start=(3.0, 3.0), goal=(3.0, 3.5))],
+        obstacles=[StaticDiscSpec(center=(-1.5, 1.5), radius=0.4)],
+    ).validate()
+    nav = build_navigation_diagram(scenario, config, make_planner("dwa", config))
+    sim = Simulator(nav.diagram)
+    sim.Initialize()
+    sim.AdvanceTo(1.5)
+    seen = nav.planner.GetInputPort("crowd").Eval(
+        nav.planner.GetMyContextFromRoot(sim.get_context())
+    )
+    assert len(seen.static_centers) == static_at_1_5_s
+    disc = np.vstack([seen.positions, seen.static_centers])
+    assert np.min(np.linalg.norm(disc - [-1.5, 1.5], axis=1)) < 0.05  # tracked either way
+
+
 def test_a_benchmark_records_its_state_source(tmp_path, short):
     out = tmp_path / "run"
     argv = ["benchmark", "--planners", "dwa", "--trials", "2", "--workers", "1", "--quiet"]

@@ -49,7 +49,8 @@ class CrowdTrackerSystem(LeafSystem):
         config: the LiDAR (beams, range), the scan period `crowd.dt`, the nominal
             pedestrian radius and the discomfort distances.
         detection, tracking: the detector's and the tracker's parameters (defaults:
-            `DetectionParams()`, `TrackerParams()`).
+            `DetectionParams()`, and `TrackerParams()` with the configuration's
+            `perception.still_duration`).
     """
 
     def __init__(
@@ -61,7 +62,7 @@ class CrowdTrackerSystem(LeafSystem):
         super().__init__()
         self._config = config
         self._detection = detection or DetectionParams()
-        self._tracking = tracking or TrackerParams()
+        self._tracking = tracking or TrackerParams(still_duration=config.perception.still_duration)
         self._distances = np.asarray(config.reward.emotion_distances(), dtype=float)
         self._robot_in = self.DeclareVectorInputPort("robot_state", 4)
         self._scan_in = self.DeclareVectorInputPort("scan", config.lidar.num_beams)
