@@ -1,0 +1,110 @@
+"""Why the MPC and RGL spend more steps in the static discs' zones on LiDAR tracks in the
+no-emotion setting: the same planner on the simulator's crowd, on the tracks with the
+tracker's default `perception.still_duration` (2 s) and with 0.5 s, on the same tuning
+seeds (700 000 …, never evaluation seeds), LIP plant.
+
+    python scripts/still_duration_table.py [--write]
+
+The six runs are `benchmarks/results/still_duration_lip/<setting>_<source>/`, made with
+`emonav benchmark --planners mpc,rgl --plant lip --trials 300 --first-seed 700000
+--config benchmarks/results/still_duration_lip/<setting>_<source>.yaml --workers 2
+--out …`. Success: Wilson intervals, McNemar exact on the paired seeds; DT and the static
+discs' IDT per trial: Wilcoxon signed-rank on the per-seed differences. Prints Markdown;
+with --write also writes `benchmarks/results/still_duration_lip/table.md`, which
+docs/results.md quotes (`tests/test_docs_agree.py` checks the quote).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from emonav_drake.evaluation.run_directory import read_trials
+from emonav_drake.evaluation.tables import (
+    format_p,
+    mcnemar_exact,
+    signed_rank_p,
+    wilson_interval,
+)
+
+RUNS = Path(__file__).resolve().parent.parent / "benchmarks" / "results" / "still_duration_lip"
+PLANNERS = ("mpc", "rgl")
+SETTINGS = ("no_emotion", "var_dd")
+SOURCES = {"truth": "truth", "lidar2": "tracks, 2 s", "lidar05": "tracks, 0.5 s"}
+
+
+def _trials(name: str, planner: str) -> dict[int, dict]:
+    """Seed → record of `planner` in run `name`."""
+    rows = read_trials(RUNS / name / "trials.jsonl")
+    return {t["seed"]: t["record"] for t in rows if t["method"] == planner}
+
+
+def _row(planner: str, source: str, runs: dict[str, dict[int, dict]]) -> str:
+    recs = runs[source]
+    seeds = sorted(recs)
+    ok = [recs[s]["outcome"] == "success" for s in seeds]
+    lo, hi = wilson_interval(sum(ok), len(ok))
+    dt = [recs[s]["discomfort_steps"] for s in seeds]
+    static = [recs[s]["idt"][0] for s in seeds]
+    cells = [
+        planner,
+        SOURCES[source],
+        f"{np.mean(ok):.3f} [{lo:.3f}, {hi:.3f}] ({len(ok)})",
+        f"{np.mean(dt):.2f}",
+        f"{sum(static)}",
+    ]
+    for ref in ("truth", "lidar2"):
+        if ref == source or (ref == "lidar2" and source != "lidar05"):
+            cells.append("")
+            continue
+        other = runs[ref]
+        common = [s for s in seeds if s in other]
+        a = [other[s]["outcome"] == "success" for s in common]
+        b = [recs[s]["outcome"] == "success" for s in common]
+        lost = sum(x and not y for x, y in zip(a, b, strict=True))
+        won = sum(y and not x for x, y in zip(a, b, strict=True))
+        p_dt = signed_rank_p(
+            [other[s]["discomfort_steps"] for s in common],
+            [recs[s]["discomfort_steps"] for s in common],
+        )
+        p_static = signed_rank_p(
+            [other[s]["idt"][0] for s in common], [recs[s]["idt"][0] for s in common]
+        )
+        cells.append(
+            f"{won}:{lost}, p = {format_p(mcnemar_exact(won, lost))}; DT p = {format_p(p_dt)}; "
+            f"static p = {format_p(p_static)}"
+        )
+    return "| " + " | ".join(cells) + " |"
+
+
+def table() -> str:
+    out = []
+    for setting in SETTINGS:
+        out += [
+            f"## {setting} (LIP, seeds 700000-700299)",
+            "",
+            "| planner | crowd read | SR [95 % CI] (n) | DT / trial | static IDT (sum) "
+            "| vs truth (wins:losses) | vs tracks, 2 s |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for planner in PLANNERS:
+            runs = {src: _trials(f"{setting}_{src}", planner) for src in SOURCES}
+            out += [_row(planner, src, runs) for src in SOURCES]
+        out.append("")
+    return "\n".join(out)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--write", action="store_true", help="also write table.md")
+    args = parser.parse_args()
+    text = table()
+    print(text)
+    if args.write:
+        (RUNS / "table.md").write_text(text + "\n")
+
+
+if __name__ == "__main__":
+    main()
