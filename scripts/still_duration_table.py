@@ -1,17 +1,19 @@
 """Why the MPC and RGL spend more steps in the static discs' zones on LiDAR tracks in the
 no-emotion setting: the same planner on the simulator's crowd, on the tracks with the
 tracker's default `perception.still_duration` (2 s) and with 0.5 s, on the same tuning
-seeds (700 000 …, never evaluation seeds), LIP plant.
+seeds (700 000 …, never evaluation seeds).
 
-    python scripts/still_duration_table.py [--write]
+    python scripts/still_duration_table.py [--plant lip|digit] [--write]
 
-The six runs are `benchmarks/results/still_duration_lip/<setting>_<source>/`, made with
+The runs are `benchmarks/results/still_duration_<plant>/<setting>_<source>/`, made with
 `emonav benchmark --planners mpc,rgl --plant lip --trials 300 --first-seed 700000
 --config benchmarks/results/still_duration_lip/<setting>_<source>.yaml --workers 2
---out …`. Success: Wilson intervals, McNemar exact on the paired seeds; DT and the static
-discs' IDT per trial: Wilcoxon signed-rank on the per-seed differences. Prints Markdown;
-with --write also writes `benchmarks/results/still_duration_lip/table.md`, which
-docs/results.md quotes (`tests/test_docs_agree.py` checks the quote).
+--out …` (Digit: `--planners mpc --plant digit --trials 150`, no-emotion only); a setting
+is tabled when its three runs are there, each planner of its truth run. Success: Wilson
+intervals, McNemar exact on the paired seeds; DT and the static discs' IDT per trial:
+Wilcoxon signed-rank on the per-seed differences. Prints Markdown; with --write also
+writes `benchmarks/results/still_duration_<plant>/table.md`, which docs/results.md quotes
+(`tests/test_docs_agree.py` checks the quote).
 """
 
 from __future__ import annotations
@@ -29,15 +31,15 @@ from emonav_drake.evaluation.tables import (
     wilson_interval,
 )
 
-RUNS = Path(__file__).resolve().parent.parent / "benchmarks" / "results" / "still_duration_lip"
-PLANNERS = ("mpc", "rgl")
+RESULTS = Path(__file__).resolve().parent.parent / "benchmarks" / "results"
 SETTINGS = ("no_emotion", "var_dd")
+LABELS = {"lip": "LIP", "digit": "Digit"}
 SOURCES = {"truth": "truth", "lidar2": "tracks, 2 s", "lidar05": "tracks, 0.5 s"}
 
 
-def _trials(name: str, planner: str) -> dict[int, dict]:
-    """Seed → record of `planner` in run `name`."""
-    rows = read_trials(RUNS / name / "trials.jsonl")
+def _trials(runs: Path, name: str, planner: str) -> dict[int, dict]:
+    """Seed → record of `planner` in run `name` of `runs`."""
+    rows = read_trials(runs / name / "trials.jsonl")
     return {t["seed"]: t["record"] for t in rows if t["method"] == planner}
 
 
@@ -79,18 +81,25 @@ def _row(planner: str, source: str, runs: dict[str, dict[int, dict]]) -> str:
     return "| " + " | ".join(cells) + " |"
 
 
-def table() -> str:
+def table(plant: str) -> str:
+    runs_dir = RESULTS / f"still_duration_{plant}"
     out = []
     for setting in SETTINGS:
+        names = [f"{setting}_{src}" for src in SOURCES]
+        if not all((runs_dir / n / "trials.jsonl").is_file() for n in names):
+            continue
+        truth = read_trials(runs_dir / names[0] / "trials.jsonl")
+        planners = list(dict.fromkeys(t["method"] for t in truth))
+        seeds = sorted({t["seed"] for t in truth})
         out += [
-            f"## {setting} (LIP, seeds 700000-700299)",
+            f"## {setting} ({LABELS[plant]}, seeds {seeds[0]}-{seeds[-1]})",
             "",
             "| planner | crowd read | SR [95 % CI] (n) | DT / trial | static IDT (sum) "
             "| vs truth (wins:losses) | vs tracks, 2 s |",
             "|---|---|---|---|---|---|---|",
         ]
-        for planner in PLANNERS:
-            runs = {src: _trials(f"{setting}_{src}", planner) for src in SOURCES}
+        for planner in planners:
+            runs = {src: _trials(runs_dir, f"{setting}_{src}", planner) for src in SOURCES}
             out += [_row(planner, src, runs) for src in SOURCES]
         out.append("")
     return "\n".join(out)
@@ -98,12 +107,13 @@ def table() -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--plant", choices=("lip", "digit"), default="lip")
     parser.add_argument("--write", action="store_true", help="also write table.md")
     args = parser.parse_args()
-    text = table()
+    text = table(args.plant)
     print(text)
     if args.write:
-        (RUNS / "table.md").write_text(text + "\n")
+        (RESULTS / f"still_duration_{args.plant}" / "table.md").write_text(text + "\n")
 
 
 if __name__ == "__main__":
