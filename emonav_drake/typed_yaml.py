@@ -145,10 +145,10 @@ def _check_scalar(name: str, value: Any, kind: type) -> None:
         raise ConfigError(f"{name} = {short_repr(value)} is invalid: expected {_TYPE_NAMES[kind]}")
 
 
-def _union_member(name: str, value: Any, kinds: tuple) -> Any:
-    """The dataclass of a `Union` field that a YAML value names by its tag (`!Name {...}`;
+def _union_member(name: str, value: dict, kinds: tuple) -> Any:
+    """The dataclass of a `Union` field that a YAML mapping names by its tag (`!Name {...}`;
     untagged: the first), or `ConfigError` listing the tags."""
-    tag = value.get("_tag") if isinstance(value, dict) else None
+    tag = value.get("_tag")
     if tag is None:
         return kinds[0]
     for kind in kinds:
@@ -171,9 +171,8 @@ def _check_yaml_value(name: str, value: Any, kind: Any, max_items: int = MAX_LIS
                 f"of {tags}, e.g. `{name.rpartition('.')[2]}: !{kinds[0].__name__} {{}}`"
             )
         member = _union_member(name, value, kinds)
-        if isinstance(value, dict):
-            value = {k: v for k, v in value.items() if k != "_tag"}
-        _check_yaml_mapping(member, value, name)
+        fields = {k: v for k, v in value.items() if k != "_tag"}
+        _check_yaml_mapping(member, fields, name)
     elif dc.is_dataclass(kind):
         _check_yaml_mapping(kind, value, name)
     elif origin is list:

@@ -69,7 +69,7 @@ def _forbid(monkeypatch, module, name):
 def test_output_path_that_is_a_directory(tmp_path, capsys, monkeypatch, argv, flag):
     import emonav_drake.diagrams.navigation as nav
 
-    _forbid(monkeypatch, nav, "run_episode")
+    _forbid(monkeypatch, nav, "build_episode")
     target = tmp_path / "out"
     target.mkdir()
     argv = [a.replace("{dir}", str(target)) for a in argv]
@@ -92,7 +92,7 @@ def test_json_into_a_missing_folder_fails_before_the_episodes(
 ):
     import emonav_drake.diagrams.navigation as nav
 
-    _forbid(monkeypatch, nav, "run_episode")
+    _forbid(monkeypatch, nav, "build_episode")
     out = tmp_path / "missing" / "r.json"
     assert_user_error(*run(capsys, command, "--json", out), "--json", "does not exist")
     assert not (tmp_path / "missing").exists()
@@ -317,7 +317,7 @@ def test_train_help_matches_what_the_loader_accepts(capsys):
 def test_bad_scenario_files(tmp_path, capsys, monkeypatch, yaml_text, culprits):
     import emonav_drake.diagrams.navigation as nav
 
-    _forbid(monkeypatch, nav, "run_episode")
+    _forbid(monkeypatch, nav, "build_episode")
     sc = tmp_path / "scene.yaml"
     sc.write_text(yaml_text)
     out = tmp_path / "r.json"
@@ -497,15 +497,15 @@ def test_png_interrupted_while_rendering(tmp_path, capsys, monkeypatch, tiny):
 def test_eval_ctrl_c_keeps_the_finished_episodes(tmp_path, capsys, monkeypatch, tiny):
     import emonav_drake.diagrams.navigation as nav
 
-    real, calls = nav.run_episode, []
+    real, calls = nav.build_episode, []
 
-    def interrupted_at_the_third(*a, **k):
+    def interrupted_at_the_third(*a, **k):  # the LIP plant builds each episode's diagram
         calls.append(1)
         if len(calls) == 3:
             raise KeyboardInterrupt
         return real(*a, **k)
 
-    monkeypatch.setattr(nav, "run_episode", interrupted_at_the_third)
+    monkeypatch.setattr(nav, "build_episode", interrupted_at_the_third)
     out = tmp_path / "e.json"
     argv = ["eval", "--episodes", "10", "--first-seed", "4", "--config", tiny, "--json", out]
     code = main([str(a) for a in argv])

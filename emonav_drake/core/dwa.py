@@ -96,8 +96,8 @@ def choose_candidate(
 ) -> np.ndarray:
     """The best of `candidates` (C, 2) given their predicted CoM positions `traj` (C, S, 2)
     at the middle and end of each step (see the module: rejection, score, tie-breaking)."""
-    cfg, p = config, config.dwa
-    r_robot, step_time = cfg.robot.radius, cfg.robot.step_time
+    p = config.dwa
+    r_robot, step_time = config.robot.radius, config.robot.step_time
     rb = obs.robot
     samples = traj.shape[1]
     times = step_time * (np.arange(samples) + 1) / 2  # mid and end of each step
@@ -128,12 +128,12 @@ def choose_candidate(
 
     d_now = math.hypot(obs.goal_xy[0] - rb.x, obs.goal_xy[1] - rb.y)
     d_end = np.linalg.norm(traj[:, -1, :] - obs.goal_xy, axis=1)
-    reach = cfg.robot.max_speed * step_time * p.horizon_steps
+    reach = config.robot.max_speed * step_time * p.horizon_steps
     score = (
         p.goal_weight * (d_now - d_end) / reach
         + p.clearance_weight * clearance / p.clearance_cap
         - p.discomfort_weight * intrusion
-        + p.speed_weight * candidates[:, 0] / cfg.robot.max_speed
+        + p.speed_weight * candidates[:, 0] / config.robot.max_speed
         - _LATE_COLLISION_PENALTY * hit_late
     )
     if feasible.any():

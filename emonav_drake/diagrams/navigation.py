@@ -293,10 +293,10 @@ def run_episode(
     `planner.initial_memory()` in the new diagram's Context (no `reset()` needed).
     """
     request = training_request(scenario, config, planner, **options)
-    return run_navigation_episode(request, _build_episode)
+    return run_navigation_episode(request, build_episode)
 
 
-def _build_episode(r: EpisodeRequest) -> EpisodeSystems:
+def build_episode(r: EpisodeRequest) -> EpisodeSystems:
     """The LIP diagram of a request, as the episode loop reads it."""
     nav = build_navigation_diagram(
         r.scenario,

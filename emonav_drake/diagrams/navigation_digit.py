@@ -174,10 +174,10 @@ def run_digit_episode(
     [m/s] (world frame W); after a fall its last row is the instant the fall was seen.
     """
     request = training_request(scenario, config, planner, **options)
-    return run_navigation_episode(request, _build_episode)
+    return run_navigation_episode(request, build_episode)
 
 
-def _build_episode(r: EpisodeRequest) -> EpisodeSystems:
+def build_episode(r: EpisodeRequest) -> EpisodeSystems:
     """The Digit diagram of a request, as the episode loop reads it."""
     if r.show_rays:
         raise ValueError("the Digit diagram draws no LiDAR rays: show_rays must be False")

@@ -71,15 +71,17 @@ class Plant:
         return self.label if self.caption is None else self.caption
 
 
-def _runner(module: str, function: str) -> EpisodeSimulator:
-    """`simulate` of a built-in plant: `module.function(scenario, config, planner,
-    **options)` (`diagrams.navigation.run_episode`, `...navigation_digit.run_digit_episode`)
-    on the request's fields, looked up when called (the diagrams load on first use)."""
+def _runner(module: str) -> EpisodeSimulator:
+    """`simulate` of a built-in plant: the request run by the one episode loop
+    (`diagrams.episode.run_navigation_episode`) on the diagram `module.build_episode`
+    builds (`diagrams.navigation`, `diagrams.navigation_digit`), looked up when called (the
+    diagrams load on first use)."""
 
     def simulate(request: EpisodeRequest) -> tuple[EpisodeRecord, EpisodeTrace | None]:
-        run = getattr(importlib.import_module(module), function)
-        fields = {f.name: getattr(request, f.name) for f in dc.fields(request)}
-        return run(fields.pop("scenario"), fields.pop("config"), fields.pop("planner"), **fields)
+        from emonav_drake.diagrams.episode import run_navigation_episode
+
+        build = importlib.import_module(module).build_episode
+        return run_navigation_episode(request, build)
 
     return simulate
 
@@ -90,7 +92,7 @@ PLANTS.add(
     Plant(
         "lip",
         "LIP",
-        _runner("emonav_drake.diagrams.navigation", "run_episode"),
+        _runner("emonav_drake.diagrams.navigation"),
         can_fall=False,
         footsteps=False,
         rays=True,
@@ -102,7 +104,7 @@ PLANTS.add(
     Plant(
         "digit",
         "Digit (full order)",
-        _runner("emonav_drake.diagrams.navigation_digit", "run_digit_episode"),
+        _runner("emonav_drake.diagrams.navigation_digit"),
         can_fall=True,
         footsteps=True,
         caption="Digit",

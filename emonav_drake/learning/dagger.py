@@ -230,7 +230,7 @@ def _resume(run: DaggerRunState, saved: dict, tensors: dict, out: Path) -> None:
     """Restore the saved state (`RunStateError` if it does not fit), warning first of the
     configuration fields that differ from the saved run's."""
     changes = config_changes(
-        {"config": to_plain(run.cfg.from_saved(saved["config"])), "env": saved["env_config"]},
+        {"config": to_plain(DaggerConfig.from_saved(saved["config"])), "env": saved["env_config"]},
         {"config": to_plain(run.cfg), "env": dc.asdict(run.env_cfg)},
     )
     if changes:

@@ -83,7 +83,7 @@ def named_expert_from_legacy(saved: dict) -> dict:
     from emonav_drake.planners import planner_kind
 
     spec = planner_kind(name).spec
-    return saved | {"expert": dc.asdict(spec) | {"_tag": f"!{type(spec).__name__}"}}
+    return saved | {"expert": _tagged(spec)}
 
 
 def expert_from_legacy(saved: dict) -> dict:
@@ -120,5 +120,10 @@ def expert_from_legacy(saved: dict) -> dict:
         )
     else:
         spec = PlannerSpec(name=name)
-    out["expert"] = dc.asdict(spec) | {"_tag": f"!{type(spec).__name__}"}
+    out["expert"] = _tagged(spec)
     return out
+
+
+def _tagged(spec: object) -> dict:
+    """A spec as tagged plain data, as `typed_yaml.to_plain` writes a union's value."""
+    return dc.asdict(spec) | {"_tag": f"!{type(spec).__name__}"}

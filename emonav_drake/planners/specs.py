@@ -56,6 +56,7 @@ class _Learned:
     `planners.policy.DEFAULT_POLICY`)."""
 
     checkpoint: str
+    variant: str
 
     def checkpoint_file(self) -> Path:
         """The checkpoint this spec runs (`ConfigError` for a variant with none shipped)."""
@@ -63,9 +64,8 @@ class _Learned:
 
         if self.checkpoint:
             return resolve_policy_file(self.checkpoint, "checkpoint")
-        variant = getattr(self, "variant", "")
-        if variant:
-            return shipped_checkpoint(variant)
+        if self.variant:
+            return shipped_checkpoint(self.variant)
         from emonav_drake.planners.policy import DEFAULT_POLICY
 
         return DEFAULT_POLICY
@@ -125,7 +125,7 @@ class PolicySpec(_Learned):
 
 
 @dc.dataclass
-class SacSpec(_Learned):
+class SacSpec:
     """A SAC-trained actor (`emonav train --algo sac`); the checkpoint must be given."""
 
     checkpoint: str = setting("", "the SAC-trained actor it runs (required)")
@@ -137,7 +137,9 @@ class SacSpec(_Learned):
                 "give --checkpoint PATH; the shipped policy is a DAgger student, run it "
                 "with --planner policy"
             )
-        return super().checkpoint_file()
+        from emonav_drake.planners.variants import resolve_policy_file
+
+        return resolve_policy_file(self.checkpoint, "checkpoint")
 
     def build(self, config: EmoNavConfig, device: str = "cpu"):
         from emonav_drake.planners.policy import describe_policy, policy_kind
