@@ -101,6 +101,19 @@ _RHO_INTERVAL = 50  # ADMM iterations between rho adaptations (never OSQP's time
 _OK = {int(osqp.SolverStatus.OSQP_SOLVED), int(osqp.SolverStatus.OSQP_SOLVED_INACCURATE)}
 _TIME_LIMIT = int(osqp.SolverStatus.OSQP_TIME_LIMIT_REACHED)
 _STOPPED = {int(osqp.SolverStatus.OSQP_MAX_ITER_REACHED), _TIME_LIMIT}
+_SOLVED = int(osqp.SolverStatus.OSQP_SOLVED)
+# OSQP installs its own SIGINT handler for the length of a solve: a Ctrl-C (or any SIGINT,
+# even one the process ignores) stops the ADMM loop and returns this status instead of
+# reaching Python. Such a solve did not finish: it is never used (`SolveInterrupted`).
+_INTERRUPTED = int(osqp.SolverStatus.OSQP_SIGINT)
+
+
+class SolveInterrupted(Exception):
+    """OSQP stopped a solve because a SIGINT arrived during it (status `OSQP_SIGINT`).
+
+    The signal never reached Python: whoever catches this passes it on to the process's
+    SIGINT handler and, if that does not stop the run, solves again from the same inputs.
+    """
 
 
 @dc.dataclass
@@ -297,7 +310,8 @@ def solve_qp(
     """One QP with OSQP (set up at the layout's first use, updated in place after).
 
     `first`: the first QP of a planning step (rho is reset). Returns OSQP's result
-    (`x`, `y`, `info`); `solution_accepted` says whether to keep it.
+    (`x`, `y`, `info`); `solution_accepted` says whether to keep it. Raises
+    `SolveInterrupted` if a SIGINT stopped the solve (its result is never returned).
     """
     p = params
     if layout.solver is None:
@@ -335,12 +349,22 @@ def solve_qp(
     layout.solver.update(Px=lin["Px"], Ax=lin["Ax"])
     layout.solver.update(q=lin["q"], l=lin["l"], u=lin["u"])
     layout.solver.warm_start(x=x0, y=y0)
-    return layout.solver.solve(raise_error=False)
+    res = layout.solver.solve(raise_error=False)
+    if int(res.info.status_val) == _INTERRUPTED:
+        raise SolveInterrupted("OSQP: the solve was interrupted by SIGINT")
+    return res
 
 
 def hit_time_limit(res: Any) -> bool:
     """Whether OSQP's wall-clock safety (`mpc.time_limit`) stopped this solve."""
     return int(res.info.status_val) == _TIME_LIMIT
+
+
+def solved_exactly(res: Any) -> bool:
+    """Whether OSQP reports the solve as solved to its tolerances (`OSQP_SOLVED`); an
+    accepted solve that is not (inaccurate, or stopped by max_iter with a small residual)
+    is counted by the planner as inexact."""
+    return int(res.info.status_val) == _SOLVED
 
 
 def solution_accepted(res: Any, x: np.ndarray) -> bool:

@@ -68,6 +68,7 @@ from __future__ import annotations
 
 import dataclasses as dc
 import logging
+import signal
 
 import numpy as np
 
@@ -76,12 +77,14 @@ from emonav_drake.core.mpc_guide import GuidePath
 from emonav_drake.core.mpc_model import HorizonModel
 from emonav_drake.core.mpc_qp import (
     QpLayout,
+    SolveInterrupted,
     build_layout,
     hit_time_limit,
     linearise,
     shift_duals,
     solution_accepted,
     solve_qp,
+    solved_exactly,
 )
 from emonav_drake.core.mpc_response import ResponseHorizonModel
 from emonav_drake.core.navigation import PlannerInput
@@ -91,6 +94,8 @@ from emonav_drake.params import EmoNavConfig
 log = logging.getLogger(__name__)
 
 _CONVERGED = 1e-4  # SCP stops when no command changes by more than this
+# The counters a planning step adds to (restored when an interrupted step is redone).
+_STEP_COUNTERS = ("fallbacks", "plans", "qp_solves", "qp_failures", "qp_inexact", "time_limit_hits")
 
 
 @dc.dataclass(frozen=True)
@@ -171,6 +176,8 @@ class MpcPlanner:
         self.qp_solves = 0
         self.qp_failures = 0
         self.time_limit_hits = 0
+        self.qp_inexact = 0  # accepted solves OSQP did not report as solved exactly
+        self.interrupted_solves = 0  # solves a SIGINT stopped (their planning step redone)
         self.last_info: dict = {}
 
     # ------------------------------------------------------------------ interface
@@ -196,7 +203,28 @@ class MpcPlanner:
         A deterministic function of (obs, memory), bit for bit, whatever the planner
         object solved before; `memory` is not modified. The previous plan warm-starts
         this step only if it was planned at step `obs.step − 1`.
+
+        A SIGINT that arrives inside an OSQP solve stops the solve without reaching
+        Python (OSQP handles it): the unfinished plan is thrown away, the signal is passed
+        on to the process's SIGINT handler (Python's default raises `KeyboardInterrupt`),
+        and if that handler lets the run go on (SIGINT ignored, or a handler that only
+        asks for a stop later) the whole planning step is planned again from the same
+        input and memory: the same command, bit for bit, as without the signal.
         """
+        counters = {name: getattr(self, name) for name in _STEP_COUNTERS}
+        while True:
+            try:
+                return self._plan_once(obs, memory)
+            except SolveInterrupted:
+                for name, value in counters.items():  # the redone step counts once
+                    setattr(self, name, value)
+                self.interrupted_solves += 1
+                pass_on_sigint()
+
+    def _plan_once(
+        self, obs: PlannerInput, memory: MpcMemory | None
+    ) -> tuple[np.ndarray, MpcMemory]:
+        """`plan_with_memory` without the handling of an interrupted solve."""
         memory = self.initial_memory() if memory is None else memory
         self.plans += 1
         p = self.params
@@ -409,6 +437,9 @@ class MpcPlanner:
         if not solution_accepted(res, x):
             self.qp_failures += 1
             return x, y0, False
+        if not solved_exactly(res):
+            self.qp_inexact += 1
+            info["inexact"] += 1
         return x.copy(), np.asarray(res.y, dtype=float).copy(), True
 
 
@@ -424,4 +455,21 @@ def _new_info(step: int) -> dict:
         "qp_iterations": [],
         "fallback": False,
         "time_limit_hits": 0,
+        "inexact": 0,
     }
+
+
+def pass_on_sigint() -> None:
+    """Deliver a SIGINT that a solver swallowed to the handler Python has for it now.
+
+    Python's default handler and `SIG_DFL` → `KeyboardInterrupt` (the run stops: exit 130,
+    resumable); `SIG_IGN` → nothing (the caller solves again); any other handler (e.g. a
+    trainer's stop request) is called and, if it returns, the caller solves again.
+    """
+    handler = signal.getsignal(signal.SIGINT)
+    if handler is signal.SIG_IGN:
+        return
+    if callable(handler) and handler is not signal.default_int_handler:
+        handler(signal.SIGINT, None)
+        return
+    raise KeyboardInterrupt

@@ -1,0 +1,122 @@
+"""A SIGINT inside an OSQP solve never changes a plan (issue 46, item 2).
+
+OSQP installs its own SIGINT handler for the length of a solve: a Ctrl-C that lands there
+stops the ADMM loop and returns the status "interrupted" without reaching Python — even
+when the process ignores SIGINT (a background job of a script). Before the fix the MPC
+took such a solve as a failed QP and fell back to slowing down: the run went on, exited 0
+and recorded a trial that differed from the uninterrupted one. Now an interrupted solve
+is never used: the signal is passed on to Python's handler (the default raises
+`KeyboardInterrupt`: exit 130, resumable), and where the process ignores it the planning
+step is planned again, giving the same command bit for bit.
+
+Each test runs a driver process that plans MPC episodes on the LIP world in a loop and
+compares every command with an uninterrupted reference computed first; the test sends it
+real SIGINTs (`os.kill`) while it plans.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+# The driver: one reference episode, then episodes in a loop compared with it, each
+# command checked as it is planned. It prints READY once the reference is known, KI for
+# each KeyboardInterrupt it catches (then starts the episode again), and at the end the
+# number of mismatching commands and of solves a SIGINT interrupted.
+_DRIVER = """
+import signal, sys
+import numpy as np
+from emonav_drake.core.navigation import NavigationWorld
+from emonav_drake.core.scenario import sample_scenario
+from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.mpc import MpcPlanner
+
+mode, episodes = sys.argv[1], int(sys.argv[2])
+cfg = EmoNavConfig()
+scenario = sample_scenario(7, cfg)
+planner = MpcPlanner(cfg)
+
+def episode(check=None):
+    world = NavigationWorld(scenario, cfg, goal_radius=cfg.episode.eval_goal_radius,
+                            grid_kind=None)
+    planner.reset()
+    commands, bad = [], 0
+    while True:
+        u = planner.plan(world.planner_input())
+        k = len(commands)
+        if check is not None and (k >= len(check) or not np.array_equal(u, check[k])):
+            bad += 1
+        commands.append(u)
+        _, outcome = world.step(u)
+        if outcome:
+            return commands, bad + (check is not None and len(commands) != len(check))
+
+reference, _ = episode()
+if mode == "ignored":
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+print("READY", len(reference), flush=True)
+mismatches = done = 0
+while done < episodes:
+    try:
+        _, bad = episode(reference)
+        mismatches += bad
+        done += 1
+    except KeyboardInterrupt:
+        print("KI", flush=True)
+print("MISMATCHES", mismatches, "INTERRUPTED_SOLVES", getattr(planner, "interrupted_solves", -1), flush=True)
+"""
+
+
+def _driver(mode: str, episodes: int) -> subprocess.Popen:
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _DRIVER, mode, str(episodes)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    line = proc.stdout.readline()
+    assert line.startswith("READY"), line + proc.stderr.read()
+    return proc
+
+
+def _summary(line: str) -> tuple[int, int]:
+    words = line.split()
+    assert words[0] == "MISMATCHES", line
+    return int(words[1]), int(words[3])
+
+
+def test_sigints_while_sigint_is_ignored_change_no_command():
+    """SIGINT ignored (as in a script's background job): a SIGINT every 3 ms while the
+    MPC plans four episodes; every command equals the uninterrupted one, and some of the
+    signals did land inside a solve (else the test would prove nothing)."""
+    proc = _driver("ignored", episodes=4)
+    while proc.poll() is None:
+        os.kill(proc.pid, signal.SIGINT)
+        time.sleep(0.003)
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0, err
+    mismatches, interrupted = _summary(out.strip().splitlines()[-1])
+    assert mismatches == 0
+    assert interrupted > 0
+
+
+def test_every_sigint_inside_or_outside_a_solve_interrupts_planning():
+    """Python's default handler: each of 25 SIGINTs, sent one at a time, becomes one
+    KeyboardInterrupt (none swallowed by OSQP), and no command planned between them
+    differs from the uninterrupted one."""
+    proc = _driver("default", episodes=3)
+    try:
+        for _ in range(25):
+            os.kill(proc.pid, signal.SIGINT)
+            line = proc.stdout.readline()  # before the fix: a later line (none swallowed)
+            assert line.strip() == "KI", line
+        out, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, err
+    mismatches, _ = _summary(out.strip().splitlines()[-1])
+    assert mismatches == 0
