@@ -33,12 +33,14 @@ from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Any, BinaryIO
 
+from emonav_drake.errors import UserError
+
 TMP_MARK = ".tmp-"
 # The errors of a storage that is full: no space, a quota, a file size limit.
 FULL_DISK_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
 
 
-class OutputPathError(ValueError):
+class OutputPathError(UserError, ValueError):
     """An output path cannot be written (a directory, a missing or read-only folder…)."""
 
 

@@ -1,12 +1,24 @@
 """Exceptions shared by the library and the `emonav` command line.
 
-The CLI maps them to exit codes: a `ValueError` family error (`ConfigError`,
-`PolicyError`, `CommandError`, …) is a user error — one line naming the culprit, exit
-code 2; `RunInterrupted` is a Ctrl-C that was handled — whatever finished was saved, one
-line saying where, exit code 130.
+The CLI maps them to exit codes: a `UserError` (`ConfigError`, `PolicyError`,
+`OutputPathError`, …, raised where an input is checked) is a user error — one line naming
+the culprit, exit code 2; `RunInterrupted` is a Ctrl-C that was handled — whatever
+finished was saved, one line saying where, exit code 130. Any other exception, a plain
+`ValueError` or numpy's `LinAlgError` from deep inside a simulation included, is a bug:
+exit code 1.
 """
 
 from __future__ import annotations
+
+
+class UserError(Exception):
+    """An input the user can fix: a flag, a file, a field, an output path, a checkpoint.
+
+    Raised where the input is checked, with a message that names the culprit and says
+    what is allowed. The concrete errors also derive from `ValueError` (what a library
+    user catching bad input expects), but only this type makes the CLI call an error the
+    user's: a `ValueError` raised anywhere else is a bug.
+    """
 
 
 class RunInterrupted(Exception):
@@ -16,3 +28,8 @@ class RunInterrupted(Exception):
         message: one line: what was saved and how to resume (e.g. "interrupted at step
             1500; checkpoint saved in runs/sac; continue with --resume runs/sac").
     """
+
+
+class UsageError(UserError, ValueError):
+    """A flag value or an input file that a command refuses (e.g. `--every 0`, an image
+    that cannot be read): the message names the flag or file and what is allowed."""

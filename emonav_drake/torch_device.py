@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import torch
 
+from emonav_drake.errors import UserError
 
-class DeviceError(ValueError):
+
+class DeviceError(UserError, ValueError):
     """A torch device string is malformed or names hardware this machine does not have."""
 
 

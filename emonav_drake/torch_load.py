@@ -27,6 +27,8 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from emonav_drake.errors import UserError
+
 _UNSAFE_GLOBAL = re.compile(r"\bGLOBAL ([\w.]+)")  # in weights_only errors
 # torch's weights_only failure: the reason sits between these two sentences
 _WEIGHTS_ONLY_REASON = re.compile(
@@ -34,7 +36,7 @@ _WEIGHTS_ONLY_REASON = re.compile(
 )
 
 
-class CheckpointReadError(ValueError):
+class CheckpointReadError(UserError, ValueError):
     """A `torch.save` file that `load_checked` refuses.
 
     `kind` is "code" (loading it would run code: `refused` names the Python global),

@@ -26,6 +26,8 @@ import typing
 from pathlib import Path
 from typing import Any
 
+from emonav_drake.errors import UserError
+
 # A configuration, scenario or training configuration is a few kB; these bound what a
 # hostile file can cost (parsing 100 000 values with Drake's pure-Python loader and its
 # typed loader takes ~4 s).
@@ -34,7 +36,7 @@ MAX_YAML_VALUES = 100_000  # scalars, lists and mappings, aliases expanded
 MAX_LIST_ITEMS = 100  # items of a list field, unless its dataclass's `_MAX_ITEMS` says
 
 
-class ConfigError(ValueError):
+class ConfigError(UserError, ValueError):
     """A configuration or scenario value is invalid; the message names the field."""
 
 

@@ -52,7 +52,7 @@ from emonav_drake.cli import (
 )
 from emonav_drake.cli import eval as eval_cmd
 from emonav_drake.cli.common import UserHelpFormatter
-from emonav_drake.errors import RunInterrupted
+from emonav_drake.errors import RunInterrupted, UserError
 
 # Exit codes.
 EXIT_USAGE = 2  # a user error: bad flag, file, field or output path
@@ -60,9 +60,11 @@ EXIT_INTERRUPTED = 130  # Ctrl-C (128 + SIGINT)
 EXIT_INTERNAL = 1  # an unexpected exception: a bug
 EXIT_BROKEN_PIPE = 141  # the reader of stdout went away (`emonav planners | head`): 128 + SIGPIPE
 
-# Exceptions that are the user's to fix: the ValueError family (ConfigError, PolicyError,
-# CommandError, ImageReadError, OutputPathError, DeviceError, …) and the file system's.
-USER_ERRORS = (ValueError, OSError, NotImplementedError)
+# Exceptions that are the user's to fix: a `UserError` (ConfigError, PolicyError,
+# ImageReadError, OutputPathError, DeviceError, …: raised where an input is checked) and the
+# file system's (a missing file, a full disk, no permission). Anything else — a plain
+# ValueError or numpy's LinAlgError from inside a simulation included — is a bug.
+USER_ERRORS = (UserError, OSError)
 
 # The sub-commands in the order of `emonav --help`.
 SUBCOMMANDS = (

@@ -33,6 +33,7 @@ from emonav_drake.atomic_io import (
     write_bytes_atomic,
     write_json,
 )
+from emonav_drake.errors import UsageError
 from emonav_drake.params import EMOTION_NAMES
 
 IMAGE_WRITE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp")
@@ -82,10 +83,10 @@ def _write_image(path: Path, image: np.ndarray) -> None:
 
     suffix = path.suffix.lower()
     if suffix not in IMAGE_WRITE_SUFFIXES:
-        raise ValueError(f"--annotate {path}: use one of {IMAGE_WRITE_SUFFIXES}")
+        raise UsageError(f"--annotate {path}: use one of {IMAGE_WRITE_SUFFIXES}")
     ok, data = cv2.imencode(suffix, image)
     if not ok:
-        raise ValueError(f"--annotate {path}: could not encode the image")
+        raise UsageError(f"--annotate {path}: could not encode the image")
     write_bytes_atomic(path, data.tobytes())
 
 
@@ -114,31 +115,31 @@ def _validate_emotion_args(args: argparse.Namespace, video: bool) -> None:
     from emonav_drake.perception.image_io import MAX_IMAGE_PIXELS
 
     if args.path.is_dir():
-        raise ValueError(f"{args.path}: is a directory, expected an image or video file")
+        raise UsageError(f"{args.path}: is a directory, expected an image or video file")
     if not args.path.is_file():
         raise FileNotFoundError(f"{args.path}: no such file")
     if args.every < 1:
-        raise ValueError(f"--every {args.every}: must be >= 1")
+        raise UsageError(f"--every {args.every}: must be >= 1")
     if args.max_frames is not None and args.max_frames < 1:
-        raise ValueError(f"--max-frames {args.max_frames}: must be >= 1")
+        raise UsageError(f"--max-frames {args.max_frames}: must be >= 1")
     if not 0.0 < args.smooth <= 1.0:
-        raise ValueError(f"--smooth {args.smooth}: must be in (0, 1]")
+        raise UsageError(f"--smooth {args.smooth}: must be in (0, 1]")
     if not 0.05 <= args.detection_scale <= 1.0:
-        raise ValueError(f"--detection-scale {args.detection_scale}: must be in [0.05, 1]")
+        raise UsageError(f"--detection-scale {args.detection_scale}: must be in [0.05, 1]")
     if args.max_pixels is None:
         args.max_pixels = MAX_IMAGE_PIXELS
     if args.max_pixels < 0:
-        raise ValueError(f"--max-pixels {args.max_pixels}: must be >= 0 (0 = never downscale)")
+        raise UsageError(f"--max-pixels {args.max_pixels}: must be >= 0 (0 = never downscale)")
     if args.annotate is not None:
         check_output_file(args.annotate, "--annotate")
         suffix = args.annotate.suffix.lower()
         if suffix not in (*IMAGE_WRITE_SUFFIXES, *VIDEO_WRITERS):
-            raise ValueError(
+            raise UsageError(
                 f"--annotate {args.annotate}: use an image suffix {IMAGE_WRITE_SUFFIXES} "
                 f"or, for a video, {tuple(VIDEO_WRITERS)}"
             )
         if suffix in VIDEO_WRITERS and not video:
-            raise ValueError(f"--annotate {args.annotate}: an image input needs an image suffix")
+            raise UsageError(f"--annotate {args.annotate}: an image input needs an image suffix")
     if args.json is not None:
         check_output_file(args.json, "--json")
     check_distinct({"--json": args.json, "--annotate": args.annotate, "PATH": args.path})
@@ -216,7 +217,7 @@ def _run_video(args: argparse.Namespace, classifier: Any) -> int:
     _report_video(args, frames_out, scale, wall)
     if args.annotate and suffix not in VIDEO_WRITERS:
         if best is None:
-            raise ValueError(f"{args.path}: no frame to annotate")
+            raise UsageError(f"{args.path}: no frame to annotate")
         _write_image(args.annotate, best)
     if args.annotate:
         print(f"annotation written to {args.annotate}")
@@ -263,7 +264,7 @@ def _classify_video(
             writer.release()
     wall = time.perf_counter() - t0
     if video_out is not None and writer is None:
-        raise ValueError(f"{args.path}: no frame to annotate")
+        raise UsageError(f"{args.path}: no frame to annotate")
     return frames_out, best[1], scale, wall
 
 
@@ -339,5 +340,5 @@ def _open_writer(path: Path, source: Path, shape: tuple, every: int) -> Any:
     fourcc = cv2.VideoWriter_fourcc(*VIDEO_WRITERS[path.suffix.lower()])
     writer = cv2.VideoWriter(str(path), fourcc, max(fps / every, 1.0), (shape[1], shape[0]))
     if not writer.isOpened():
-        raise ValueError(f"--annotate {path.suffix}: cannot open a video writer for this format")
+        raise UsageError(f"--annotate {path.suffix}: cannot open a video writer for this format")
     return writer

@@ -18,10 +18,11 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from emonav_drake.core.metrics import COLLISION, FALL, TIMEOUT
+from emonav_drake.errors import UserError
 from emonav_drake.evaluation import tables
 
 
-class CurveError(ValueError):
+class CurveError(UserError, ValueError):
     """A point that cannot be read or does not fit the others."""
 
 

@@ -20,6 +20,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+from emonav_drake.errors import UserError
+
 _BLOCK = re.compile(
     r"(?P<open><!-- from (?P<file>[^:>]+?): (?P<section>[^>]+?) -->\n)"
     r"(?P<body>.*?)"
@@ -28,7 +30,7 @@ _BLOCK = re.compile(
 )
 
 
-class ResultsDocError(ValueError):
+class ResultsDocError(UserError, ValueError):
     """A block names a file or section that does not exist."""
 
 

@@ -48,6 +48,7 @@ import numpy as np
 import torch
 
 from emonav_drake.atomic_io import atomic_write, process_alive
+from emonav_drake.errors import UserError
 from emonav_drake.torch_load import CheckpointReadError, load_checked
 
 SAC_FORMAT = "emonav-sac-checkpoint/2"
@@ -62,7 +63,7 @@ _LEGACY_TMP = re.compile(
 )
 
 
-class RunStateError(ValueError):
+class RunStateError(UserError, ValueError):
     """A run directory cannot be resumed: no state, or a damaged, foreign or old file."""
 
 

@@ -41,13 +41,14 @@ import cv2
 import numpy as np
 
 from emonav_drake import MAX_DECODED_PIXELS
+from emonav_drake.errors import UserError
 
 log = logging.getLogger(__name__)
 
 VIDEO_SUFFIXES = frozenset({".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v", ".mpg", ".mpeg"})
 
 
-class ImageReadError(ValueError):
+class ImageReadError(UserError, ValueError):
     """A file is not a readable image or video, or an array is not a usable image."""
 
 

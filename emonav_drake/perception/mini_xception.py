@@ -38,6 +38,8 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
+from emonav_drake.errors import UserError
+
 CLASS_NAMES = ("angry", "disgust", "fear", "happy", "sad", "surprise", "neutral")
 INPUT_SIZE = 64  # pixels, square grayscale input
 BN_EPSILON = 1e-3  # Keras' default, stored in the file's layer config
@@ -51,7 +53,7 @@ FER_INSTALL_HINT = (
 )
 
 
-class ModelFileError(ValueError):
+class ModelFileError(UserError, ValueError):
     """The emotion model file is missing, unreadable or not the expected network."""
 
 

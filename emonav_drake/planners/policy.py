@@ -34,6 +34,7 @@ from emonav_drake.atomic_io import atomic_write
 from emonav_drake.core.goal_input import check_goal_input
 from emonav_drake.core.navigation import PlannerInput
 from emonav_drake.core.observations import observation_kind, observation_kinds
+from emonav_drake.errors import UserError
 from emonav_drake.params import NUM_BEAMS, LidarParams, RobotParams
 from emonav_drake.planners.networks import (
     Actor,
@@ -55,7 +56,7 @@ LIP_POLICY = _DATA / "policy_lgm.pt"
 DEFAULT_POLICY = _DATA / "policies" / "emobipednav_distilled_digit.pt"
 
 
-class PolicyError(ValueError):
+class PolicyError(UserError, ValueError):
     """A policy checkpoint is missing, corrupt, or does not fit the observation."""
 
 
