@@ -48,6 +48,25 @@ def _where(flag: str | None, path: Path) -> str:
     return f"{flag} {path}" if flag else str(path)
 
 
+SYMLINK_LOOP = "a symlink loop (a link that leads back to itself); give another path"
+
+
+def is_symlink_loop(path: str | Path) -> bool:
+    """Whether `path` (or a folder on the way to it) is a chain of symbolic links that
+    leads back to itself: `exists()` is False for it, yet nothing can be created there."""
+    try:
+        os.stat(path)
+    except OSError as e:
+        return e.errno == errno.ELOOP
+    return False
+
+
+def missing_file(path: str | Path) -> str:
+    """Why an input file that is not there cannot be read: "no such file", or that the
+    path is a symlink loop (which `is_file()` also reports as absent)."""
+    return SYMLINK_LOOP if is_symlink_loop(path) else "no such file"
+
+
 def check_output_file(path: str | Path, flag: str | None = None) -> Path:
     """`path` as a `Path` if a file can be written there; else `OutputPathError`.
 
@@ -58,6 +77,8 @@ def check_output_file(path: str | Path, flag: str | None = None) -> Path:
     where = _where(flag, p)
     if str(path).strip() == "":
         raise OutputPathError(f"{flag or 'output'}: empty path")
+    if is_symlink_loop(p):
+        raise OutputPathError(f"{where}: {SYMLINK_LOOP}")
     if p.is_dir():
         raise OutputPathError(f"{where}: is a directory; give a file name inside it")
     if p.exists() and not p.is_file():
@@ -82,6 +103,8 @@ def check_output_dir(path: str | Path, flag: str | None = None) -> Path:
     where = _where(flag, p)
     if str(path).strip() == "":
         raise OutputPathError(f"{flag or 'output'}: empty path")
+    if is_symlink_loop(p):
+        raise OutputPathError(f"{where}: {SYMLINK_LOOP}")
     if p.exists() and not p.is_dir():
         raise OutputPathError(f"{where}: exists and is not a directory")
     probe = p

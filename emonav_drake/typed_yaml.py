@@ -26,6 +26,7 @@ import typing
 from pathlib import Path
 from typing import Any
 
+from emonav_drake.atomic_io import missing_file
 from emonav_drake.errors import UserError
 
 # A configuration, scenario or training configuration is a few kB; these bound what a
@@ -287,6 +288,7 @@ def check_yaml_text(where: str, text: str) -> None:
                 continue
             if not isinstance(ev, yaml.NodeEvent):
                 continue
+            _refuse_python_tag(where, ev)
             parent = stack[-1] if stack else None
             path = parent.child_path() if parent is not None else ""
             if parent is not None and parent.is_mapping:
@@ -316,6 +318,23 @@ def check_yaml_text(where: str, text: str) -> None:
                 raise ConfigError(_too_many(where, aliased))
     except yaml.YAMLError:
         return  # the loader reports it, with its line and column
+
+
+# What `!!python/…` expands to (PyYAML's tags that build Python objects or call code).
+_PYTHON_TAG = "tag:yaml.org,2002:python/"
+
+
+def _refuse_python_tag(where: str, ev: Any) -> None:
+    """A `!!python/…` tag is refused by name (nothing here would build it, but the
+    loader's "expected a mapping node" said nothing of why)."""
+    tag = getattr(ev, "tag", None) or ""
+    if tag.startswith(_PYTHON_TAG) or tag.startswith("!python/"):
+        shown = "!!python/" + tag[len(_PYTHON_TAG) :] if tag.startswith(_PYTHON_TAG) else tag
+        raise ConfigError(
+            f"{where}: line {ev.start_mark.line + 1}: the Python tag {shown} is refused: "
+            "these YAML files hold data only (numbers, strings, lists, mappings and the "
+            "planner spec tags such as !MpcSpec)"
+        )
 
 
 def _check_key(where: str, mapping: _Collection, ev: Any) -> str:
@@ -366,7 +385,7 @@ def load_typed_yaml_raw(
         if path.is_dir():
             raise ConfigError(f"{path}: is a directory, expected a YAML file")
         if not path.is_file():
-            raise ConfigError(f"{path}: no such file")
+            raise ConfigError(f"{path}: {missing_file(path)}")
         size = path.stat().st_size
         if size > MAX_YAML_BYTES:  # refused before it is read
             raise ConfigError(_too_large(str(path), size))

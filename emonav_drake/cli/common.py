@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 from emonav_drake.atomic_io import check_distinct, check_output_file, write_text_atomic
 from emonav_drake.cli.resolve import add_config_choice, add_family, add_state_source
 from emonav_drake.params import ConfigError, EmoNavConfig
-from emonav_drake.planners import is_learned
+from emonav_drake.planners import is_learned, reads_crowd_state
 
 if TYPE_CHECKING:
     import numpy as np
@@ -168,7 +168,15 @@ def add_episode_flags(p: argparse.ArgumentParser) -> None:
 
 
 def check_planner_flags(args: argparse.Namespace) -> None:
-    """--checkpoint / --device only mean something with a learned planner; check them early."""
+    """--checkpoint / --device only mean something with a learned planner, --state-source
+    only with a planner that reads the crowd state; check them early."""
+    source = getattr(args, "state_source", None)
+    if source is not None and not reads_crowd_state(args.planner):
+        raise ConfigError(
+            f"--state-source {source}: --planner {args.planner} reads its LiDAR map "
+            "observation, not the crowd state, so the state source changes nothing for it; "
+            "it applies to the state-based planners (dwa, mpc, sarl, …: emonav planners)"
+        )
     if not is_learned(args.planner):
         if args.checkpoint is not None:
             raise ConfigError(

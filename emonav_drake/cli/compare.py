@@ -28,7 +28,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 def cmd_compare(args: argparse.Namespace) -> int:
     """Combine the runs; write combined.json (their settings and the runs they came from) and
     the tables."""
-    from emonav_drake.atomic_io import write_json
+    from emonav_drake.atomic_io import check_output_dir, write_json
     from emonav_drake.evaluation.combine import combine_runs
     from emonav_drake.evaluation.run_directory import (
         SETTINGS_FILE,
@@ -37,7 +37,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         RunDirectory,
     )
 
-    out = args.out
+    out = check_output_dir(args.out, "--out")  # a file, a symlink loop: named, at once
     if any((out / f).exists() for f in (SETTINGS_FILE, TRIALS_FILE)):
         raise BenchmarkSettingsError(
             f"--out {out}: already holds a run; give a new or empty directory"

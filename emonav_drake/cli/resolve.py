@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from emonav_drake.configs import SETTINGS
-from emonav_drake.params import EmoNavConfig, load_config
+from emonav_drake.params import ConfigError, EmoNavConfig, load_config
 
 if TYPE_CHECKING:
     from emonav_drake.core.scenario import Scenario
@@ -67,6 +67,7 @@ def resolve_config(args: argparse.Namespace) -> ResolvedConfig:
     if setting is not None:
         cfg, origin = load_setting(setting), f"--setting {setting}"
     elif config_file is not None:
+        check_input_file(config_file, "--config")
         cfg, origin = load_config(config_file), f"--config {config_file}"
     else:
         cfg, origin = load_config(), "the default configuration"
@@ -80,6 +81,19 @@ def resolve_config(args: argparse.Namespace) -> ResolvedConfig:
     if family is not None:
         cfg.crowd.family = family
     return ResolvedConfig(cfg, setting, origin, time_varying, state_source, family)
+
+
+def check_input_file(path: str | Path, flag: str) -> Path:
+    """`path` if it is a file to read; else a `ConfigError` naming `flag` and why (no such
+    file, a symlink loop, a directory)."""
+    from emonav_drake.atomic_io import missing_file
+
+    p = Path(path)
+    if p.is_dir():
+        raise ConfigError(f"{flag} {path}: is a directory, expected a YAML file")
+    if not p.is_file():
+        raise ConfigError(f"{flag} {path}: {missing_file(p)}")
+    return p
 
 
 def add_config_choice(p: argparse.ArgumentParser) -> None:
@@ -138,6 +152,11 @@ def resolve_scenario(args: argparse.Namespace, resolved: ResolvedConfig) -> Scen
     if getattr(args, "scenario", None):
         from emonav_drake.scenarios import scenario_path
 
+        if resolved.family is not None:
+            raise ConfigError(
+                f"--family {resolved.family} with --scenario {args.scenario}: a scenario file "
+                "is one fixed scene and --family chooses how seeds are sampled; give one of them"
+            )
         sc = load_scenario(scenario_path(args.scenario), resolved.config)
         sc.seed = args.seed if sc.seed < 0 else sc.seed
         if resolved.time_varying:

@@ -145,6 +145,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     wall = time.perf_counter() - t0
     out = record.to_json()
     out["seed"] = scenario.seed
+    out["state_source"] = cfg.perception.state_source  # what the planner read of the crowd
     if rates is not None and rates.report is not None:
         out.update(rates.report.to_json())
         print(_format_rates(rates.report))

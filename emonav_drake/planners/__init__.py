@@ -143,6 +143,17 @@ def is_learned(name: str) -> bool:
     return is_registered(name) and planner_kind(name).learned
 
 
+def reads_crowd_state(name: str) -> bool:
+    """Whether planner `name` reads the crowd state (`PlannerInput.crowd`: the simulator's,
+    or the LiDAR tracks with `perception.state_source` "lidar"): the model-based planners,
+    a user's planners, SARL/RGL and the MPC-steered policies. A policy that reads only its
+    map observation does not, so the state source changes nothing for it (DRL-VO*'s
+    velocity image is drawn from the simulator's crowd either way)."""
+    if not is_learned(name):
+        return True
+    return planner_kind(name).runs_as == "sarl" or name in MPC_STEERED
+
+
 def is_default_checkpoint(name: str, path: str | Path) -> bool:
     """Whether `path` is the checkpoint planner `name` runs without `--checkpoint`."""
     if not is_registered(name):

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from emonav_drake.atomic_io import SYMLINK_LOOP, is_symlink_loop
 from emonav_drake.params import ConfigError
 
 SCENARIO_DIR = Path(__file__).resolve().parent
@@ -34,6 +35,8 @@ def scenario_path(name_or_path: str | Path) -> Path:
         return p
     if str(name_or_path) in EXAMPLES:
         return SCENARIO_DIR / f"{name_or_path}.yaml"
+    if is_symlink_loop(p):
+        raise ConfigError(f"--scenario {name_or_path}: {SYMLINK_LOOP}")
     raise ConfigError(
         f"--scenario {name_or_path}: no such file, and not a shipped example "
         f"({', '.join(EXAMPLES)})"
