@@ -147,7 +147,15 @@ def build_parser() -> argparse.ArgumentParser:
 
 QUIET_HELP = "no progress bars (there are none either when stderr is not a terminal)"
 # The sub-commands that build planners by name, and so take `--planner-module`.
-PLANNER_MODULE_COMMANDS = ("sim", "eval", "benchmark", "train", "planners")
+PLANNER_MODULE_COMMANDS = (
+    "sim",
+    "eval",
+    "benchmark",
+    "train",
+    "planners",
+    "diagnose",
+    "digit-rounds",
+)
 PLANNER_MODULE_HELP = (
     "a module of your own that registers planners (a .py file or a dotted module name; "
     "repeatable): its planners become names for --planner / --planners and, with train, "

@@ -7,7 +7,10 @@ emonav diagnose RUN [--methods M,…] [--last 5] [--reference 10] --out DIR [--f
 and cause, steps, smallest pedestrian distance) and the `emonav sim` command that plays
 the first few again; it simulates nothing. `--out` simulates every failure again: its
 cause on both plants, and on Digit the tracking errors against the planner's LIP model
-(skipped on a LIP run, with a line saying so).
+(skipped on a LIP run, with a line saying so). A run of planners of the user's own
+(`planner_modules` in its settings.json) is simulated only when the same modules are
+given with `--planner-module`: a run directory never makes us import code
+(`planners.plugins.require_named_on_command_line`).
 """
 
 from __future__ import annotations
@@ -76,6 +79,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     methods = args.methods.split(",") if args.methods else None
     rows = None
     if args.out is not None:
+        _check_planner_modules(args.run, getattr(args, "planner_modules", []))
         # its bar where `emonav` allows bars (cli.main: a terminal, no --quiet)
         rows = diagnose_run(args.run, args.out, methods, args.last, args.reference, True)
     if args.failures:
@@ -103,3 +107,16 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             "run_config.yaml"
         )
     return 0
+
+
+def _check_planner_modules(run: Path, given: list[str]) -> None:
+    """Before re-simulating: the run's settings (checked, `RunDirectory.read_settings`)
+    name no planner module that is not among `given` (`--planner-module`): `ConfigError`
+    naming its settings.json otherwise, and nothing is imported."""
+    from emonav_drake.evaluation.run_directory import SETTINGS_FILE, RunDirectory
+    from emonav_drake.planners.plugins import require_named_on_command_line
+
+    found = RunDirectory(run).read_settings()
+    if found is not None:
+        recorded = found[0].get("planner_modules")
+        require_named_on_command_line(recorded, given, run / SETTINGS_FILE)

@@ -1,8 +1,11 @@
 """`emonav digit-rounds`: DAgger rounds on the full-order Digit after the calibrated route.
 
 emonav digit-rounds --from RUN --rounds 2 --episodes 60 [--workers W] --out DIR [--resume]
+                    [--planner-module MODULE]
 
-See `emonav_drake/learning/digit_dagger.py`.
+See `emonav_drake/learning/digit_dagger.py`. A source run whose expert is a planner of the
+user's own (`planner_modules` in its saved configuration) is continued only when the same
+modules are given with `--planner-module`: a run directory never makes us import code.
 """
 
 from __future__ import annotations
@@ -71,8 +74,19 @@ def cmd_digit_rounds(args: argparse.Namespace) -> int:
         raise ConfigError(f"--from {args.source}: no DAgger run there (dagger_state.pt)")
     check_output_dir(args.out, "--out")
     with training_run_directory(args.out, args.resume):  # a new run: an empty --out only
+        # before any work (a refused new --out is removed again, empty)
+        _check_planner_modules(args.source, list(getattr(args, "planner_modules", None) or []))
         policy = run_digit_rounds(
             args.out, args.source, cfg, args.workers, args.ray_address, resume=args.resume
         )
     print(f"policy written to {policy}")
     return 0
+
+
+def _check_planner_modules(source: Path, given: list[str]) -> None:
+    """Before any work (nothing imported, nothing written): the source run's DAgger state
+    is readable and its configuration names no planner module that is not among `given`
+    (`--planner-module`; `ConfigError` naming its dagger_state.pt otherwise)."""
+    from emonav_drake.learning.dagger_state import STATE_FILE, read_dagger_state
+
+    read_dagger_state(source / STATE_FILE, command_line=given)

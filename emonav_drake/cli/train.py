@@ -197,10 +197,23 @@ def _training_config(args: argparse.Namespace):
     else:
         from emonav_drake.learning.sac_config import SacConfig as schema
     _check_init(args)
+    # code only from the command line: a route's YAML or a run's saved state that names
+    # planner modules is refused unless they are given with --planner-module (checked
+    # before anything is imported: validating a configuration imports its modules)
+    given = list(getattr(args, "planner_modules", None) or [])
+    saved = None
+    if args.resume is not None and args.algo in ("dagger", "sarl"):
+        saved = _saved_config(args.resume, args.algo, schema, given)
     if args.config is not None:
         cfg = load_typed_yaml(schema, path=args.config)
+        if hasattr(cfg, "planner_modules"):
+            from emonav_drake.planners.plugins import require_named_on_command_line
+
+            cfg.planner_modules = require_named_on_command_line(
+                cfg.planner_modules, given, args.config
+            )
     elif args.resume is not None and args.variant is None:
-        cfg = _saved_config(args.resume, args.algo, schema)
+        cfg = saved if saved is not None else _saved_config(args.resume, args.algo, schema)
     else:
         cfg = schema()
     if args.steps is not None and args.steps < 1:
@@ -238,26 +251,33 @@ def _training_config(args: argparse.Namespace):
     return cfg
 
 
-def _saved_config(run: Path, algo: str, schema: type):
+def _saved_config(run: Path, algo: str, schema: type, given: list[str] | None = None):
     """The configuration the run in `run` was started with (its state file's `config`),
-    checked as a --config file would be; `RunStateError` if the state cannot be read."""
+    checked as a --config file would be; `RunStateError` if the state cannot be read.
+
+    `given`: the command line's `--planner-module` values; the saved configuration's
+    `planner_modules` must be among them (`ConfigError` naming the state file otherwise),
+    checked before it is validated (which imports them)."""
     import json
 
     from emonav_drake.learning.run_state import RunStateError, read_state_config
+    from emonav_drake.planners.plugins import require_named_on_command_line
     from emonav_drake.typed_yaml import load_typed_yaml
 
     name = STATE_FILES[algo]
+    given = list(given or [])
     if not (run / name).is_file():
         return schema()  # the trainer says there is nothing to resume
     if algo == "dagger":  # the routes with a reader of their own: the same checks
         from emonav_drake.learning.dagger_state import read_dagger_state
 
-        return read_dagger_state(run / name)[0]
+        return read_dagger_state(run / name, command_line=given)[0]
     if algo == "finetune":
         from emonav_drake.learning.finetune_state import read_finetune_state
 
         return read_finetune_state(run / name)[0]
     saved = read_state_config(run / name)
+    require_named_on_command_line(saved.get("planner_modules"), given, f"{run / name} (config)")
     try:
         if hasattr(schema, "from_saved"):  # a configuration with a planner spec (SARL's)
             return schema.from_saved(saved)

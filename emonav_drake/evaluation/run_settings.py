@@ -2,8 +2,10 @@
 
 `make_settings` records the methods (planner kinds, checkpoints and their hashes), the
 plant, trials, first seed, the full resolved configuration as YAML and its hash, the
-emotion estimate and the package's identity; `settings_difference` names the first field
-in which a later run into the same directory differs (a run may only add trials);
+emotion estimate, the package's identity and the planner modules of the user's own with
+the sha256 of each one's source; `settings_difference` names the first field in which a
+later run into the same directory differs (a run may only add trials; a changed plug-in
+file is another setting);
 `spec_from_settings` rebuilds what a worker needs (`diagrams.trials.BenchmarkSpec`).
 
 `check_settings` is applied on every read of a run (`emonav benchmark` continuing one,
@@ -68,10 +70,18 @@ def make_settings(
     emotion_estimate_yaml: str | None = None,
     planner_modules: Sequence[str] = (),
 ) -> dict:
-    """The `settings.json` of a run (`planner_modules` only when there are any, so a run
-    of the package's own planners keeps the settings it always had)."""
+    """The `settings.json` of a run (`planner_modules` and `planner_modules_sha256`, the
+    sha256 of each module's source, only when there are any, so a run of the package's
+    own planners keeps the settings it always had)."""
+    from emonav_drake.planners.plugins import modules_sha256
+
     cfg_yaml = dump_config(config)
-    extra = {"planner_modules": list(planner_modules)} if planner_modules else {}
+    extra: dict[str, object] = {}
+    if planner_modules:
+        extra = {
+            "planner_modules": list(planner_modules),
+            "planner_modules_sha256": modules_sha256(planner_modules),
+        }
     return extra | {
         "format": FORMAT,
         "planners": [m.name for m in methods],
@@ -163,6 +173,20 @@ def _kind_problem(settings: dict) -> str | None:
         return f"first_seed = {first} with trials = {trials}: the seeds are not in [0, 2**64 - 1]"
     if not (math.isfinite(settings["goal_radius"]) and settings["goal_radius"] > 0):
         return f"goal_radius = {settings['goal_radius']!r} is not a number > 0"
+    # added later, so optional (absent: none): the planner modules and their sources' hashes
+    modules = settings.get("planner_modules", [])
+    if not (isinstance(modules, list) and all(isinstance(m, str) and m for m in modules)):
+        return f"planner_modules = {_short(modules)} is not a list of planner modules"
+    hashes = settings.get("planner_modules_sha256", {})
+    if not (
+        isinstance(hashes, dict)
+        and all(isinstance(h, _OPT_STR) for h in hashes.values())
+        and set(hashes) <= set(modules)
+    ):
+        return (
+            f"planner_modules_sha256 = {_short(hashes)} is not an object: planner module → "
+            "SHA-256 or null"
+        )
     extended = settings.get("extended", [])
     if not (isinstance(extended, list) and all(isinstance(e, dict) for e in extended)):
         return f"extended = {_short(extended)} is not a list of objects"
@@ -264,6 +288,9 @@ def settings_difference(old: dict, new: dict) -> str | None:
             if key == "config_sha256":
                 extra = f" — {_config_diff(old['config_yaml'], new['config_yaml'])}"
             return f"{what} is {_short(old.get(key))} there, {_short(new.get(key))} here{extra}"
+    changed = _changed_module(old, new)
+    if changed is not None:
+        return changed
     for name in new["planners"]:
         a, b = old["methods"][name], new["methods"][name]
         for key, what in (("planner", "planner"), ("checkpoint_sha256", "checkpoint (hash)")):
@@ -278,6 +305,22 @@ def settings_difference(old: dict, new: dict) -> str | None:
     ):
         if pa.get(key) != pb.get(key):
             return f"{what} is {_short(pa.get(key))} there, {_short(pb.get(key))} here"
+    return None
+
+
+def _changed_module(old: dict, new: dict) -> str | None:
+    """The first planner module whose source's hash (`planner_modules_sha256`) differs
+    between two runs with the same `planner_modules`, as words. A run directory written
+    before the hashes were recorded has none: its modules' sources are not compared."""
+    if "planner_modules_sha256" not in old:
+        return None
+    there, here = old["planner_modules_sha256"], new.get("planner_modules_sha256", {})
+    for module in new.get("planner_modules", []):
+        if there.get(module) != here.get(module):
+            return (
+                f"planner_modules: the source of {module} has changed (sha256 "
+                f"{_short(there.get(module))} there, {_short(here.get(module))} here)"
+            )
     return None
 
 

@@ -13,6 +13,7 @@ writes and restores the file; `read_dagger_state` reads and checks one.
 from __future__ import annotations
 
 import dataclasses as dc
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -38,16 +39,30 @@ STATE_KEYS = ("config", "env_config", "progress", "episodes", "best_sr", "histor
 DEMO_KEYS = ("frames", "windows", "states", "labels")
 
 
-def read_dagger_state(path: str | Path) -> tuple[DaggerConfig, dict, dict]:
+def read_dagger_state(
+    path: str | Path, command_line: Sequence[str] | None = None
+) -> tuple[DaggerConfig, dict, dict]:
     """A DAgger run's state file, read without running code and checked: (its
     configuration, its plain state, its tensors).
 
     `RunStateError` naming the file if it is missing, damaged, of another format, lacks
     part of the state (`STATE_KEYS`, the demonstrations' `DEMO_KEYS`), or its
     configuration has fields this emonav does not know or values out of range.
+
+    `command_line`: the `--planner-module` values of a command that reads a state file it
+    was handed (`train --resume`, `digit-rounds --from`): the configuration's
+    `planner_modules` must be among them (`ConfigError` naming the file otherwise), checked
+    before the configuration is validated, which imports them. None (the Python API): no
+    such check.
     """
     path = Path(path)
     saved, tensors = read_run_state(path, DAGGER_FORMAT)
+    if command_line is not None and isinstance(saved.get("config"), dict):
+        from emonav_drake.planners.plugins import require_named_on_command_line
+
+        require_named_on_command_line(
+            saved["config"].get("planner_modules"), command_line, f"{path} (config)"
+        )
 
     def check() -> DaggerConfig:
         missing = [k for k in (*STATE_KEYS, "demos") if k not in saved]
