@@ -31,6 +31,7 @@ def loop(tmp_path):
         ("sim", "--json", "{loop}"),
         ("sim", "--json", "{loop}/r.json"),
         ("sim", "--config", "{loop}"),
+        ("train", "--algo", "dagger", "--config", "{loop}", "--out", "{tmp}/run"),
         ("sim", "--scenario", "{loop}"),
     ],
     ids=[
@@ -40,6 +41,7 @@ def loop(tmp_path):
         "sim-json",
         "sim-json-inside",
         "config",
+        "train-config",
         "scenario",
     ],
 )
@@ -57,6 +59,20 @@ def test_compare_out_an_existing_file_names_the_flag(capsys, tmp_path):
     out = tmp_path / "tables.md"
     out.write_text("mine\n")
     code, err = run(capsys, "compare", "--out", out, tmp_path / "r1", tmp_path / "r2")
+    assert_user_error(code, err, "--out", "not a directory")
+    assert out.read_text() == "mine\n"
+
+
+def test_diagnose_out_an_existing_file_names_the_flag(capsys, tmp_path):
+    """Before: the run was read and its trials looked at first ('no failed trials …'), and
+    with failures the file would have been replaced by a folder's worth of output."""
+    run_dir = tmp_path / "b"
+    argv = ("benchmark", "--plant", "lip", "--planners", "dwa", "--trials", "1")
+    code, err = run(capsys, *argv, "--out", run_dir, "--quiet")
+    assert code == 0, err
+    out = tmp_path / "diagnosis"
+    out.write_text("mine\n")
+    code, err = run(capsys, "diagnose", run_dir, "--out", out)
     assert_user_error(code, err, "--out", "not a directory")
     assert out.read_text() == "mine\n"
 

@@ -74,6 +74,10 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         raise ConfigError(
             "give --failures (list the failed trials) or --out DIR (simulate them again)"
         )
+    if args.out is not None:  # a file, a symlink loop, an unwritable folder: named at once
+        from emonav_drake.atomic_io import check_output_dir
+
+        check_output_dir(args.out, "--out")
     if not (args.run / "settings.json").is_file():
         raise ConfigError(f"{args.run}: not a benchmark run directory (no settings.json)")
     methods = args.methods.split(",") if args.methods else None

@@ -205,6 +205,9 @@ def _training_config(args: argparse.Namespace):
     if args.resume is not None and args.algo in ("dagger", "sarl"):
         saved = _saved_config(args.resume, args.algo, schema, given)
     if args.config is not None:
+        from emonav_drake.cli.resolve import check_input_file
+
+        check_input_file(args.config, "--config")  # missing, a symlink loop: the flag named
         cfg = load_typed_yaml(schema, path=args.config)
         if hasattr(cfg, "planner_modules"):
             from emonav_drake.planners.plugins import require_named_on_command_line
