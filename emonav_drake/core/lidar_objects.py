@@ -24,6 +24,14 @@ turns one scan into discs in the world frame (numpy only, deterministic):
    bounds, a poor fit — the **fallback**: radius ``prior_radius`` (or half the arc's
    chord if that is larger, at most ``max_radius``), centre that far behind the arc's
    middle beam along its line of sight.
+   A straight cluster is a **line**, not a circle, and is tested for explicitly: its
+   points' scatter matrix has a smaller eigenvalue below 1e-10 of the larger (collinear
+   points: no algebraic fit), or a Gauss-Newton normal matrix has a smallest eigenvalue
+   below 1e-12 of its largest (nearly collinear points: the best circle grows without
+   bound). Such a cluster leaves the refinement at once and takes the fallback (a piece
+   of wall shorter than ``wall_min_length``, e.g. cut off by a corner or an occluder;
+   longer straight runs are walls, step 4). No linear system is solved unless its matrix
+   passed that test.
 4. **Walls.** A cluster that holds a long straight run of points (a wall) would otherwise
    become one large fallback circle that slides along the wall as the robot moves. So a
    cluster longer than ``wall_min_length`` (its bounding box's diagonal) is first split
@@ -44,8 +52,9 @@ turns one scan into discs in the world frame (numpy only, deterministic):
    (4 m with the defaults), so scans without such objects are detected as before.
 
 All clusters are fitted at once (sums per cluster with ``np.add.reduceat``, batched 3 × 3
-solves; the refinement stops when every cluster has converged), so a scan costs
-O(hits) numpy work and a bounded number of numpy calls whatever the number of objects.
+solves of the matrices that passed the conditioning test; the refinement stops when every
+cluster has converged), so a scan costs O(hits) numpy work and a bounded number of numpy
+calls whatever the number of objects.
 """
 
 from __future__ import annotations
@@ -234,6 +243,28 @@ def detect_objects(
     return Detections(centers[idx], radii[idx], counts[idx].astype(np.int64), walls[idx])
 
 
+# A cluster is a line, not a circle, when the smaller eigenvalue of its points' scatter
+# matrix is below this fraction of the larger one (collinear to about 1e-5 of its length) …
+_LINE_RATIO = 1e-10
+# … or when a Gauss-Newton normal matrix's smallest eigenvalue falls below this fraction of
+# its largest (the circle through nearly collinear points grows without bound; a solve
+# would be meaningless or singular). A disc's arc the detector accepts stays far above
+# (5 beams 1 cm apart on a 0.7 m disc: about 7e-9).
+_GN_RCOND = 1e-12
+
+
+def _well_conditioned(a: np.ndarray, skip: np.ndarray) -> np.ndarray:
+    """Which of the symmetric positive semi-definite matrices `a` (C, 3, 3) are finite and
+    well-conditioned (smallest eigenvalue > ``_GN_RCOND`` · largest); `skip` (C,) bool:
+    matrices not to test (reported False)."""
+    good = ~skip & np.isfinite(a).all(axis=(1, 2))
+    out = np.zeros(a.shape[0], dtype=bool)
+    if good.any():
+        lam = np.linalg.eigvalsh(a[good])  # ascending, per matrix
+        out[good] = lam[:, 0] > _GN_RCOND * lam[:, -1]
+    return out
+
+
 def _fit_circles(
     x: np.ndarray,
     y: np.ndarray,
@@ -260,10 +291,10 @@ def _fit_circles(
     suz = np.add.reduceat(u * z, starts)
     svz = np.add.reduceat(v * z, starts)
     det = suu * svv - suv * suv
-    # Ill-conditioned (nearly straight or tiny arc): the smaller eigenvalue of the
-    # scatter matrix is tiny against the larger one.
+    # Ill-conditioned (a line: collinear points, or a tiny arc): the smaller eigenvalue
+    # of the scatter matrix is tiny against the larger one (det / trace² ≈ their ratio).
     trace = suu + svv
-    ok = (counts >= p.min_fit_points) & (det > 1e-10 * trace * trace) & (trace > 0.0)
+    ok = (counts >= p.min_fit_points) & (det > _LINE_RATIO * trace * trace) & (trace > 0.0)
     safe = np.where(ok, det, 1.0)
     d_coef = -(svv * suz - suv * svz) / safe
     e_coef = -(suu * svz - suv * suz) / safe
@@ -284,7 +315,10 @@ def _fit_circles(
         # [JᵀJ | Jᵀres] per cluster in one pass: (C, 3, 4).
         normal = np.add.reduceat(jac[:, :3, None] * jac[:, None, :], starts, axis=0)
         a, rhs = normal[:, :, :3], -normal[:, :, 3:]
-        a[~ok] = eye  # keep the batch solvable; those clusters fall back anyway
+        # A normal matrix that is not finite or ill-conditioned: the best circle is
+        # running off to an infinite radius (a line); that cluster leaves the refinement.
+        ok &= _well_conditioned(a, ~ok)
+        a[~ok] = eye  # solve only checked matrices; the others take the fallback anyway
         rhs[~ok] = 0.0
         with np.errstate(all="ignore"):
             step = np.linalg.solve(a, rhs)[:, :, 0]
