@@ -33,3 +33,9 @@ class RunInterrupted(Exception):
 class UsageError(UserError, ValueError):
     """A flag value or an input file that a command refuses (e.g. `--every 0`, an image
     that cannot be read): the message names the flag or file and what is allowed."""
+
+
+class PluginError(UserError, RuntimeError):
+    """A planner of the user's own (from `--planner-module` or an entry point) failed in
+    its own code: it raised, returned no command, or hung. The message names the planner
+    and its module; the fault is in that module, not in the package (exit code 2)."""

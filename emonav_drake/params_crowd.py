@@ -149,3 +149,12 @@ class EpisodeParams:
     )
     eval_goal_radius: float = setting(0.2, "d_goal in evaluation", "m", _GOAL_RADIUS)
     discount: float = setting(0.99, "γ, discount factor", "", (0.0, 1.0))
+    # A safety only (`watchdog.py`): it turns a planner that hangs into the episode's
+    # error; a decision that returns in time is untouched, so no result depends on it.
+    decision_timeout: float = setting(
+        60.0,
+        "wall-clock limit of one planner decision: a planner still deciding after it ends "
+        "the episode with an error naming it (PlannerTimeout); 0 = no limit",
+        "s",
+        (0.0, 86400.0),
+    )

@@ -37,6 +37,7 @@ LAYERS: list[tuple[str, frozenset[str]]] = [
                 "run_lock",
                 "provenance",
                 "progress",
+                "watchdog",
                 "registry",
                 "parallel",
                 "configs",

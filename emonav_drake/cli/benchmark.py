@@ -6,7 +6,9 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from emonav_drake.cli.common import (
     PLANT_HELP,
@@ -26,6 +28,9 @@ from emonav_drake.core.metrics import format_idt
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.diagrams.trials import MAX_TRIALS
 
+if TYPE_CHECKING:
+    from emonav_drake.evaluation.benchmark import BenchmarkResult
+
 DESCRIPTION = """\
 Compare planners on the same seeded trials (the paper's Tables II and III).
 
@@ -35,7 +40,11 @@ Every planner runs trial i on seed first-seed + i, in parallel on Ray (a local R
 default, a cluster with --ray-address). The run directory keeps settings.json,
 trials.jsonl (one line per finished trial) and the tables (tables.md, CSV files): the
 same command again continues an interrupted run, a larger --trials extends it, and
-other settings are refused. Success rates come with their 95 % intervals.
+other settings are refused. Success rates come with their 95 % intervals. A trial that
+raises an error (a planner of your own that raises, returns no command or hangs) goes to
+errors.jsonl with its traceback, in no table; the others go on, the run ends with exit
+code 1 naming the failed trials and the `emonav sim` command that replays one, and the
+same command again runs them again.
 """
 
 TIME_VARYING_HELP = "one pedestrian's emotion changes every 2 s (paper §IV-F)"
@@ -114,9 +123,11 @@ def _emotion_estimate_yaml(args: argparse.Namespace) -> str | None:
 
 
 def cmd_benchmark(args: argparse.Namespace) -> int:
-    """Run or continue a benchmark; print where the tables are."""
+    """Run or continue a benchmark; print the summary and where the tables are. Trials
+    that raised (`TrialsFailed`): the summary of the others, then one line `emonav:
+    error: …` naming them, exit code 1."""
     from emonav_drake.atomic_io import check_output_dir
-    from emonav_drake.evaluation.benchmark import run_benchmark
+    from emonav_drake.evaluation.benchmark import TrialsFailed, run_benchmark
 
     # every flag checked before the first trial (planners are built in run_benchmark)
     check_output_dir(args.out, "--out")
@@ -132,21 +143,33 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
         workers = os.cpu_count() or 1
     from emonav_drake.planners.plugins import import_planner_modules
 
-    result = run_benchmark(
-        args.out,
-        methods,
-        args.plant,
-        args.trials,
-        args.first_seed,
-        resolved.config,
-        workers=workers,
-        ray_address=args.ray_address,
-        setting=resolved.setting,
-        config_source=resolved.source,
-        emotion_estimate_yaml=estimate_yaml,
-        progress=True,  # drawn only where `emonav` allows bars (cli.main)
-        planner_modules=import_planner_modules(args.planner_modules),
-    )
+    try:
+        result = run_benchmark(
+            args.out,
+            methods,
+            args.plant,
+            args.trials,
+            args.first_seed,
+            resolved.config,
+            workers=workers,
+            ray_address=args.ray_address,
+            setting=resolved.setting,
+            config_source=resolved.source,
+            emotion_estimate_yaml=estimate_yaml,
+            progress=True,  # drawn only where `emonav` allows bars (cli.main)
+            planner_modules=import_planner_modules(args.planner_modules),
+        )
+    except TrialsFailed as e:  # the others ran: their summary, then the error line
+        _print_summary(e.result)
+        print(f"emonav: error: {e}", file=sys.stderr)
+        return 1
+    _print_summary(result)
+    return 0
+
+
+def _print_summary(result: BenchmarkResult) -> None:
+    """Per method: SR with its interval, NT, DT, IDT and the other fields; the pairwise
+    comparisons; how many trials ran and where the tables are."""
     from emonav_drake.evaluation import tables
 
     summary = tables.summarize_methods(result.trials, result.settings["planners"])
@@ -167,4 +190,3 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
         f"{result.ran} trials run in {result.wall_seconds:.1f} s; "
         f"{len(result.trials)} in {result.path}; tables: {result.path / 'tables.md'}"
     )
-    return 0

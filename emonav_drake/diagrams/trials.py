@@ -13,6 +13,10 @@ for calibration, the Digit DAgger rounds):
   reused (a planner's memory lives in the diagram's Context, so reuse changes no command).
 * `TrialWorker` / `run_trials`: the same on Ray actors (`parallel.run_tasks`), or serially
   in this process with the same arithmetic (torch on one thread in both).
+* `TrialRunner.try_run` / `BenchmarkTrialWorker`: a trial that raises comes back as its
+  error line (`trial_error`: type, message, traceback) instead of stopping the run — what
+  `emonav benchmark` records beside the run; Ctrl-C (KeyboardInterrupt, `RunInterrupted`)
+  still stops it.
 """
 
 from __future__ import annotations
@@ -21,11 +25,13 @@ import copy
 import dataclasses as dc
 import tempfile
 import time
+import traceback
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from emonav_drake.atomic_io import json_safe
+from emonav_drake.errors import RunInterrupted
 from emonav_drake.parallel import Worker, run_tasks
 from emonav_drake.params import ConfigError, EmoNavConfig, load_config
 from emonav_drake.planners import is_registered, model_planner_names, planner_kind
@@ -305,6 +311,33 @@ class TrialRunner:
             "wall_seconds": round(wall, 4),
         }
 
+    def try_run(self, method: str, seed: int) -> dict:
+        """`run`, or if the trial raised an `Exception`, its error line (`trial_error`).
+        KeyboardInterrupt and `RunInterrupted` are not caught: they stop the run."""
+        t0 = time.perf_counter()
+        try:
+            return self.run(method, seed)
+        except RunInterrupted:
+            raise
+        except Exception as e:  # noqa: BLE001 — any error of one trial is that trial's
+            return trial_error(method, seed, self.spec.plant, e, time.perf_counter() - t0)
+
+
+def trial_error(method: str, seed: int, plant: str, error: BaseException, wall: float) -> dict:
+    """The line of a trial that raised `error` after `wall` seconds: method, seed, plant,
+    ``error`` = {type (the class's name), message, traceback (as Python prints it)}."""
+    return {
+        "method": method,
+        "seed": seed,
+        "plant": plant,
+        "error": {
+            "type": type(error).__qualname__,
+            "message": str(error),
+            "traceback": "".join(traceback.format_exception(error)),
+        },
+        "wall_seconds": round(wall, 4),
+    }
+
 
 class TrialWorker(Worker):
     """The Ray actor: one `TrialRunner` per worker process (planners built once). Other
@@ -317,6 +350,14 @@ class TrialWorker(Worker):
 
     def run(self, method: str, seed: int) -> dict:
         return self.runner.run(method, seed)
+
+
+class BenchmarkTrialWorker(TrialWorker):
+    """The benchmark's Ray actor: a trial that raises comes back as its error line
+    (`TrialRunner.try_run`), so the other trials go on."""
+
+    def run(self, method: str, seed: int) -> dict:
+        return self.runner.try_run(method, seed)
 
 
 def run_serial(

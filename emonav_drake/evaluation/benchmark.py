@@ -18,6 +18,16 @@ A *run directory* holds one benchmark:
   lengths >= 0, …); a bad one is an error naming the file and line, never a table entry.
 * `tables.md` and `table2.csv`, `table3.csv`, `social.csv`, `pairwise.csv` — the tables of
   `evaluation.tables`, written at the end and on an interruption, from the sorted trials.
+* `errors.jsonl` — the trials that raised instead of finishing (a bug, or a planner of the
+  user's own that raises, returns no command or hangs past `episode.decision_timeout`):
+  one JSON line each with the method, seed, plant and the error's type, message and
+  traceback (`diagrams.trials.trial_error`). Such a trial is in no table and not in
+  `trials.jsonl`; the other trials go on, and the run ends with `TrialsFailed` naming
+  the failed trials and the `emonav sim` command that replays one (`emonav benchmark`:
+  one line `emonav: error: …`, exit code 1). Running the same command again runs them
+  again (they are missing); a line goes once its trial finishes. Ctrl-C and SIGTERM
+  still stop the run at once (`RunInterrupted`), and a Ray worker that dies still
+  counts as lost (`parallel.run_tasks`), not as a trial's error.
 
 A failed append (a full disk) cuts `trials.jsonl` back to its finished trials and is the
 error reported (the tables written after it may fail on the same disk: that is logged,
@@ -52,6 +62,7 @@ import contextlib
 import dataclasses as dc
 import logging
 import os
+import shlex
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -64,13 +75,14 @@ from emonav_drake.diagrams.plants import plant_named
 from emonav_drake.diagrams.trials import (
     MAX_TRIALS,
     BenchmarkSpec,
+    BenchmarkTrialWorker,
     MethodSpec,
     TrialRunner,
     run_serial,
     run_trials,
 )
 from emonav_drake.errors import RunInterrupted
-from emonav_drake.evaluation.run_directory import RunDirectory, trial_key
+from emonav_drake.evaluation.run_directory import ERRORS_FILE, RunDirectory, trial_key
 from emonav_drake.evaluation.run_settings import make_settings
 from emonav_drake.params import ConfigError, EmoNavConfig, dump_config, load_config
 
@@ -85,6 +97,22 @@ class BenchmarkResult:
     trials: list[dict]  # all finished trials of the directory, sorted
     ran: int  # trials run by this call
     wall_seconds: float
+    failed: list[dict] = dc.field(default_factory=list)  # this call's trials that raised
+
+
+class TrialsFailed(Exception):
+    """Trials of a benchmark raised an error instead of finishing; the others ran.
+
+    The message is one line: the failed trials (method and seeds), the first error, where
+    the errors and tracebacks are (`errors.jsonl`) and the `emonav sim` command that
+    replays one. `result` is the run's `BenchmarkResult` (its finished trials, tables
+    written), `failed` the error lines (`diagrams.trials.trial_error`).
+    """
+
+    def __init__(self, message: str, result: BenchmarkResult) -> None:
+        super().__init__(message)
+        self.result = result
+        self.failed = result.failed
 
 
 class _Progress:
@@ -96,6 +124,7 @@ class _Progress:
         self.methods = list(methods)
         self.k = {m: 0 for m in methods}
         self.n = {m: 0 for m in methods}
+        self.errors = 0
         for t in done:
             self._count(t)
         self.bar = progress_bar(total=total, initial=len(done), unit="trial", enabled=enabled)
@@ -110,10 +139,18 @@ class _Progress:
             f"{m} SR {self.k[m] / self.n[m]:.3f} ({self.n[m]})" if self.n[m] else f"{m} -"
             for m in self.methods
         ]
+        if self.errors:
+            parts.append(f"{self.errors} raised")
         self.bar.set_postfix_str(" | ".join(parts), refresh=False)
 
     def update(self, t: dict) -> None:
         self._count(t)
+        self._postfix()
+        self.bar.update(1)
+
+    def failed(self) -> None:
+        """A trial that raised: counted apart, in no success rate."""
+        self.errors += 1
         self._postfix()
         self.bar.update(1)
 
@@ -151,6 +188,8 @@ def run_benchmark(
         BenchmarkSettingsError: `out` holds another benchmark.
         RunInterrupted: after Ctrl-C / SIGTERM: the finished trials are kept and the
             tables of them written; running the same call again continues.
+        TrialsFailed: at the end, if trials raised an error (in `errors.jsonl`, not in
+            the tables); every other trial ran, and its `result` is the run's.
     """
     workers = _check_run_args(
         plant, trials, first_seed, workers, ray_address, emotion_estimate_yaml
@@ -187,7 +226,9 @@ def run_benchmark(
             given = {m.name: m for m in spec.methods}
             spec.methods = [given[n] for n in settings["planners"]]
             engine = (workers, ray_address)
-            all_trials, new = _run_missing(rd, spec, settings, done, engine, progress, on_trial)
+            all_trials, new, failed = _run_missing(
+                rd, spec, settings, done, engine, progress, on_trial
+            )
     except (KeyboardInterrupt, RunInterrupted):
         raise  # the settings stay: "run the same command again to start"
     except BaseException:
@@ -195,7 +236,56 @@ def run_benchmark(
         raise
     rank = {m: i for i, m in enumerate(settings["planners"])}
     all_trials.sort(key=lambda t: (rank[t["method"]], t["seed"]))
-    return BenchmarkResult(out, settings, all_trials, len(new), time.perf_counter() - t0)
+    failed.sort(key=lambda t: (rank[t["method"]], t["seed"]))
+    wall = time.perf_counter() - t0
+    result = BenchmarkResult(out, settings, all_trials, len(new), wall, failed)
+    if failed:  # the settings and errors.jsonl stay: the same command runs them again
+        raise TrialsFailed(_failure_message(rd, settings, failed), result)
+    return result
+
+
+SHOWN_SEEDS = 10  # failed seeds named per method in `TrialsFailed`'s line
+
+
+def _failure_message(rd: RunDirectory, settings: dict, failed: list[dict]) -> str:
+    """`TrialsFailed`'s line: the failed trials by method, the first error, where the
+    errors are, the command that replays the first one, and how to retry them."""
+    by_method: dict[str, list[int]] = {}
+    for t in failed:
+        by_method.setdefault(t["method"], []).append(int(t["seed"]))
+    which = "; ".join(
+        f"{m} seed{'s' if len(seeds) > 1 else ''} {', '.join(map(str, seeds[:SHOWN_SEEDS]))}"
+        + (f", … ({len(seeds)} in all)" if len(seeds) > SHOWN_SEEDS else "")
+        for m, seeds in by_method.items()
+    )
+    first = failed[0]
+    error = f"{first['error']['type']}: {first['error']['message']}".splitlines()[0]
+    if len(error) > 200:
+        error = error[:199] + "…"
+    n = len(failed)
+    replay = replay_command(rd, settings, first["method"], int(first["seed"]))
+    return (
+        f"{n} trial{'s' if n > 1 else ''} raised an error and {'are' if n > 1 else 'is'} in "
+        f"no table: {which} (first: {error}); errors and tracebacks in "
+        f"{rd.path / ERRORS_FILE}; replay {first['method']} seed {first['seed']} with: "
+        f"{replay}; run the same command again to retry {'them' if n > 1 else 'it'}"
+    )
+
+
+def replay_command(rd: RunDirectory, settings: dict, method: str, seed: int) -> str:
+    """The `emonav sim` command that plays trial (`method`, `seed`) of the run in `rd`
+    again (`evaluation.failures.rerun_command`, with the run's `--planner-module`s; the
+    run's configuration and emotion estimate written into `rd` as YAML when its flags no
+    longer give them)."""
+    from emonav_drake.evaluation.failures import config_flags, rerun_command, write_run_files
+
+    files = None
+    if config_flags(settings) is None or settings.get("emotion_estimate_yaml") is not None:
+        files = write_run_files(settings, rd.path)
+    argv = shlex.split(rerun_command(settings, method, seed, files))
+    modules = settings.get("planner_modules") or []
+    argv[2:2] = [word for m in modules for word in ("--planner-module", m)]
+    return shlex.join(argv)
 
 
 def _missing_folders(out: Path) -> list[Path]:
@@ -277,10 +367,11 @@ def _run_missing(
     engine: tuple[int | None, str | None],
     progress: bool,
     on_trial: Callable[[dict, int], None] | None,
-) -> tuple[list[dict], list[dict]]:
+) -> tuple[list[dict], list[dict], list[dict]]:
     """Run the trials of `settings` that `done` lacks on `engine` = (workers, Ray address),
-    each appended to `rd` as it finishes, then write the tables; the directory's trials
-    (unsorted) and this call's. On an interruption the tables of the finished trials are
+    each appended to `rd` as it finishes (one that raised: recorded in `errors.jsonl`
+    instead), then write the tables; the directory's trials (unsorted), this call's, and
+    this call's error lines. On an interruption the tables of the finished trials are
     written first (Ctrl-C / SIGTERM: `RunInterrupted`; anything else is re-raised)."""
     workers, ray_address = engine
     have = {trial_key(t) for t in done}
@@ -288,10 +379,23 @@ def _run_missing(
     tasks = [(m, s) for s in seeds for m in settings["planners"] if (m, s) not in have]
     all_trials = list(done)
     new: list[dict] = []
+    failed: list[dict] = []
+    # errors.jsonl: the errors of earlier calls whose trials are still missing (they run
+    # again now), then this call's, appended as they come; settled when the call ends
+    errors = {k: e for k, e in rd.read_errors().items() if k not in have}
     bar = _Progress(len(done) + len(tasks), done, settings["planners"], progress)
 
     def on_result(t: dict) -> None:
+        key = trial_key(t)
+        if "error" in t:  # the trial raised: beside the run, in no table
+            rd.append_error(t)
+            errors.pop(key, None)
+            errors[key] = t
+            failed.append(t)
+            bar.failed()
+            return
         rd.append(t)
+        errors.pop(key, None)  # it raised before, if it did; finished now
         all_trials.append(t)
         new.append(t)
         bar.update(t)
@@ -301,21 +405,35 @@ def _run_missing(
     try:
         if tasks:
             if workers == 1 and not ray_address:
-                run_serial(spec, tasks, on_result)
+                run_serial(spec, tasks, on_result, TrialRunner.try_run)
             else:
-                run_trials(spec, tasks, on_result, workers, ray_address)
+                worker = BenchmarkTrialWorker
+                run_trials(spec, tasks, on_result, workers, ray_address, worker)
     except KeyboardInterrupt:
         bar.close()
+        _settle_errors(rd, errors)
         md = _tables_after_a_stop(rd, settings, all_trials)
         total = len(seeds) * len(settings["planners"])
         raise _interruption(rd.path, md, len(new), len(all_trials), total) from None
     except BaseException:
         bar.close()
+        _settle_errors(rd, errors)
         _tables_after_a_stop(rd, settings, all_trials)
         raise
     bar.close()
-    rd.write_tables(settings, all_trials)
-    return all_trials, new
+    rd.record_errors(errors)
+    rd.write_tables(settings, all_trials, failed=len(failed))
+    return all_trials, new, failed
+
+
+def _settle_errors(rd: RunDirectory, errors: dict[tuple[str, int], dict]) -> None:
+    """After an interruption or an error: `errors.jsonl` rewritten to `errors` (the last
+    error of each trial still missing) — logged, not raised, if it cannot be (what stopped
+    the run is the error to report; the file's extra lines are dropped at the next open)."""
+    try:
+        rd.record_errors(errors)
+    except OSError as e:
+        log.warning("%s was not rewritten: %s", rd.errors_path, e)
 
 
 def _tables_after_a_stop(rd: RunDirectory, settings: dict, trials: list[dict]) -> Path | None:

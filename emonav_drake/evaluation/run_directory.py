@@ -1,8 +1,10 @@
 """A benchmark's run directory: `settings.json`, `trials.jsonl`, the tables.
 
 `trials.jsonl` holds one JSON line per finished trial, appended as it finishes with one
-`write` + fsync; a torn last line (a kill mid-write) is dropped and its trial redone when
-the directory is opened again, and every other line is checked when read
+`write` + fsync; a torn last line (a kill mid-write: the file does not end in a newline) is
+dropped and its trial redone when the directory is opened again; any other damaged line —
+a complete last line included — is an error naming the file and the line, and every line
+is checked when read
 (`trial_check.check_trial`: each record consistent in itself and with the run's
 configuration — `nav_time` is `steps` × `robot.step_time`, a timeout ends at
 `episode.max_steps`, …). An append that fails (a full disk) cuts the file back to its
@@ -11,6 +13,14 @@ every read (`run_settings.check_settings`). The files must be regular files (a s
 link, or a `trials.jsonl` with another hard link, is refused). `RunDirectory` opens,
 checks, appends and writes the tables; `load_run` reads a finished run. See
 `evaluation/benchmark.py` for the run.
+
+`errors.jsonl`, beside them, holds one JSON line per trial that raised instead of
+finishing (`diagrams.trials.trial_error`: method, seed, plant, the error's type, message
+and traceback): such a trial is not in `trials.jsonl` nor in the tables, and runs again
+when the run is continued. Lines are appended as trials fail (a trial's later line
+supersedes its earlier ones, `RunDirectory.read_errors`); when a run ends, the file is
+rewritten (atomically) with the last line of each trial still missing, or removed when
+none is (`RunDirectory.record_errors`).
 """
 
 from __future__ import annotations
@@ -47,9 +57,10 @@ if TYPE_CHECKING:
 
 SETTINGS_FILE = "settings.json"
 TRIALS_FILE = "trials.jsonl"
+ERRORS_FILE = "errors.jsonl"
 TABLES_FILE = "tables.md"
 TABLE_CSV_FILES = ("table2.csv", "table3.csv", "social.csv", "pairwise.csv")
-RUN_FILES = (SETTINGS_FILE, TRIALS_FILE, TABLES_FILE, *TABLE_CSV_FILES)
+RUN_FILES = (SETTINGS_FILE, TRIALS_FILE, ERRORS_FILE, TABLES_FILE, *TABLE_CSV_FILES)
 
 
 def trial_key(t: dict) -> tuple[str, int]:
@@ -69,10 +80,12 @@ def _sorted_trials(trials: Iterable[dict], methods: Sequence[str]) -> list[dict]
 
 def read_trials(path: Path, repair: bool = False, config: EmoNavConfig | None = None) -> list[dict]:
     """The trial lines of `trials.jsonl`, each checked (`check_trial`, against the run's
-    `config` if given). A torn last line (a kill while writing: no final newline, or not a
-    trial's JSON) is dropped — and cut from the file with `repair`, so the next append
-    starts on a fresh line; a damaged earlier line, or any line that is a trial's JSON
-    with invalid values, is an error naming the file and the line."""
+    `config` if given). A torn last line (a kill while writing: the file does not end in
+    a newline) is dropped — and cut from the file with `repair`, so the next append
+    starts on a fresh line. Any other damaged line (a complete last line included: an
+    append writes the newline last, so a line that has it was written whole, and damaged
+    since), or any line that is a trial's JSON with invalid values, is an error naming
+    the file and the line."""
     if not path.exists():
         return []
     data = path.read_bytes()
@@ -97,7 +110,7 @@ def read_trials(path: Path, repair: bool = False, config: EmoNavConfig | None = 
             pos = nl + 1
             continue
         if t is None:
-            if end >= len(data) - 1:  # the last line
+            if nl < 0:  # the last line, without its newline: an interrupted append
                 log.warning("%s: dropping a torn last line (%d bytes)", path, len(line))
                 break
             raise BenchmarkSettingsError(
@@ -126,6 +139,7 @@ class RunDirectory:
         self.path = Path(path)
         self.settings_path = self.path / SETTINGS_FILE
         self.trials_path = self.path / TRIALS_FILE
+        self.errors_path = self.path / ERRORS_FILE
 
     @contextlib.contextmanager
     def locked(self) -> Iterator[RunDirectory]:
@@ -214,33 +228,59 @@ class RunDirectory:
         """Append one trial line: one write, fsynced (never through a link). A failed
         append (a full disk) cuts the file back to its previous length — no half line —
         and raises the `OSError` naming `trials.jsonl`."""
-        data = (json.dumps(json_safe(trial), allow_nan=False) + "\n").encode()
-        flags = os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW
         what = (
             "could not be appended to (cut back to its finished trials, which are kept; "
             "free some space and run the same command again to continue)"
         )
-        with naming_full_disk(self.trials_path, what):
-            fd = os.open(self.trials_path, flags, 0o666)
+        _append_line(self.trials_path, trial, what)
+
+    def append_error(self, error: dict) -> None:
+        """Append one error line (`diagrams.trials.trial_error`) to `errors.jsonl` as
+        `append` does to `trials.jsonl`; a later line of a trial supersedes its earlier."""
+        what = (
+            "could not be appended to (cut back to its earlier lines; free some space and "
+            "run the same command again: the failed trials run again)"
+        )
+        _append_line(self.errors_path, error, what)
+
+    def read_errors(self) -> dict[tuple[str, int], dict]:
+        """The lines of `errors.jsonl` by trial (method, seed), in file order, a trial's
+        last line superseding its earlier ones. The file is a report beside the run, which
+        nothing reads into a table: a line that is not a trial's error line is skipped
+        with a warning."""
+        if not self.errors_path.is_file():
+            return {}
+        errors: dict[tuple[str, int], dict] = {}
+        for number, line in enumerate(self.errors_path.read_bytes().splitlines(), 1):
             try:
-                size = os.fstat(fd).st_size
-                try:
-                    view = memoryview(data)
-                    while view:  # a short write (the disk filling up) goes on, or raises
-                        view = view[os.write(fd, view) :]
-                    os.fsync(fd)
-                except BaseException:
-                    with contextlib.suppress(OSError):
-                        os.ftruncate(fd, size)
-                        os.fsync(fd)
-                    raise
-            finally:
-                os.close(fd)
+                e = parse_json(line, f"line {number}")
+                key = trial_key(e)
+            except (JsonInputError, TypeError, KeyError, ValueError) as why:
+                log.warning("%s: line %d is not a trial's error, skipped (%s)", self.errors_path,
+                            number, why)  # fmt: skip
+                continue
+            errors.pop(key, None)
+            errors[key] = e
+        return errors
+
+    def record_errors(self, errors: dict[tuple[str, int], dict]) -> None:
+        """Make `errors.jsonl` hold exactly the error lines `errors` (one JSON line each,
+        in order), written atomically; removed when there are none."""
+        if not errors:
+            self.errors_path.unlink(missing_ok=True)
+            return
+        text = "".join(json.dumps(json_safe(e), allow_nan=False) + "\n" for e in errors.values())
+        write_text_atomic(self.errors_path, text, durable=True)
 
     def write_tables(
-        self, settings: dict, trials: Sequence[dict], interrupted: bool = False
+        self,
+        settings: dict,
+        trials: Sequence[dict],
+        interrupted: bool = False,
+        failed: int = 0,
     ) -> Path:
-        """tables.md and the CSVs, from the trials sorted by method and seed."""
+        """tables.md and the CSVs, from the trials sorted by method and seed; `failed`:
+        trials that raised (`errors.jsonl`), named in a note — they are in no table."""
         methods = settings["planners"]
         trials = _sorted_trials(trials, methods)
         md = self.path / TABLES_FILE
@@ -257,7 +297,13 @@ class RunDirectory:
             f"plant: {plant}; setting: {label}; seeds {settings['first_seed']}–"
             f"{settings['first_seed'] + settings['trials'] - 1} "
             f"({settings['trials']} planned per method; done: {counts})"
-            + (" — INTERRUPTED, partial" if interrupted else ""),
+            + (" — INTERRUPTED, partial" if interrupted else "")
+            + (
+                f" — {failed} trial{'s' if failed != 1 else ''} raised an error, in no table "
+                f"({ERRORS_FILE})"
+                if failed
+                else ""
+            ),
             f"goal radius {settings['goal_radius']} m (evaluation); configuration hash "
             f"{settings['config_sha256'][:12]}; emotion estimate: "
             f"{_estimate_label(settings['emotion_estimate_yaml'])}",
@@ -285,6 +331,30 @@ class RunDirectory:
         for name, text in zip(TABLE_CSV_FILES, csvs, strict=True):
             write_text_atomic(self.path / name, text)
         return md
+
+
+def _append_line(path: Path, obj: dict, what: str) -> None:
+    """Append `obj` as one JSON line to `path`: one write, fsynced, never through a link.
+    A failed append (a full disk) cuts the file back to its previous length — no half
+    line — and raises the `OSError` naming `path` and saying `what` happened."""
+    data = (json.dumps(json_safe(obj), allow_nan=False) + "\n").encode()
+    flags = os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW
+    with naming_full_disk(path, what):
+        fd = os.open(path, flags, 0o666)
+        try:
+            size = os.fstat(fd).st_size
+            try:
+                view = memoryview(data)
+                while view:  # a short write (the disk filling up) goes on, or raises
+                    view = view[os.write(fd, view) :]
+                os.fsync(fd)
+            except BaseException:
+                with contextlib.suppress(OSError):
+                    os.ftruncate(fd, size)
+                    os.fsync(fd)
+                raise
+        finally:
+            os.close(fd)
 
 
 def check_run_trials(path: Path, trials: list[dict], settings: dict) -> list[dict]:

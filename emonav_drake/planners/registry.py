@@ -13,6 +13,7 @@ registry, so a new planner is one module plus one registry line (`docs/architect
 from __future__ import annotations
 
 import dataclasses as dc
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Protocol
@@ -61,6 +62,8 @@ class PlannerKind:
 
 
 _KINDS: Registry[PlannerKind] = Registry("planner")
+# The module names `planners.plugins.import_planner_module` gives `.py` files.
+USER_MODULE_PREFIX = "emonav_user_planner_"
 
 
 def runs_checkpoint(spec: object) -> bool:
@@ -76,15 +79,43 @@ def make_planner(
     A learned planner runs `checkpoint` if given (the spec's `checkpoint` replaced), else
     its spec's default ("policy": the shipped policy; a variant: the policy shipped under
     its name; "sac": none — a `ConfigError` says how to get one); a model planner takes no
-    checkpoint (`ConfigError` if one is given)."""
+    checkpoint (`ConfigError` if one is given). A spec from outside the package whose
+    `build` raises is a `PlannerBuildError` naming the planner and its module."""
     spec = planner_kind(name).spec
     if checkpoint is not None:
         if not runs_checkpoint(spec):
             raise ConfigError(f"--checkpoint: planner {name!r} runs no checkpoint")
         spec = dc.replace(spec, checkpoint=str(checkpoint))
-    planner = spec.build(config, device)
-    planner.name = name  # what captions and logs call it: the name it was asked for
+    try:
+        planner = spec.build(config, device)
+        planner.name = name  # what captions and logs call it: the name it was asked for
+    except Exception as e:
+        module = outside_module(spec)
+        if module is None:  # the package's own spec: its errors are its own
+            raise
+        raise PlannerBuildError(
+            f"planner {name!r} (module {module}) failed to build: {type(e).__name__}: {e}"
+        ) from e
     return planner
+
+
+class PlannerBuildError(ConfigError):
+    """A planner of the user's own (its spec in a module outside the package) whose
+    `build` raised: the message names the planner, its module and the error. A
+    `ConfigError` (the CLI's exit 2): the fault is in that module, not in the package."""
+
+
+def outside_module(obj: object) -> str | None:
+    """Where a spec or planner from outside the package comes from, for messages: the file
+    of a module named by its path (`--planner-module x.py`), else the module's dotted name;
+    None for the package's own specs and planners."""
+    module = type(obj).__module__
+    if module == "emonav_drake" or module.startswith("emonav_drake."):
+        return None
+    file = getattr(sys.modules.get(module), "__file__", None)
+    if module.startswith(USER_MODULE_PREFIX) and file:
+        return file
+    return module
 
 
 def register(kind: PlannerKind, replace: bool = False) -> PlannerKind:

@@ -32,6 +32,17 @@ robot executes during step k (t_k → t_{k+1}). The command is checked with
 `core.navigation.check_command`: NaN raises `CommandError`; out of range is clipped to the
 bounds of Eq. 2, counted in `plan_log` and logged as a warning naming the system, the time
 and the command.
+
+A planner's answer that is not a (command, memory) pair, or whose command is not two
+finite numbers (a string, three numbers, NaN), raises `PlannerOutputError` (a
+`CommandError`) naming the planner and what it returned. A decision that takes longer
+than `episode.decision_timeout` of wall time (60 s by default; 0: no limit) raises
+`PlannerTimeout` naming the planner (`watchdog.wall_clock_limit`: in the main thread of
+the process, as in `emonav` and in a Ray worker; elsewhere there is no limit). The
+watchdog only turns a hang into an error: a decision made in time is untouched. For a
+planner of the user's own (its class in a module outside the package) any of these, and
+any exception its decision raises, becomes a `PluginError` naming the planner and its
+module: the user's to fix (exit code 2), not a bug of the package.
 """
 
 from __future__ import annotations
@@ -45,12 +56,64 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem, State
 
 from emonav_drake.core.crowd import with_wall_discs
-from emonav_drake.core.navigation import PlannerInput, check_command
+from emonav_drake.core.navigation import CommandError, PlannerInput, check_command
+from emonav_drake.errors import PluginError
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.protocol import Planner
+from emonav_drake.planners.registry import outside_module
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
+from emonav_drake.watchdog import wall_clock_limit
 
 log = logging.getLogger(__name__)
+
+
+class PlannerOutputError(CommandError):
+    """A planner's decision that is not a (command, memory) pair whose command is a
+    (speed, turn) pair of finite numbers; the message names the planner and its answer."""
+
+
+class PlannerTimeout(RuntimeError):
+    """A planner's decision still running after `episode.decision_timeout` of wall time."""
+
+
+def planner_label(planner: object) -> str:
+    """What errors call a planner: its `name` (the registered name `make_planner` gives
+    it), else its class's name."""
+    name = getattr(planner, "name", None)
+    return name if isinstance(name, str) and name else type(planner).__name__
+
+
+def _shown(value: object, limit: int = 80) -> str:
+    """`value` for an error message: its repr (an array as a list), at most `limit` chars."""
+    text = repr(value.tolist() if isinstance(value, np.ndarray) else value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def checked_decision(planner: object, answer: object) -> tuple[np.ndarray, Any]:
+    """(command (2,) float, memory) of a planner's `plan_with_memory` answer `answer`;
+    `PlannerOutputError` naming the planner if it is not a (command, memory) pair whose
+    command is two finite numbers."""
+    name = planner_label(planner)
+    if not (isinstance(answer, tuple | list) and len(answer) == 2):
+        raise PlannerOutputError(
+            f"planner {name!r} returned {_shown(answer)} from plan_with_memory, not a "
+            "(command, memory) pair"
+        )
+    raw, memory = answer
+    try:
+        u = np.asarray(raw, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        u = None
+    if u is None or u.shape != (2,) or isinstance(raw, str | bytes):
+        raise PlannerOutputError(
+            f"planner {name!r} returned {_shown(raw)}, not a (speed, turn) pair of numbers"
+        )
+    if not np.all(np.isfinite(u)):
+        raise PlannerOutputError(
+            f"planner {name!r} returned {_shown(raw)}: a command that is not finite, not a "
+            "(speed, turn) pair of finite numbers"
+        )
+    return u, memory
 
 
 class NavigationPlanner(LeafSystem):
@@ -71,6 +134,7 @@ class NavigationPlanner(LeafSystem):
         self._goal = np.asarray(goal_xy, dtype=float)
         self._robot_params = config.robot
         self.step_time = config.robot.step_time  # T [s]: the planning period
+        self.decision_timeout = config.episode.decision_timeout  # [s] of wall time; 0: none
         self._robot = self.DeclareVectorInputPort("robot_state", 4)
         self._crowd = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
         self._lgm = self.DeclareAbstractInputPort("lgm_stack", AbstractValue.Make(object()))
@@ -106,13 +170,39 @@ class NavigationPlanner(LeafSystem):
         t, plans, clipped = context.get_discrete_state(self._plan_log).get_value()
         return float(t), int(plans), int(clipped)
 
+    def _decide(self, context: Context, t: float) -> tuple[np.ndarray, Any]:
+        """The planner's decision at `t`: (command, memory), checked (`checked_decision`),
+        within the wall-clock limit `decision_timeout` (`PlannerTimeout` past it)."""
+        obs, memory = self.planner_input(context), self.memory(context)
+        name, limit = planner_label(self.planner), self.decision_timeout
+
+        def timeout() -> PlannerTimeout:
+            return PlannerTimeout(
+                f"planner {name!r} made no decision at t = {t:.2f} s within {limit:g} s of "
+                "wall time (episode.decision_timeout): it hangs, or is far too slow"
+            )
+
+        try:
+            with wall_clock_limit(limit, timeout):
+                answer = self.planner.plan_with_memory(obs, memory)
+            return checked_decision(self.planner, answer)
+        except Exception as e:
+            module = outside_module(self.planner)
+            if module is None:  # the package's own planner: its error is a bug of ours
+                raise
+            what = (
+                str(e)
+                if isinstance(e, PlannerOutputError | PlannerTimeout)
+                else (f"planner {name!r} raised {type(e).__name__}: {e}")
+            )
+            raise PluginError(f"{what} (module {module})") from e
+
     def _plan(self, context: Context, state: State) -> None:
         t = context.get_time()
         if self._action is not None:
             raw, memory = self._action.Eval(context), None
         else:
-            obs = self.planner_input(context)
-            raw, memory = self.planner.plan_with_memory(obs, self.memory(context))
+            raw, memory = self._decide(context, t)
         command, clipped = check_command(raw, self._robot_params, clip=True)
         _, plans, clips = self.plan_log(context)
         if clipped:
