@@ -66,7 +66,8 @@ while done < episodes:
         done += 1
     except KeyboardInterrupt:
         print("KI", flush=True)
-print("MISMATCHES", mismatches, "INTERRUPTED_SOLVES", getattr(planner, "interrupted_solves", -1), flush=True)
+interrupted = getattr(planner, "interrupted_solves", -1)
+print("MISMATCHES", mismatches, "INTERRUPTED_SOLVES", interrupted, flush=True)
 """
 
 
