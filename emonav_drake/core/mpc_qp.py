@@ -82,8 +82,11 @@ Variables are ordered (u_v,0…N−1, u_Δθ,0…N−1, s_k,o for k·O + o, σ o
 
 from __future__ import annotations
 
+import ctypes
 import dataclasses as dc
 import math
+import signal
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -106,6 +109,24 @@ _SOLVED = int(osqp.SolverStatus.OSQP_SOLVED)
 # even one the process ignores) stops the ADMM loop and returns this status instead of
 # reaching Python. Such a solve did not finish: it is never used (`SolveInterrupted`).
 _INTERRUPTED = int(osqp.SolverStatus.OSQP_SIGINT)
+
+
+def _load_osqp_interrupt_flag() -> Callable[[], int] | None:
+    """OSQP's `osqp_is_interrupted()`: whether a SIGINT reached OSQP's handler in the
+    last solve (the flag is cleared when the next solve starts). None where the
+    extension does not export it."""
+    try:
+        import osqp.ext_builtin as ext
+
+        flag = ctypes.CDLL(ext.__file__).osqp_is_interrupted
+    except (ImportError, OSError, AttributeError):
+        return None
+    flag.restype = ctypes.c_int
+    flag.argtypes = []
+    return flag
+
+
+_osqp_interrupt_flag = _load_osqp_interrupt_flag()
 
 
 class SolveInterrupted(Exception):
@@ -352,6 +373,12 @@ def solve_qp(
     res = layout.solver.solve(raise_error=False)
     if int(res.info.status_val) == _INTERRUPTED:
         raise SolveInterrupted("OSQP: the solve was interrupted by SIGINT")
+    if _osqp_interrupt_flag is not None and _osqp_interrupt_flag():
+        # The SIGINT reached OSQP's handler after its last check (while polishing): the
+        # solve finished and is good, but the signal would be lost. Send it again, now
+        # that the process's own handler is back (Python's default: KeyboardInterrupt
+        # here; an ignored SIGINT: nothing).
+        signal.raise_signal(signal.SIGINT)
     return res
 
 

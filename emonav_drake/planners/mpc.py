@@ -209,7 +209,9 @@ class MpcPlanner:
         on to the process's SIGINT handler (Python's default raises `KeyboardInterrupt`),
         and if that handler lets the run go on (SIGINT ignored, or a handler that only
         asks for a stop later) the whole planning step is planned again from the same
-        input and memory: the same command, bit for bit, as without the signal.
+        input and memory: the same command, bit for bit, as without the signal. A SIGINT
+        that reaches OSQP after its last check (while it polishes) leaves a finished,
+        usable solve; `solve_qp` sends that signal again to the process's handler.
         """
         counters = {name: getattr(self, name) for name in _STEP_COUNTERS}
         while True:
