@@ -8,15 +8,17 @@ the dotted field path and the range.
 
 This module is the public configuration: `EmoNavConfig`, its cross-field rules, loading
 and dumping, and every name of its sections, which live by concept in
-`params_robot.py` (the robot, its LiDAR and perception, Digit walking), `params_crowd.py`
-(the crowd and its scenarios, rewards, episodes, the emotion codes) and
+`params_robot.py` (the robot, its LiDAR and the LiDAR's sensor model, perception, Digit
+walking), `params_crowd.py` (the crowd and its scenarios, rewards, episodes, the emotion
+codes) and
 `params_planners.py` (DWA, the MPC): import them from here. Each field declares its
 default, doc, unit and allowed range (`config_fields.setting`); the schema-agnostic YAML
 machinery (typed loading and dumping, error messages naming the field, the range check
 `validate_fields`, `ConfigError`) is `typed_yaml.py`, shared with the training
 configurations and the scenarios. `ConfigError` is importable from here too.
 
-Units are SI throughout (metres, seconds, radians).
+Units are SI throughout (metres, seconds, radians), but the sensor model's angles,
+in degrees as datasheets give them (`*_deg`).
 """
 
 # No `from __future__ import annotations`: Drake's typed YAML loader needs real types.
@@ -37,17 +39,22 @@ from emonav_drake.params_crowd import (
 from emonav_drake.params_planners import DwaParams, MpcParams
 from emonav_drake.params_robot import (
     NUM_BEAMS,
+    PEOPLE_AS,
+    SENSOR_NAMES,
+    SENSOR_PRESETS,
     STATE_SOURCES,
     LidarParams,
     PerceptionParams,
     RobotParams,
+    SensorParams,
     WalkingParams,
     pendulum_frequency,
+    sensor_preset,
 )
 from emonav_drake.typed_yaml import (
     ConfigError,
     dump_typed_yaml,
-    load_typed_yaml,
+    load_typed_yaml_raw,
     require,
     validate_fields,
 )
@@ -58,7 +65,10 @@ __all__ = [
     "NEGATIVE",
     "NEUTRAL",
     "NUM_BEAMS",
+    "PEOPLE_AS",
     "SCENARIO_FAMILIES",
+    "SENSOR_NAMES",
+    "SENSOR_PRESETS",
     "STATE_SOURCES",
     "ConfigError",
     "CrowdParams",
@@ -70,10 +80,13 @@ __all__ = [
     "PerceptionParams",
     "RewardParams",
     "RobotParams",
+    "SensorParams",
     "WalkingParams",
+    "apply_sensor_preset",
     "dump_config",
     "load_config",
     "pendulum_frequency",
+    "sensor_preset",
 ]
 
 
@@ -91,6 +104,7 @@ class EmoNavConfig:
     mpc: MpcParams = setting(factory=MpcParams)
     walking: WalkingParams = setting(factory=WalkingParams)
     perception: PerceptionParams = setting(factory=PerceptionParams)
+    sensor: SensorParams = setting(factory=SensorParams)
 
     def validate(self) -> "EmoNavConfig":
         """Check every field against its range and the cross-field rules; raise
@@ -147,6 +161,7 @@ class EmoNavConfig:
         require(family in SCENARIO_FAMILIES, "crowd.family", family, f"one of {SCENARIO_FAMILIES}")
         source = self.perception.state_source
         require(source in STATE_SOURCES, "perception.state_source", source, '"truth" or "lidar"')
+        self._validate_sensor()
         w = self.walking
         require(w.arms in ("welded", "held"), "walking.arms", w.arms, '"welded" or "held"')
         require(
@@ -164,6 +179,29 @@ class EmoNavConfig:
         )
         self._validate_walking()
         return self
+
+    def _validate_sensor(self) -> None:
+        """The sensor's names, and what its scan must give the grid maps: at least one of
+        its beams in every LGM sector (angular resolution ≤ 360° / lidar.grid_size) and a
+        rated range that covers the maps' range L (docs/perception.md)."""
+        s, li = self.sensor, self.lidar
+        require(s.preset in SENSOR_PRESETS, "sensor.preset", s.preset, f"one of {SENSOR_NAMES}")
+        require(s.people_as in PEOPLE_AS, "sensor.people_as", s.people_as, '"disc" or "legs"')
+        sector = 360.0 / li.grid_size
+        require(
+            s.angular_resolution_deg <= sector,
+            "sensor.angular_resolution_deg",
+            s.angular_resolution_deg,
+            f"<= {sector:g} (360° / lidar.grid_size: every LGM sector needs one of the "
+            "sensor's beams)",
+        )
+        require(
+            li.max_range <= s.rated_range,
+            "lidar.max_range",
+            li.max_range,
+            f"<= sensor.rated_range ({s.rated_range:g} m, sensor {s.preset}): the maps "
+            "cannot reach beyond what the sensor measures",
+        )
 
     def _validate_walking(self) -> None:
         """Cross-field rules of the Digit walking stack (its rates are multiples)."""
@@ -186,14 +224,31 @@ class EmoNavConfig:
 
 
 def load_config(path: str | Path | None = None, data: str | None = None) -> EmoNavConfig:
-    """The default configuration, overridden by a YAML file or string, validated."""
+    """The default configuration, overridden by a YAML file or string, validated.
+
+    A `sensor` mapping that names a `preset` starts from the preset: the sensor fields it
+    does not give take the preset's values (`apply_sensor_preset`)."""
     if path is None and data is None:
         return EmoNavConfig().validate()
-    cfg = load_typed_yaml(EmoNavConfig, path=path, data=data)
+    cfg, raw = load_typed_yaml_raw(EmoNavConfig, path=path, data=data)
     try:
+        sensor = raw.get("sensor") if isinstance(raw, dict) else None
+        if isinstance(sensor, dict) and "preset" in sensor:
+            apply_sensor_preset(cfg, cfg.sensor.preset, keep=tuple(sensor))
         return cfg.validate()
     except ConfigError as e:
         raise ConfigError(f"{path if path is not None else '<yaml>'}: {e}") from None
+
+
+def apply_sensor_preset(config: EmoNavConfig, name: str, keep: tuple[str, ...] = ()) -> None:
+    """Set `config.sensor` to the preset `name`, in place: every field the preset gives,
+    except those named in `keep` (given explicitly); the seed is kept. `ConfigError`
+    naming `sensor.preset` for an unknown name."""
+    require(name in SENSOR_PRESETS, "sensor.preset", name, f"one of {SENSOR_NAMES}")
+    config.sensor.preset = name
+    for field, value in SENSOR_PRESETS[name].items():
+        if field not in keep:
+            setattr(config.sensor, field, value)
 
 
 def dump_config(config: EmoNavConfig) -> str:

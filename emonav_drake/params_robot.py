@@ -1,16 +1,17 @@
-"""The robot's sections of the configuration: the LIP robot, its LiDAR, what it perceives
-of the crowd, and the full-order Digit walking stack.
+"""The robot's sections of the configuration: the LIP robot, its LiDAR and the LiDAR's
+sensor model, what it perceives of the crowd, and the full-order Digit walking stack.
 
 Part of `EmoNavConfig` (`params.py`, which re-exports every name here). Each field gives
 its default, doc, unit and allowed range (`config_fields.setting`). Units are SI
-throughout (metres, seconds, radians).
+throughout (metres, seconds, radians), but the sensor model's angles, in degrees as
+datasheets give them (`*_deg`).
 """
 
 # No `from __future__ import annotations`: Drake's typed YAML loader needs real types.
 import dataclasses as dc
 import math
 
-from emonav_drake.config_fields import WORLD_POINT, setting
+from emonav_drake.config_fields import SEED_RANGE, WORLD_POINT, setting
 
 
 def pendulum_frequency(height: float, gravity: float) -> float:
@@ -82,6 +83,174 @@ class PerceptionParams:
         "s",
         (0.1, 60.0),
     )
+
+
+# How the LiDAR sees a pedestrian (`SensorParams.people_as`).
+PEOPLE_AS = ("disc", "legs")
+
+
+@dc.dataclass
+class SensorParams:
+    """The LiDAR as a real sensor: resolution, field of view and faults (docs/perception.md).
+
+    A named `preset` gives every field but the seed; a configuration file may override
+    single fields (`sensor: {preset: vlp16, range_noise_std: 0.05}`: the preset, then the
+    fields given). The default, "ideal", is the exact scan of the paper's simulator: with
+    its values the scan and the maps are computed by the exact code path, bit for bit.
+    The faults act on the real scan (the maps' 255 layer, the `scan` port the tracker
+    reads, the "scan" observation), never on the inflated (discomfort) scan.
+    """
+
+    preset: str = setting(
+        "ideal",
+        "the sensor the other fields start from: ideal (the exact scan), vlp16 (Velodyne "
+        "VLP-16 at 10 Hz, Digit's head LiDAR) or ust10lx (a Hokuyo UST-10LX-class planar "
+        "scanner)",
+    )
+    seed: int = setting(
+        0,
+        "seed of the sensor's noise; each scan draws from (seed, the scenario's seed, the "
+        "scan's time in ms)",
+        "",
+        SEED_RANGE,
+    )
+    people_as: str = setting(
+        "disc",
+        '"disc" (a pedestrian is one disc of crowd.pedestrian_radius) or "legs" (two leg '
+        "discs that swing with the gait, core/pedestrian_legs.py); only the real scan",
+    )
+    angular_resolution_deg: float = setting(
+        0.0,
+        "angle between the sensor's beams (0: the grid's own lidar.num_beams beams); each "
+        "grid beam reads the nearest sensor beam",
+        "deg",
+        (0.0, 10.0),
+    )
+    field_of_view_deg: float = setting(
+        360.0, "horizontal field of view, centred on the heading", "deg", (1.0, 360.0)
+    )
+    rated_range: float = setting(
+        100.0,
+        "the datasheet's maximum range; far_dropout is the dropout probability there",
+        "m",
+        (0.5, 1000.0),
+    )
+    range_noise_std: float = setting(
+        0.0, "σ of the Gaussian range noise of a return", "m", (0.0, 1.0)
+    )
+    range_bias: float = setting(
+        0.0, "mean range error of a return (+: reads long)", "m", (-0.5, 0.5)
+    )
+    range_resolution: float = setting(
+        0.0, "ranges are rounded to multiples of this (0: not quantised)", "m", (0.0, 0.5)
+    )
+    dropout_rate: float = setting(
+        0.0, "probability a return is lost at normal incidence, near the sensor", "", (0.0, 1.0)
+    )
+    grazing_dropout: float = setting(
+        0.0,
+        "extra loss probability at grazing incidence; at incidence angle a it is this·(1 − cos a)²",
+        "",
+        (0.0, 1.0),
+    )
+    far_dropout: float = setting(
+        0.0,
+        "extra loss probability at the rated range; at range r it is this·(r / rated_range)²",
+        "",
+        (0.0, 1.0),
+    )
+    mixed_pixel_rate: float = setting(
+        0.0,
+        "probability a beam at a range jump (an object's edge) returns a range between the "
+        "two surfaces",
+        "",
+        (0.0, 1.0),
+    )
+    spurious_rate: float = setting(
+        0.0,
+        "probability a beam returns a random short range (dust, crosstalk), uniform between "
+        "lidar.min_range and its true range",
+        "",
+        (0.0, 1.0),
+    )
+
+    def is_exact(self) -> bool:
+        """True when nothing differs from the exact scan: full circle at the grid's beams,
+        pedestrians as discs, no fault. The scan is then computed by the exact code path."""
+        return (
+            self.people_as == "disc"
+            and self.angular_resolution_deg == 0.0
+            and self.field_of_view_deg == 360.0
+            and all(getattr(self, name) == 0.0 for name in SENSOR_FAULTS)
+        )
+
+
+# The fields that a preset gives and that make a scan differ from the exact one.
+SENSOR_FAULTS = (
+    "range_noise_std",
+    "range_bias",
+    "range_resolution",
+    "dropout_rate",
+    "grazing_dropout",
+    "far_dropout",
+    "mixed_pixel_rate",
+    "spurious_rate",
+)
+
+# The named sensors: every field of `SensorParams` but `preset` and `seed`. The datasheet
+# figures and the reasons of the modelling choices: docs/perception.md, "The LiDAR as a
+# sensor". Range error: the datasheet's accuracy ±a is read as |bias| + 2σ = a, split as
+# bias a/4 and σ 3a/8.
+SENSOR_PRESETS: dict[str, dict[str, object]] = {
+    "ideal": {
+        "people_as": "disc",
+        "angular_resolution_deg": 0.0,
+        "field_of_view_deg": 360.0,
+        "rated_range": 100.0,
+        "range_noise_std": 0.0,
+        "range_bias": 0.0,
+        "range_resolution": 0.0,
+        "dropout_rate": 0.0,
+        "grazing_dropout": 0.0,
+        "far_dropout": 0.0,
+        "mixed_pixel_rate": 0.0,
+        "spurious_rate": 0.0,
+    },
+    "vlp16": {  # Velodyne VLP-16 at 10 Hz: ±3 cm, 0.2°, 360°, 100 m, 2 mm packets
+        "people_as": "legs",
+        "angular_resolution_deg": 0.2,
+        "field_of_view_deg": 360.0,
+        "rated_range": 100.0,
+        "range_noise_std": 0.01125,
+        "range_bias": 0.0075,
+        "range_resolution": 0.002,
+        "dropout_rate": 0.01,
+        "grazing_dropout": 0.5,
+        "far_dropout": 0.1,
+        "mixed_pixel_rate": 0.3,
+        "spurious_rate": 0.001,
+    },
+    "ust10lx": {  # Hokuyo UST-10LX class: ±40 mm, 0.25°, 270°, 10 m, 1 mm
+        "people_as": "legs",
+        "angular_resolution_deg": 0.25,
+        "field_of_view_deg": 270.0,
+        "rated_range": 10.0,
+        "range_noise_std": 0.015,
+        "range_bias": 0.01,
+        "range_resolution": 0.001,
+        "dropout_rate": 0.005,
+        "grazing_dropout": 0.5,
+        "far_dropout": 0.1,
+        "mixed_pixel_rate": 0.3,
+        "spurious_rate": 0.0005,
+    },
+}
+SENSOR_NAMES = tuple(SENSOR_PRESETS)
+
+
+def sensor_preset(name: str, seed: int = 0) -> SensorParams:
+    """The `SensorParams` of the preset `name` (`KeyError` if unknown), with `seed`."""
+    return SensorParams(preset=name, seed=seed, **SENSOR_PRESETS[name])
 
 
 @dc.dataclass

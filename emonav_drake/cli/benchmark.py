@@ -21,6 +21,7 @@ from emonav_drake.cli.common import (
 from emonav_drake.cli.resolve import (
     add_config_choice,
     add_family,
+    add_sensor,
     add_state_source,
     resolve_config,
 )
@@ -96,6 +97,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     add_emotion_flags(b)
     add_state_source(b)
     add_family(b)
+    add_sensor(b)
     b.add_argument(
         "--checkpoint",
         action="append",

@@ -17,7 +17,7 @@ import sys
 import textwrap
 from pathlib import Path
 
-from emonav_drake.cli.resolve import add_config_choice, add_family, resolve_config
+from emonav_drake.cli.resolve import add_config_choice, add_family, add_sensor, resolve_config
 from emonav_drake.params import ConfigError
 
 TIME_VARYING_HELP = "one pedestrian's emotion changes every 2 s (paper §IV-F)"
@@ -50,6 +50,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     )
     add_config_choice(c)
     add_family(c)
+    add_sensor(c)
     c.add_argument("--time-varying", action="store_true", help=TIME_VARYING_HELP)
     c.set_defaults(func=cmd_config)
     return c

@@ -2,8 +2,9 @@
 
 Every sub-command that runs on an `EmoNavConfig` resolves it here, in one order:
 `--setting NAME` (a shipped setting, `emonav_drake/configs/NAME.yaml`), else
-`--config F.yaml`, else the defaults; then `--time-varying`, `--state-source` and
-`--family` on top.
+`--config F.yaml`, else the defaults; then `--time-varying`, `--state-source`,
+`--family` and `--sensor` on top (`--sensor NAME` sets the whole `sensor` section from the
+preset, but its seed: a configuration file's single sensor fields are overridden too).
 `--setting` and `--config` are mutually exclusive (`add_config_choice`); a sub-command
 without one of these flags resolves as if it were not given. `sim` and `lgm` also take a scenario
 (`--scenario NAME|F.yaml`, else one sampled from the seed): `resolve_scenario`.
@@ -19,7 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from emonav_drake.configs import SETTINGS
-from emonav_drake.params import ConfigError, EmoNavConfig, load_config
+from emonav_drake.params import ConfigError, EmoNavConfig, apply_sensor_preset, load_config
 
 if TYPE_CHECKING:
     from emonav_drake.core.scenario import Scenario
@@ -42,16 +43,19 @@ class ResolvedConfig:
     time_varying: bool  # --time-varying was given (applied to `config` already)
     state_source: str | None = None  # --state-source, if given (applied to `config`)
     family: str | None = None  # --family, if given (applied to `config`)
+    sensor: str | None = None  # --sensor, if given (applied to `config`)
 
     @property
     def source(self) -> str:
-        """`origin` plus " --time-varying" / " --state-source S" / " --family F" when given
-        (recorded by `benchmark`, printed by `config`)."""
+        """`origin` plus " --time-varying" / " --state-source S" / " --family F" /
+        " --sensor P" when given (recorded by `benchmark`, printed by `config`)."""
         flags = " --time-varying" if self.time_varying else ""
         if self.state_source is not None:
             flags += f" --state-source {self.state_source}"
         if self.family is not None:
             flags += f" --family {self.family}"
+        if self.sensor is not None:
+            flags += f" --sensor {self.sensor}"
         return self.origin + flags
 
 
@@ -80,7 +84,14 @@ def resolve_config(args: argparse.Namespace) -> ResolvedConfig:
     family = getattr(args, "family", None)
     if family is not None:
         cfg.crowd.family = family
-    return ResolvedConfig(cfg, setting, origin, time_varying, state_source, family)
+    sensor = getattr(args, "sensor", None)
+    if sensor is not None:
+        apply_sensor_preset(cfg, sensor)  # a ConfigError naming sensor.preset if unknown
+        try:
+            cfg.validate()
+        except ConfigError as e:
+            raise ConfigError(f"--sensor {sensor} with {origin}: {e}") from None
+    return ResolvedConfig(cfg, setting, origin, time_varying, state_source, family, sensor)
 
 
 def check_input_file(path: str | Path, flag: str) -> Path:
@@ -131,6 +142,23 @@ def add_family(p: argparse.ArgumentParser) -> None:
     from emonav_drake.params import SCENARIO_FAMILIES
 
     p.add_argument("--family", choices=SCENARIO_FAMILIES, metavar="NAME", help=FAMILY_HELP)
+
+
+SENSOR_HELP = (
+    "the LiDAR as a real sensor, by preset: ideal (the exact scan of the paper's "
+    "simulator), vlp16 (Velodyne VLP-16 at 10 Hz, Digit's head LiDAR: 0.2°, ±3 cm), "
+    "ust10lx (Hokuyo UST-10LX-class planar scanner: 270°, 0.25°, ±40 mm); the real "
+    "presets add range noise, quantisation, dropouts, mixed pixels and spurious returns "
+    "and show pedestrians as two legs (docs/perception.md); sets the whole sensor section "
+    "but its seed; default: the configuration's sensor, ideal"
+)
+
+
+def add_sensor(p: argparse.ArgumentParser) -> None:
+    """`--sensor PRESET` (`SensorParams`, `params_robot.SENSOR_PRESETS`)."""
+    from emonav_drake.params import SENSOR_NAMES
+
+    p.add_argument("--sensor", choices=SENSOR_NAMES, help=SENSOR_HELP)
 
 
 def sample(seed: int, resolved: ResolvedConfig) -> Scenario:

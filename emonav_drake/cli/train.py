@@ -20,6 +20,7 @@ from pathlib import Path
 
 from emonav_drake.atomic_io import check_output_dir
 from emonav_drake.cli.common import SeedArg
+from emonav_drake.cli.resolve import add_sensor
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.params import ConfigError
 from emonav_drake.planners.variants import VARIANTS, variant
@@ -93,6 +94,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     t.add_argument(
         "--device", help="cpu or cuda (cuda:N) (default cpu; with --resume: the run's own)"
     )
+    add_sensor(t)  # the training configuration's `sensor`: the training world's LiDAR
     t.add_argument(
         "--out",
         type=Path,
@@ -225,6 +227,8 @@ def _training_config(args: argparse.Namespace):
         cfg.seed = args.seed
     if args.device is not None:
         cfg.device = args.device
+    if args.sensor is not None:  # every route's world: its configuration's `sensor`
+        cfg.sensor = args.sensor
     if args.steps is not None:
         cfg.total_steps = args.steps
     if args.plant is not None:
@@ -336,6 +340,7 @@ def resume_command(args: argparse.Namespace, out: Path) -> str:
         ("--ray-address", args.ray_address),
         ("--seed", args.seed or None),
         ("--device", None if args.device in (None, "cpu") else args.device),
+        ("--sensor", args.sensor),
     ):
         if value is not None:
             words += [flag, str(value)]

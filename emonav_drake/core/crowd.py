@@ -22,6 +22,8 @@ import math
 import numpy as np
 
 from emonav_drake.core.orca import OrcaParams, orca_velocities
+from emonav_drake.core.pedestrian_legs import gait_offsets, gait_phase
+from emonav_drake.core.pedestrian_pose import facing_headings, start_to_goal_headings
 from emonav_drake.core.pedestrian_routes import RoutePlan
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.core.walls import wall_discs
@@ -44,6 +46,9 @@ class CrowdState:
     targets: np.ndarray | None = None  # (P,) int
     backwards: np.ndarray | None = None  # (P,) bool
     waits: np.ndarray | None = None  # (P,) int
+    # (P,) distance each pedestrian has walked since the start [m] (its gait's odometer,
+    # `core/pedestrian_legs.py`). None in states saved before it existed: 0.
+    walked: np.ndarray | None = None
 
     def to_plain(self) -> dict:
         """The state as plain data (copies of the arrays; `from_plain` reads it back)."""
@@ -60,7 +65,7 @@ class CrowdState:
                 raise ValueError(f"crowd {name} have shape {np.shape(d[name])}, expected {p}")
         if np.shape(d["emotions"]) != p[:1]:
             raise ValueError(f"crowd emotions have shape {np.shape(d['emotions'])}")
-        for name in ("targets", "backwards", "waits"):
+        for name in ("targets", "backwards", "waits", "walked"):
             if d.get(name) is not None and np.shape(d[name]) != p[:1]:
                 raise ValueError(f"crowd {name} have shape {np.shape(d[name])}, expected {p[:1]}")
         return cls(**{f.name: _copy(d.get(f.name)) for f in dc.fields(cls)})
@@ -84,6 +89,13 @@ class CrowdSnapshot:
     static_discomfort: float  # d_static [m]
     # (W, 2, 2) walls: segment k runs from wall_segments[k, 0] to wall_segments[k, 1] [m]
     wall_segments: np.ndarray = dc.field(default_factory=lambda: np.zeros((0, 2, 2)))
+    # (P,) gait phase of each pedestrian [rad] (`core/pedestrian_legs.py`); None: all 0
+    gait_phase: np.ndarray | None = None
+    # (P,) yaw each pedestrian faces [rad], world frame: its walking direction, standing
+    # towards its current goal; None: its velocity's direction (0 at rest)
+    facing: np.ndarray | None = None
+    time: float = 0.0  # since the episode began [s] (crowd periods · dt): the scan's time
+    seed: int = 0  # the scenario's seed: with `time`, what the LiDAR's noise is drawn from
 
 
 class Crowd:
@@ -112,6 +124,8 @@ class Crowd:
         self.static_discomfort = config.reward.static_discomfort
         peds = scenario.pedestrians
         self.num_pedestrians = len(peds)
+        self.seed = int(scenario.seed)
+        self._gait_offsets = gait_offsets(self.seed, self.num_pedestrians)
         self._starts = np.array([p.start for p in peds], dtype=float).reshape(-1, 2)
         self.routes = RoutePlan.from_specs(peds, self.preferred_speed, self.dt)
         self._all_plain = bool(self.routes.plain.all())
@@ -163,6 +177,7 @@ class Crowd:
             targets=np.ones(p, dtype=np.int64),
             backwards=np.zeros(p, dtype=bool),
             waits=self.routes.delay_substeps.copy(),
+            walked=np.zeros(p),
         )
 
     def step(
@@ -226,6 +241,7 @@ class Crowd:
             check_inputs=False,  # arrays built here, float64/bool, shapes fixed per crowd
         )[:-1]
         substep = state.substep + 1
+        walked = _walked(state) + np.hypot(new_v[:, 0], new_v[:, 1]) * self.dt
         return CrowdState(
             positions=state.positions + new_v * self.dt,
             velocities=new_v,
@@ -236,6 +252,7 @@ class Crowd:
             targets=targets,
             backwards=backwards,
             waits=waits,
+            walked=walked,
         )
 
     def snapshot(self, state: CrowdState) -> CrowdSnapshot:
@@ -250,6 +267,12 @@ class Crowd:
             static_radii=self.static_radii,
             static_discomfort=self.static_discomfort,
             wall_segments=self.wall_segments,
+            gait_phase=gait_phase(_walked(state), self._gait_offsets),
+            facing=facing_headings(
+                state.velocities, start_to_goal_headings(state.positions, state.goals)
+            ),
+            time=state.substep * self.dt,
+            seed=self.seed,
         )
 
 
@@ -266,6 +289,11 @@ def with_wall_discs(snapshot: CrowdSnapshot) -> CrowdSnapshot:
         static_centers=np.vstack([snapshot.static_centers.reshape(-1, 2), centers]),
         static_radii=np.concatenate([snapshot.static_radii, radii]),
     )
+
+
+def _walked(state: CrowdState) -> np.ndarray:
+    """Each pedestrian's walked distance [m] (a state saved before the odometer: 0)."""
+    return np.zeros(len(state.positions)) if state.walked is None else state.walked
 
 
 def _route_progress(state: CrowdState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from emonav_drake.core.grid_maps import lgm_frame
+from emonav_drake.core.grid_maps import lgm_frame, ogm_from_ranges
 from emonav_drake.params import NUM_BEAMS
 
 
@@ -94,6 +94,29 @@ def drlvo_image(
         segments=segments,
         segment_margin=segment_margin,
     )
+    image[1:] = pedestrian_velocity_map(
+        robot_xy, heading, ped_positions, ped_velocities, ped_radius, grid_size, max_range
+    )
+    return image
+
+
+def drlvo_image_from_ranges(
+    hit_ranges: np.ndarray,
+    inflated_ranges: np.ndarray,
+    robot_xy: np.ndarray,
+    heading: float,
+    ped_positions: np.ndarray,
+    ped_velocities: np.ndarray,
+    ped_radius: float,
+    grid_size: int = 100,
+    max_range: float = 6.0,
+) -> np.ndarray:
+    """uint8 (3, M, M) as `drlvo_image`, from scans already cast: the real scan
+    `hit_ranges` (K,) [m] and the inflated scan `inflated_ranges` (K,) [m] (a sensor's
+    scan, `core/lidar_sensor.py`), robot at `robot_xy` [m] heading `heading` [rad], world
+    frame; the velocity planes from the pedestrians' positions [m] and velocities [m/s]."""
+    image = np.empty((3, grid_size, grid_size), np.uint8)
+    image[0] = ogm_from_ranges(hit_ranges, inflated_ranges, grid_size, max_range)
     image[1:] = pedestrian_velocity_map(
         robot_xy, heading, ped_positions, ped_velocities, ped_radius, grid_size, max_range
     )

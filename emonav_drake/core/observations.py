@@ -16,6 +16,12 @@ Everything that depends on the kind asks its `ObservationKind`: the environments
 augmentation. A new observation is one `register_observation(ObservationKind(...))`.
 The observation dictionary holds the map under the kind's `key` ("lgm", "scan" or
 "image") beside "goal" and "last_action".
+
+Every kind reads the LiDAR through `core/lidar_sensor.py`: the real scan (the maps' 255
+layer, the "scan" ranges) is `sensed_ranges`, the configured sensor's scan (its faults,
+pedestrians as legs), the inflated scan (the 127 layer) `inflated_ranges`. With the exact
+sensor (`config.sensor`, preset "ideal") the frames are computed by the exact code path
+(`lgm_frame`, `scan_discs`, `drlvo_image`), bit for bit the paper simulator's.
 """
 
 from __future__ import annotations
@@ -27,9 +33,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from emonav_drake.core.crowd import CrowdSnapshot, obstacle_discs
-from emonav_drake.core.grid_maps import FrameStack, lgm_frame
-from emonav_drake.core.kinematic_maps import drlvo_image
-from emonav_drake.core.lidar import scan_discs
+from emonav_drake.core.grid_maps import FrameStack, lgm_frame, lgm_from_ranges, ogm_from_ranges
+from emonav_drake.core.kinematic_maps import drlvo_image, drlvo_image_from_ranges
+from emonav_drake.core.lidar_sensor import inflated_ranges, sensed_ranges
 from emonav_drake.params import EmoNavConfig, LidarParams
 from emonav_drake.registry import Registry
 
@@ -179,8 +185,14 @@ def mirror_observation(stacks: np.ndarray, kind: str) -> np.ndarray:
 # ------------------------------------------------------------------ the paper's kinds
 def _grid_frame(kind: str) -> Callable[[LipState, CrowdSnapshot, EmoNavConfig], np.ndarray]:
     def frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
-        centers, radii, margins = obstacle_discs(crowd)
         li = config.lidar
+        if not config.sensor.is_exact():
+            xy = np.array([robot.x, robot.y])
+            hit = sensed_ranges(xy, robot.heading, crowd, config)
+            inflated = inflated_ranges(xy, robot.heading, crowd, config)
+            to_grid = lgm_from_ranges if kind == "lgm" else ogm_from_ranges
+            return to_grid(hit, inflated, li.grid_size, li.max_range)
+        centers, radii, margins = obstacle_discs(crowd)
         return lgm_frame(
             np.array([robot.x, robot.y]),
             robot.heading,
@@ -200,25 +212,26 @@ def _grid_frame(kind: str) -> Callable[[LipState, CrowdSnapshot, EmoNavConfig], 
 
 
 def _scan_frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
-    centers, radii, _ = obstacle_discs(crowd)
-    li = config.lidar
-    xy = np.array([robot.x, robot.y])
-    ranges = scan_discs(
-        xy,
-        robot.heading,
-        centers,
-        radii,
-        li.num_beams,
-        li.max_range,
-        li.min_range,
-        segments=crowd.wall_segments,
-    )
+    ranges = sensed_ranges(np.array([robot.x, robot.y]), robot.heading, crowd, config)
     return ranges.astype(np.float32)
 
 
 def _drlvo_frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
-    centers, radii, margins = obstacle_discs(crowd)
     li = config.lidar
+    xy = np.array([robot.x, robot.y])
+    if not config.sensor.is_exact():
+        return drlvo_image_from_ranges(
+            sensed_ranges(xy, robot.heading, crowd, config),
+            inflated_ranges(xy, robot.heading, crowd, config),
+            xy,
+            robot.heading,
+            crowd.positions,
+            crowd.velocities,
+            crowd.radius,
+            li.grid_size,
+            li.max_range,
+        )
+    centers, radii, margins = obstacle_discs(crowd)
     return drlvo_image(
         np.array([robot.x, robot.y]),
         robot.heading,

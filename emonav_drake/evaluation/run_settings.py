@@ -56,6 +56,8 @@ def setting_label(config: EmoNavConfig, name: str | None) -> str:
         label += f", {config.perception.state_source} state"
     if config.crowd.family != "paper":
         label += f", family {config.crowd.family}"
+    if not config.sensor.is_exact():
+        label += f", sensor {config.sensor.preset}"
     return label
 
 

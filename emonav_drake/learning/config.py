@@ -27,10 +27,12 @@ from emonav_drake.learning.config_common import (
     NUM_FRAMES,
     POOL,
     SEED_OFFSET,
+    SENSOR_DOC,
     THREADS,
     WIDTH,
     check_choice,
     check_observation,
+    check_sensor,
 )
 from emonav_drake.learning.teacher import (
     LEGACY_EXPERT_FIELDS,
@@ -112,6 +114,7 @@ class DaggerConfig:
         '"paper" (the paper\'s arena) or another family, e.g. "mixed" (the paper\'s arena '
         "half the time, else any family: walls, corridors, standing and grouped pedestrians)",
     )
+    sensor: str = _setting("ideal", SENSOR_DOC)
     mirror_augment: bool = _setting(True, "mirror half of every batch left-right (every kind)")
     response: str = _setting(
         "",
@@ -186,6 +189,7 @@ class DaggerConfig:
         check_choice("goal_input", self.goal_input, GOAL_INPUTS)
         check_choice("setting", self.setting, SETTINGS)
         check_choice("family", self.family, SCENARIO_FAMILIES)
+        check_sensor(self.sensor)
         self.teacher()  # the expert's own rules
         if self.soft_labels and not is_soft(self.expert):
             raise ConfigError(
@@ -260,6 +264,7 @@ class SarlConfig:
         "m",
         GOAL_RADIUS,
     )
+    sensor: str = _setting("ideal", SENSOR_DOC)
     device: str = _setting("cpu", "the torch device")
     threads: int = _setting(1, "torch threads", "", THREADS)
 
@@ -270,6 +275,7 @@ class SarlConfig:
         validate_fields(self)
         expert_for_route(self.expert, "", self.planner_modules)
         check_choice("network", self.network, VALUE_NETWORKS)
+        check_sensor(self.sensor)
         return self
 
     @classmethod

@@ -9,7 +9,13 @@ refused instead of started). The ranges of what a training configuration shares 
 
 from emonav_drake.config_fields import field_range
 from emonav_drake.core.observations import observation_kind, observation_kinds
-from emonav_drake.params import EpisodeParams, LidarParams
+from emonav_drake.params import (
+    SENSOR_NAMES,
+    EmoNavConfig,
+    EpisodeParams,
+    LidarParams,
+    apply_sensor_preset,
+)
 from emonav_drake.typed_yaml import ConfigError
 
 # The 4-conv encoder (3 x 3, strides 2-1-1-1) needs an input of at least this many cells.
@@ -50,6 +56,29 @@ def check_observation(grid_kind: str, encoder: str, num_frames: int) -> None:
             f"num_frames = {num_frames} is invalid with grid_kind = {grid_kind!r}: "
             f"it observes one {kind.description} (num_frames: 1)"
         )
+
+
+# The doc of every training configuration's `sensor` field (`emonav train --sensor`).
+SENSOR_DOC = (
+    "the LiDAR sensor of the training and selection world, by preset (the world's "
+    "`sensor` section, docs/perception.md): ideal (the exact scan), vlp16 or ust10lx"
+)
+
+
+def check_sensor(sensor: str) -> None:
+    """`ConfigError` naming `sensor` unless it is a sensor preset."""
+    check_choice("sensor", sensor, SENSOR_NAMES)
+
+
+def with_sensor(env_cfg: EmoNavConfig, sensor: str) -> EmoNavConfig:
+    """`env_cfg` (changed in place and returned) with the training configuration's sensor
+    preset: any preset but "ideal" sets its whole `sensor` section (the seed kept);
+    "ideal", the default, leaves the world's own sensor as it is."""
+    check_sensor(sensor)
+    if sensor != "ideal":
+        apply_sensor_preset(env_cfg, sensor)
+        env_cfg.validate()
+    return env_cfg
 
 
 def check_choice(name: str, value: str, allowed: tuple[str, ...]) -> None:

@@ -55,6 +55,7 @@ from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.errors import RunInterrupted
+from emonav_drake.learning.config_common import with_sensor
 from emonav_drake.learning.finetune_agent import DiscreteSac, check_observation, load_init
 from emonav_drake.learning.finetune_state import (
     STATE_FILE,
@@ -116,7 +117,7 @@ def train_finetune(
         RunInterrupted: after Ctrl-C, once the state is saved.
     """
     cfg = (cfg or FinetuneConfig()).validate()
-    env_cfg = copy.deepcopy(env_cfg or EmoNavConfig())
+    env_cfg = with_sensor(copy.deepcopy(env_cfg or EmoNavConfig()), cfg.sensor)
     out = Path(out)
     device = resolve_device(cfg.device, "device")
     path = out / STATE_FILE

@@ -25,11 +25,13 @@ from emonav_drake.learning.config_common import (
     POLYAK,
     POOL,
     SEED_OFFSET,
+    SENSOR_DOC,
     TEMPERATURE,
     THREADS,
     WIDTH,
     check_choice,
     check_observation,
+    check_sensor,
 )
 from emonav_drake.params import NUM_BEAMS, EpisodeParams
 from emonav_drake.typed_yaml import ConfigError, validate_fields
@@ -93,6 +95,7 @@ class SacConfig:
         'the robot of the training environment: "lip" (`EmoNavLIP-v0`) or "digit" (the '
         "full-order Digit diagram, `EmoNavDigit-v0`: ~0.2 s of CPU per environment step)",
     )
+    sensor: str = setting("ideal", SENSOR_DOC)
     num_envs: int = setting(
         1,
         "environments stepped together (on Ray actors when > 1; `learning/env_pool.py`)",
@@ -107,6 +110,7 @@ class SacConfig:
         validate_fields(self)
         check_observation(self.grid_kind, self.encoder, self.num_frames)
         check_choice("plant", self.plant, tuple(PLANTS))
+        check_sensor(self.sensor)
         if self.grid_kind != "scan":
             if NUM_BEAMS % self.grid_size:
                 raise ConfigError(
@@ -142,6 +146,7 @@ class FinetuneConfig:
         "m",
         GOAL_RADIUS,
     )
+    sensor: str = setting("ideal", SENSOR_DOC)
     total_steps: int = setting(
         100_000, "environment (walking) steps; the episode reaching it ends", "", COUNT
     )
@@ -214,6 +219,7 @@ class FinetuneConfig:
         training, selection and evaluation seed ranges overlap."""
         validate_fields(self)
         check_choice("critic_loss", self.critic_loss, ("huber", "mse"))
+        check_sensor(self.sensor)
         # at most one episode per environment step: seeds offset … offset + total_steps − 1
         ranges = {
             "train_seed_offset": (self.train_seed_offset, self.total_steps),

@@ -28,6 +28,7 @@ learning phase); every other setting must be the run's. Everything is seeded by
 
 from __future__ import annotations
 
+import copy
 import json
 import logging
 import time
@@ -40,6 +41,7 @@ from emonav_drake.atomic_io import write_text_atomic
 from emonav_drake.core.metrics import format_summary
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import SarlConfig
+from emonav_drake.learning.config_common import with_sensor
 from emonav_drake.learning.run_state import (
     InterruptGuard,
     check_state,
@@ -68,7 +70,7 @@ def _selection_key(s: dict) -> list:
 
 
 # SarlConfig fields added after runs were saved, with the value those runs used.
-FIELDS_ADDED_LATER = {"network": "sarl", "planner_modules": []}
+FIELDS_ADDED_LATER = {"network": "sarl", "planner_modules": [], "sensor": "ideal"}
 
 
 def train_sarl(
@@ -84,7 +86,7 @@ def train_sarl(
     for a damaged or foreign state file, `ConfigError` for a bad configuration."""
     out = Path(out)
     cfg = (cfg or SarlConfig()).validate()
-    env_cfg = env_cfg or EmoNavConfig()
+    env_cfg = with_sensor(copy.deepcopy(env_cfg or EmoNavConfig()), cfg.sensor)
     if resume:
         state, tensors = read_run_state(out / STATE_FILE, SARL_STATE_FORMAT)
         # a run saved before a field existed ran with that field's value here

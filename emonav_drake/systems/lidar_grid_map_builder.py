@@ -23,8 +23,11 @@ Output ports:
                     (LiDAR-SAC; LNDNL min-pools and normalises them in its encoder);
             "drlvo" uint8 (1, 3, M, M): scan OGM + pedestrian velocity map (DRL-VO*,
                     `core/kinematic_maps.py`); no stack, the current image only.
-    scan (K): the LiDAR ranges now [m], float64, clipped to [0.27, 6.0] (for
-        visualisation).
+    scan (K): the LiDAR ranges now [m], float64, clipped to [0.27, 6.0]: the configured
+        sensor's scan (`core/lidar_sensor.py::sensed_ranges`, the same real scan as the
+        maps' 255 layer and the "scan" observation; its noise is drawn from the sensor's
+        seed and the crowd's scenario seed and time, so a re-evaluation gives the same
+        ranges). The crowd tracker reads it; the visualiser draws it.
 Abstract state: the stored frames, pushed at every walking step t_k = kT.
 """
 
@@ -34,8 +37,7 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, Context, LeafSystem, State, ValueProducer
 
-from emonav_drake.core.crowd import obstacle_discs
-from emonav_drake.core.lidar import scan_discs
+from emonav_drake.core.lidar_sensor import sensed_ranges
 from emonav_drake.core.observations import (
     check_observation_kind,
     observation_dtype,
@@ -111,17 +113,5 @@ class LidarGridMapBuilder(LeafSystem):
     def _calc_scan(self, context: Context, output: BasicVector) -> None:
         robot = lip_state_from_vector(self._robot_in.Eval(context))
         crowd = self._crowd_in.Eval(context)
-        centers, radii, _ = obstacle_discs(crowd)
-        li = self._config.lidar
-        output.SetFromVector(
-            scan_discs(
-                np.array([robot.x, robot.y]),
-                robot.heading,
-                centers,
-                radii,
-                num_beams=li.num_beams,
-                max_range=li.max_range,
-                min_range=li.min_range,
-                segments=crowd.wall_segments,
-            )
-        )
+        xy = np.array([robot.x, robot.y])
+        output.SetFromVector(sensed_ranges(xy, robot.heading, crowd, self._config))
