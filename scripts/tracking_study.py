@@ -18,6 +18,7 @@ use seeds that no planner is trained, selected or evaluated on (700 000 … by d
 from __future__ import annotations
 
 import argparse
+import dataclasses as dc
 import json
 import shlex
 import sys
@@ -31,6 +32,7 @@ from emonav_drake.atomic_io import (
     write_json,
     write_text_atomic,
 )
+from emonav_drake.cli.resolve import add_family, add_sensor
 
 EVALUATION_SEEDS = range(0, 500)  # the benchmark's seeds: never measured on here
 
@@ -41,6 +43,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--first-seed", type=int, default=700_000, help="first seed (700000)")
     p.add_argument("--out", type=Path, required=True, help="directory of the results")
     p.add_argument("--png", type=Path, help="write the figure here")
+    add_family(p)
+    add_sensor(p)
     args = p.parse_args(argv)
     seeds = range(args.first_seed, args.first_seed + args.episodes)
     try:
@@ -68,9 +72,13 @@ def main(argv: list[str] | None = None) -> int:
     from emonav_drake.evaluation.tracking_report import csv_rows, plot, tables_md
     from emonav_drake.evaluation.tracking_study import study
     from emonav_drake.evaluation.tracking_summary import clear_mot, summarise
-    from emonav_drake.params import EmoNavConfig
+    from emonav_drake.params import EmoNavConfig, apply_sensor_preset
 
     cfg = EmoNavConfig()
+    if args.family is not None:
+        cfg.crowd.family = args.family
+    if args.sensor is not None:
+        apply_sensor_preset(cfg, args.sensor)
     t0 = time.perf_counter()
     results = study(seeds, cfg, progress=True)
     wall = time.perf_counter() - t0
@@ -79,6 +87,8 @@ def main(argv: list[str] | None = None) -> int:
     summary["command"] = shlex.join(["python", "scripts/tracking_study.py", *given])
     summary["planner"] = "mpc"
     summary["plant"] = "lip"
+    summary["family"] = cfg.crowd.family
+    summary["sensor"] = dc.asdict(cfg.sensor)
     summary["wall_seconds"] = round(wall, 1)
     _, per_episode = clear_mot(results)
     for row, r in zip(per_episode, results, strict=True):

@@ -61,6 +61,11 @@ class TrackerParams:
     still_speed: float = 0.1  # a track slower than this is still [m/s]
     still_duration: float = 2.0  # still for this long: a static obstacle [s]
     emotion_gate: float = 0.5  # an emotion report farther from a track is not its own [m]
+    # A track once matched to a fixed detection (`Detections.walls`) stays fixed while it
+    # is slower than `still_speed` (the leg detector's discs: a fit that fails at one scan
+    # does not make the object a pedestrian again). Off: fixed only while its last
+    # detection is.
+    sticky_fixed: bool = False
 
     def validate(self) -> TrackerParams:
         """Raise ValueError naming the field if a value is out of range; returns self."""
@@ -231,7 +236,8 @@ class CrowdTracker:
             tr.misses = 0
             tr.last_seen = t
             tr.radius += (float(radii[j]) - tr.radius) / tr.hits
-            tr.wall = bool(walls[j])
+            slow = math.hypot(tr.x[2], tr.x[3]) < p.still_speed
+            tr.wall = bool(walls[j]) or (p.sticky_fixed and tr.wall and slow)
             tr.confirmed = tr.confirmed or tr.hits >= p.confirm_hits
 
         survivors: list[Track] = []

@@ -84,6 +84,18 @@ class DetectionParams:
     wall_min_length: float = 1.0  # a straight run of points at least this long is a wall [m]
     wall_tolerance: float = 0.03  # a straight run's points lie within this of its chord [m]
     wall_piece_length: float = 0.5  # walls are reported as pieces this long [m]
+    # People as legs (`core/leg_detection.py`; on for a sensor that sees legs): clusters
+    # are legs, paired into people; a well-fitted disc larger than a leg is a fixed object.
+    legs: bool = False
+    max_missing_beams: int = 0  # beams lost inside a cluster that do not end it
+    # A lone return between two neighbours that agree with each other (within the jump
+    # limit) and not with it is a speckle (a spurious return): taken as a lost beam.
+    despeckle: bool = False
+    leg_min_points: int = 3  # a leg cluster has at least this many beams
+    leg_max_width: float = 0.25  # a cluster at most this wide (end to end) is one leg [m]
+    leg_notch: float = 0.03  # a wider cluster with a dip this deep is two legs [m]
+    leg_radius: float = 0.07  # a leg's centre lies this far behind its points [m]
+    leg_pair_distance: float = 0.55  # two legs at most this far apart are one person [m]
 
     def validate(self) -> DetectionParams:
         """Raise ValueError naming the field if a value is out of range; returns self."""
@@ -99,11 +111,21 @@ class DetectionParams:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0.0):
                 raise ValueError(f"DetectionParams.{name} must be finite and > 0, got {v!r}")
-        for name in ("jump_ratio", "fit_tolerance", "convergence"):
+        for name in ("leg_max_width", "leg_radius", "leg_pair_distance"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0.0):
+                raise ValueError(f"DetectionParams.{name} must be finite and > 0, got {v!r}")
+        for name in ("jump_ratio", "fit_tolerance", "convergence", "leg_notch"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0.0):
                 raise ValueError(f"DetectionParams.{name} must be finite and >= 0, got {v!r}")
-        for name, low in (("min_points", 1), ("min_fit_points", 3), ("gauss_newton_iterations", 0)):
+        for name, low in (
+            ("min_points", 1),
+            ("min_fit_points", 3),
+            ("gauss_newton_iterations", 0),
+            ("max_missing_beams", 0),
+            ("leg_min_points", 2),
+        ):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
                 raise ValueError(f"DetectionParams.{name} must be an int >= {low}, got {v!r}")
@@ -181,36 +203,14 @@ def detect_objects(
         raise ValueError(
             f"heading and max_range must be finite (max_range > 0): {heading}, {max_range}"
         )
-    k = r.size
-    beams = np.flatnonzero(r < max_range)  # the hits, in beam order
-    m = beams.size
-    if m == 0:
+    seg = segment_scan(r, (ox, oy), heading, max_range, params)
+    if seg is None:
         return Detections.empty()
+    if params.legs:
+        from emonav_drake.core.leg_detection import detect_people
 
-    # World points of the hits: the robot-frame beam directions rotated by the heading.
-    _, cos_b, sin_b = beam_table(k)
-    ch, sh = math.cos(heading), math.sin(heading)
-    rh, cb, sb = r[beams], cos_b[beams], sin_b[beams]
-    px = ox + rh * (ch * cb - sh * sb)
-    py = oy + rh * (sh * cb + ch * sb)
-
-    # link[j]: hit j and the next hit (mod m) are neighbouring beams in one cluster.
-    nxt = np.arange(1, m + 1)
-    nxt[-1] = 0
-    adjacent = (beams[nxt] - beams) % k == 1
-    gap = np.hypot(px[nxt] - px, py[nxt] - py)
-    limit = params.jump_distance + params.jump_ratio * np.minimum(rh, rh[nxt])
-    link = adjacent & (gap <= limit)
-    if link.all():  # one closed ring round the robot (e.g. inside a disc)
-        order = np.arange(m)
-        starts = np.zeros(1, dtype=np.intp)
-    else:
-        # Start right after the first break, so no cluster straddles the array's end; a
-        # cluster starts wherever its predecessor does not link to it.
-        first = int(np.argmin(link)) + 1
-        order = (np.arange(m) + first) % m
-        starts = np.flatnonzero(~np.concatenate(([False], link[order][:-1])))
-    counts = np.diff(np.append(starts, order.size))
+        return detect_people(seg, (ox, oy), params)
+    px, py, beams, order, starts, counts = seg
     big = counts >= params.min_points
     if not big.any():
         return Detections.empty()
@@ -241,6 +241,72 @@ def detect_objects(
     # Report clusters by their first beam index (deterministic and independent of `first`).
     idx = np.argsort(first_beam, kind="stable")
     return Detections(centers[idx], radii[idx], counts[idx].astype(np.int64), walls[idx])
+
+
+def segment_scan(
+    r: np.ndarray,
+    origin: tuple[float, float],
+    heading: float,
+    max_range: float,
+    params: DetectionParams,
+) -> tuple[np.ndarray, ...] | None:
+    """Steps 1-2 of the module docstring: the hits' world points and their clusters.
+
+    Returns None without a hit, else ``(px, py, beams, order, starts, counts)``: the
+    world points (m,) [m] and beam indices (m,) of the hits in beam order, and the
+    clusters laid end to end — ``order[starts[j] : starts[j] + counts[j]]`` are the hits
+    of cluster j, in beam order. Two hits are neighbours when at most
+    ``params.max_missing_beams`` beams between them were lost.
+    """
+    ox, oy = origin
+    k = r.size
+    if params.despeckle and k >= 3:
+        r = _despeckled(r, max_range, params)
+    beams = np.flatnonzero(r < max_range)  # the hits, in beam order
+    m = beams.size
+    if m == 0:
+        return None
+
+    # World points of the hits: the robot-frame beam directions rotated by the heading.
+    _, cos_b, sin_b = beam_table(k)
+    ch, sh = math.cos(heading), math.sin(heading)
+    rh, cb, sb = r[beams], cos_b[beams], sin_b[beams]
+    px = ox + rh * (ch * cb - sh * sb)
+    py = oy + rh * (sh * cb + ch * sb)
+
+    # link[j]: hit j and the next hit (mod m) are neighbouring beams in one cluster.
+    nxt = np.arange(1, m + 1)
+    nxt[-1] = 0
+    step = (beams[nxt] - beams) % k  # 0 for a single hit: no neighbour of itself
+    adjacent = (step >= 1) & (step <= 1 + params.max_missing_beams)
+    gap = np.hypot(px[nxt] - px, py[nxt] - py)
+    limit = params.jump_distance + params.jump_ratio * np.minimum(rh, rh[nxt])
+    link = adjacent & (gap <= limit)
+    if link.all():  # one closed ring round the robot (e.g. inside a disc)
+        order = np.arange(m)
+        starts = np.zeros(1, dtype=np.intp)
+    else:
+        # Start right after the first break, so no cluster straddles the array's end; a
+        # cluster starts wherever its predecessor does not link to it.
+        first = int(np.argmin(link)) + 1
+        order = (np.arange(m) + first) % m
+        starts = np.flatnonzero(~np.concatenate(([False], link[order][:-1])))
+    counts = np.diff(np.append(starts, order.size))
+    return px, py, beams, order, starts, counts
+
+
+def _despeckled(r: np.ndarray, max_range: float, params: DetectionParams) -> np.ndarray:
+    """`r` with every speckle set to `max_range` (`DetectionParams.despeckle`): a hit whose
+    two neighbours are hits within the jump limit of each other, both farther than it
+    by more than the jump limit or both nearer. Ranges compared along the beams [m]."""
+    prev_r, next_r = np.roll(r, 1), np.roll(r, -1)
+    limit = params.jump_distance + params.jump_ratio * np.minimum(prev_r, next_r)
+    hits = (r < max_range) & (prev_r < max_range) & (next_r < max_range)
+    agree = np.abs(prev_r - next_r) <= limit
+    off = np.minimum(np.abs(r - prev_r), np.abs(r - next_r)) > limit
+    out = r.copy()
+    out[hits & agree & off] = max_range
+    return out
 
 
 # A cluster is a line, not a circle, when the smaller eigenvalue of its points' scatter
@@ -276,6 +342,20 @@ def _fit_circles(
     """Circles (centres (C, 2), radii (C,)) of C clusters laid end to end in `x`, `y`
     (cluster j = ``[starts[j], starts[j] + counts[j])``), fitted as the module docstring
     says; `origin` is the LiDAR position."""
+    centers, radii, _ = fit_circles(x, y, starts, counts, origin, p)
+    return centers, radii
+
+
+def fit_circles(
+    x: np.ndarray,
+    y: np.ndarray,
+    starts: np.ndarray,
+    counts: np.ndarray,
+    origin: tuple[float, float],
+    p: DetectionParams,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`_fit_circles`, and (C,) bool: which clusters' fits were accepted (the others have
+    the fallback circle)."""
     n = counts.astype(np.float64)
     seg = np.repeat(np.arange(counts.size), counts)
     mx = np.add.reduceat(x, starts) / n
@@ -343,7 +423,7 @@ def _fit_circles(
             & behind
         )
     if ok.all():
-        return centers, rad
+        return centers, rad, ok
 
     # Fallback: the prior radius behind the arc's middle beam, along its line of sight.
     last = starts + counts - 1
@@ -356,7 +436,7 @@ def _fit_circles(
     fallback = np.stack([qx + fr * sx / sn, qy + fr * sy / sn], axis=1)
     centers = np.where(ok[:, None], centers, fallback)
     rad = np.where(ok, rad, fr)
-    return centers, rad
+    return centers, rad, ok
 
 
 # ------------------------------------------------------------------------------------- walls

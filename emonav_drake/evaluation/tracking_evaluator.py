@@ -36,9 +36,12 @@ from typing import Any
 
 import numpy as np
 
+from emonav_drake.core.crowd import CrowdSnapshot
 from emonav_drake.core.crowd_tracker import CrowdTracker, TrackerParams
+from emonav_drake.core.leg_detection import detection_params, tracker_params
 from emonav_drake.core.lidar import scan_discs
 from emonav_drake.core.lidar_objects import DetectionParams, detect_objects
+from emonav_drake.core.lidar_sensor import seen_discs, sensed_ranges
 from emonav_drake.evaluation.scan_visibility import (
     OCCLUDED,
     OUT_OF_RANGE,
@@ -47,7 +50,7 @@ from emonav_drake.evaluation.scan_visibility import (
     categories,
     visible_beams,
 )
-from emonav_drake.params import EmoNavConfig
+from emonav_drake.params import EmoNavConfig, SensorParams
 
 MATCH_DISTANCE = 0.5  # a hypothesis farther than this from a pedestrian is not it [m]
 
@@ -79,6 +82,46 @@ class ScanTruth:
     static_radii: np.ndarray  # (S,) [m]
     # (W, 2, 2) walls, segment k from [k, 0] to [k, 1] [m]: they block beams too
     wall_segments: np.ndarray = dc.field(default_factory=lambda: np.zeros((0, 2, 2)))
+    # (P,) gait phase [rad] and facing [rad] of each pedestrian (what a sensor that sees
+    # legs needs; None: 0 and the walking direction), the scenario's seed (the noise's)
+    gait_phase: np.ndarray | None = None
+    facing: np.ndarray | None = None
+    seed: int = 0
+
+    def snapshot(self, config: EmoNavConfig) -> CrowdSnapshot:
+        """The crowd as the sensor model reads it (`core/lidar_sensor.py`)."""
+        p = len(self.ped_positions)
+        return CrowdSnapshot(
+            positions=np.asarray(self.ped_positions, dtype=float).reshape(-1, 2),
+            velocities=np.asarray(self.ped_velocities, dtype=float).reshape(-1, 2),
+            radius=config.crowd.pedestrian_radius,
+            emotions=np.zeros(p, dtype=np.int64),
+            discomfort=np.zeros(p),
+            static_centers=np.asarray(self.static_centers, dtype=float).reshape(-1, 2),
+            static_radii=np.asarray(self.static_radii, dtype=float).reshape(-1),
+            static_discomfort=0.0,
+            wall_segments=self.wall_segments,
+            gait_phase=self.gait_phase,
+            facing=self.facing,
+            time=float(self.time),
+            seed=int(self.seed),
+        )
+
+
+def _in_view(
+    points: np.ndarray, xy: np.ndarray, heading: float, reach: float, sensor: SensorParams
+) -> np.ndarray:
+    """Which points (n, 2) [m] lie within `reach` [m] of the LiDAR at `xy` and inside its
+    field of view (`sensor.field_of_view_deg`, centred on `heading` [rad])."""
+    if len(points) == 0:
+        return np.zeros(0, dtype=bool)
+    d = points - xy
+    inside = np.hypot(d[:, 0], d[:, 1]) <= reach
+    if sensor.field_of_view_deg < 360.0:
+        bearing = np.arctan2(d[:, 1], d[:, 0]) - heading
+        bearing = (bearing + math.pi) % (2.0 * math.pi) - math.pi
+        inside &= np.abs(bearing) <= math.radians(sensor.field_of_view_deg) / 2.0
+    return inside
 
 
 def _within(a: np.ndarray, b: np.ndarray, d: float) -> np.ndarray:
@@ -107,13 +150,14 @@ class EpisodeResult:
     # −1 if tracked), hidden_s (time since it last showed min_points beams; NaN when it
     # shows them now or never did), hidden_was_tracked (tracked at that last scan),
     # since_match (time since its previous match [s], NaN before the first), speed (its
-    # true speed [m/s]).
+    # true speed [m/s]), scored (in CLEAR-MOT's counts: within the scored range).
     peds: dict[str, np.ndarray]
     # One entry per static disc per scan: scan, time, disc, visible beams, reported
     # (a still confirmed track within MATCH_DISTANCE), as_pedestrian (a moving one).
     discs_seen: dict[str, np.ndarray]
     false_positives: dict[str, int]  # counts by FP_CAUSES
     per_scan: list[dict]  # one summary row per scan (CSV)
+    scored_range: float | None = None  # CLEAR-MOT's scored range [m] (None: everything)
 
 
 class EpisodeEvaluator:
@@ -123,6 +167,11 @@ class EpisodeEvaluator:
         config: the LiDAR (beams, range), the pedestrian radius.
         detection, tracking: the detector's and the tracker's parameters.
         match_distance: the CLEAR-MOT match threshold [m].
+        scored_range: CLEAR-MOT scores the pedestrians and the hypotheses within this
+            distance [m] of the robot and inside the sensor's field of view (default:
+            `lidar.max_range`, the range the tracker is given); the others are in no
+            count (no miss, no false pedestrian). None scores all (a pedestrian beyond
+            the range is a miss).
     """
 
     def __init__(
@@ -131,10 +180,14 @@ class EpisodeEvaluator:
         detection: DetectionParams | None = None,
         tracking: TrackerParams | None = None,
         match_distance: float = MATCH_DISTANCE,
+        scored_range: float | None = -1.0,
     ) -> None:
         self.config = config
-        self.detection = (detection or DetectionParams()).validate()
-        self.tracker = CrowdTracker(tracking or TrackerParams())
+        if scored_range is not None and scored_range < 0:
+            scored_range = config.lidar.max_range
+        self.scored_range = scored_range
+        self.detection = (detection or detection_params(config)).validate()
+        self.tracker = CrowdTracker(tracking or tracker_params(config))
         self.match_distance = float(match_distance)
         self.accumulator = _motmetrics().MOTAccumulator(auto_id=False)
         self._peds: dict[str, list] = {k: [] for k in _PED_FIELDS}
@@ -159,8 +212,15 @@ class EpisodeEvaluator:
             self._num_peds = len(peds)
         elif len(peds) != self._num_peds:
             raise ValueError(f"scan at t={t}: {len(peds)} pedestrians, before {self._num_peds}")
-        centers = np.vstack([peds, sc])
-        radii = np.concatenate([np.full(len(peds), cfg.crowd.pedestrian_radius), sr])
+        crowd = truth.snapshot(cfg)
+        sensed = sensed_ranges(xy, truth.heading, crowd, cfg)
+        det = detect_objects(sensed, xy, truth.heading, li.max_range, self.detection)
+        self.tracker.update(t, det)
+        scan = len(self._per_scan)
+
+        # Visibility from the exact scan of what the sensor sees (legs or discs): a
+        # pedestrian's beams are its legs' when it shows as legs.
+        centers, radii = seen_discs(crowd, cfg.sensor)
         full = scan_discs(
             xy,
             truth.heading,
@@ -171,11 +231,11 @@ class EpisodeEvaluator:
             li.min_range,
             segments=truth.wall_segments,
         )
-        det = detect_objects(full, xy, truth.heading, li.max_range, self.detection)
-        self.tracker.update(t, det)
-        scan = len(self._per_scan)
-
         own, vis = visible_beams(xy, truth.heading, centers, radii, full, cfg)
+        parts = len(radii) - len(sr)  # discs of pedestrians: P, or 2P legs
+        if parts != len(peds):  # two legs per pedestrian: its beams are both legs'
+            own = np.concatenate([own[:parts].reshape(-1, 2).sum(axis=1), own[parts:]])
+            vis = np.concatenate([vis[:parts].reshape(-1, 2).sum(axis=1), vis[parts:]])
         cat = categories(xy, peds, own[: len(peds)], vis[: len(peds)], cfg, self.detection)
         for tr in self.tracker.all_tracks():
             self._births.setdefault(tr.id, t)
@@ -194,7 +254,17 @@ class EpisodeEvaluator:
 
         gap = np.hypot(peds[:, None, 0] - h_pos[None, :, 0], peds[:, None, 1] - h_pos[None, :, 1])
         dists = np.where(gap <= self.match_distance, gap, np.nan)
-        self.accumulator.update(list(range(len(peds))), h_ids.tolist(), dists, frameid=scan)
+        o_in = np.ones(len(peds), dtype=bool)
+        h_in = np.ones(len(h_ids), dtype=bool)
+        if self.scored_range is not None:
+            o_in = _in_view(peds, xy, truth.heading, self.scored_range, cfg.sensor)
+            h_in = _in_view(h_pos, xy, truth.heading, self.scored_range, cfg.sensor)
+        self.accumulator.update(
+            np.flatnonzero(o_in).tolist(),
+            h_ids[h_in].tolist(),
+            dists[np.ix_(o_in, h_in)],
+            frameid=scan,
+        )
 
         d = self._peds
         d["scan"] += [scan] * len(peds)
@@ -207,6 +277,7 @@ class EpisodeEvaluator:
         d["detected"] += _within(peds, det.centers, self.match_distance).tolist()
         d["near_static"] += _within(peds, still_pos, self.match_distance).tolist()
         d["near_tentative"] += _within(peds, tent_pos, self.match_distance).tolist()
+        d["scored"] += o_in.tolist()
         d["vx"] += vels[:, 0].tolist()
         d["vy"] += vels[:, 1].tolist()
 
@@ -322,6 +393,7 @@ class EpisodeEvaluator:
             hidden_was_tracked=was_tracked,
             since_match=since_match,
             speed=np.hypot(peds["vx"], peds["vy"]) if m else np.zeros(0),
+            scored=peds["scored"].astype(bool) if m else np.zeros(0, bool),
         )
         per_scan = []
         for f, row in enumerate(self._per_scan):
@@ -348,6 +420,7 @@ class EpisodeEvaluator:
             discs_seen={k: np.asarray(v) for k, v in self._discs.items()},
             false_positives=fps,
             per_scan=per_scan,
+            scored_range=self.scored_range,
         )
 
 
@@ -362,6 +435,7 @@ _PED_FIELDS = (
     "detected",
     "near_static",
     "near_tentative",
+    "scored",
     "vx",
     "vy",
 )

@@ -67,6 +67,7 @@ def run_episode(
         for j in range(substeps_per_step(config)):
             seen = robot_at_substep(start, u, j, config)
             xy = np.array([seen.x, seen.y])
+            snap = crowd_model.snapshot(crowd)
             ev.observe(
                 ScanTruth(
                     time=crowd.substep * dt,
@@ -77,6 +78,9 @@ def run_episode(
                     static_centers=crowd_model.static_centers,
                     static_radii=crowd_model.static_radii,
                     wall_segments=crowd_model.wall_segments,
+                    gait_phase=snap.gait_phase,
+                    facing=snap.facing,
+                    seed=snap.seed,
                 )
             )
             crowd = crowd_model.step(crowd, xy, lip_velocity(seen))

@@ -239,6 +239,8 @@ def summarise(
     trk, det = _cat(results, "tracked").astype(bool), _cat(results, "detected").astype(bool)
     pe, ve, age = _cat(results, "pos_err"), _cat(results, "vel_err"), _cat(results, "track_age")
     cause, speed = _cat(results, "miss_cause"), _cat(results, "speed")
+    scored = _cat(results, "scored").astype(bool)
+    cause = np.where(scored, cause, -1)  # outside the scored range: no miss
     outcomes = sorted({r.outcome for r in results})
     return {
         "episodes": len(results),
@@ -268,6 +270,7 @@ def summarise(
         "by_hidden_time": hidden_bins(results, cfg, tracking),
         "settings": {
             "match_distance_m": MATCH_DISTANCE,
+            "scored_range_m": results[0].scored_range if results else None,
             "settled_track_age_s": SETTLED_AGE,
             "lidar": dc.asdict(cfg.lidar),
             "scan_period_s": cfg.crowd.dt,

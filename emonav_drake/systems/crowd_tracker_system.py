@@ -35,6 +35,7 @@ from pydrake.systems.framework import Context, LeafSystem, State
 
 from emonav_drake.core.crowd import CrowdSnapshot
 from emonav_drake.core.crowd_tracker import CrowdTracker, TrackerParams
+from emonav_drake.core.leg_detection import detection_params, tracker_params
 from emonav_drake.core.lidar_objects import DetectionParams, detect_objects
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
@@ -49,8 +50,9 @@ class CrowdTrackerSystem(LeafSystem):
         config: the LiDAR (beams, range), the scan period `crowd.dt`, the nominal
             pedestrian radius and the discomfort distances.
         detection, tracking: the detector's and the tracker's parameters (defaults:
-            `DetectionParams()`, and `TrackerParams()` with the configuration's
-            `perception.still_duration`).
+            `core/leg_detection.py`'s `detection_params` and `tracker_params` of the
+            configuration: the disc detector, or legs paired into people for a sensor
+            that sees legs; the configuration's `perception.still_duration`).
     """
 
     def __init__(
@@ -61,8 +63,8 @@ class CrowdTrackerSystem(LeafSystem):
     ) -> None:
         super().__init__()
         self._config = config
-        self._detection = detection or DetectionParams()
-        self._tracking = tracking or TrackerParams(still_duration=config.perception.still_duration)
+        self._detection = detection or detection_params(config)
+        self._tracking = tracking or tracker_params(config)
         self._distances = np.asarray(config.reward.emotion_distances(), dtype=float)
         self._robot_in = self.DeclareVectorInputPort("robot_state", 4)
         self._scan_in = self.DeclareVectorInputPort("scan", config.lidar.num_beams)
