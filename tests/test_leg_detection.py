@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.core.crowd_tracker import CrowdTracker
-from emonav_drake.core.leg_detection import detection_params, tracker_params
+from emonav_drake.core.crowd_tracker import CrowdTracker, tracker_params
+from emonav_drake.core.leg_detection import detect_scan, detection_params
 from emonav_drake.core.lidar_objects import DetectionParams, detect_objects
 from emonav_drake.core.lidar_sensor import sensed_ranges
 from emonav_drake.core.pedestrian_legs import GAIT_CYCLE_LENGTH
@@ -77,7 +77,7 @@ def test_a_walking_person_is_one_detection_at_their_centre(preset, distance):
         phase = np.array([2 * math.pi * t / GAIT_CYCLE_LENGTH])
         snap = _snapshot(pos, np.array([[0.0, 1.0]]), phase, t)
         scan = sensed_ranges(ROBOT, 0.0, snap, cfg)
-        det = detect_objects(scan, ROBOT, 0.0, cfg.lidar.max_range, det_p)
+        det = detect_scan(scan, ROBOT, 0.0, cfg.lidar.max_range, det_p)
         people = det.centers[~det.walls]
         assert len(people) <= 1, (k, people)
         if len(people) == 1:
@@ -94,7 +94,7 @@ def test_a_static_disc_is_one_fixed_detection_and_not_a_person():
     for k in range(20):
         snap = _snapshot(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), 0.1 * k, center, [0.3])
         scan = sensed_ranges(ROBOT, 0.0, snap, cfg)
-        det = detect_objects(scan, ROBOT, 0.0, cfg.lidar.max_range, det_p)
+        det = detect_scan(scan, ROBOT, 0.0, cfg.lidar.max_range, det_p)
         assert len(det) == 1 and det.walls[0], det
         assert np.hypot(*(det.centers[0] - center[0])) < 0.05
         assert det.radii[0] == pytest.approx(0.3, abs=0.05)
@@ -128,7 +128,7 @@ def test_the_tracker_keeps_identity_through_a_crossing(preset):
         phase = np.array([t, t + 1.0]) * 2 * math.pi / GAIT_CYCLE_LENGTH
         snap = _snapshot(pos, vel, phase, t)
         scan = sensed_ranges(ROBOT, 0.0, snap, cfg)
-        tracker.update(t, detect_objects(scan, ROBOT, 0.0, cfg.lidar.max_range, det_p))
+        tracker.update(t, detect_scan(scan, ROBOT, 0.0, cfg.lidar.max_range, det_p))
         tracks = [tr for tr in tracker.tracks() if not tracker.is_static(tr)]
         for p in range(2):
             near = [tr.id for tr in tracks if np.hypot(*(tr.x[:2] - pos[p])) < 0.5]
@@ -138,3 +138,14 @@ def test_the_tracker_keeps_identity_through_a_crossing(preset):
         assert len(ids[p]) >= 40, ids[p]
         assert len(set(ids[p])) == 1, ids[p]
     assert ids[0][0] != ids[1][0]
+
+
+def test_detect_objects_refuses_legs_and_detect_scan_is_it_without():
+    cfg = _config("ideal")
+    snap = _snapshot(np.array([[2.0, 0.5]]), np.zeros((1, 2)), np.zeros(1), 0.0)
+    scan = sensed_ranges(ROBOT, 0.0, snap, cfg)
+    a = detect_objects(scan, ROBOT, 0.0, 6.0, DetectionParams())
+    b = detect_scan(scan, ROBOT, 0.0, 6.0, DetectionParams())
+    assert np.array_equal(a.centers, b.centers) and np.array_equal(a.radii, b.radii)
+    with pytest.raises(ValueError, match="detect_scan"):
+        detect_objects(scan, ROBOT, 0.0, 6.0, DetectionParams(legs=True))

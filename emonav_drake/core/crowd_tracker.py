@@ -42,6 +42,7 @@ from scipy.optimize import linear_sum_assignment
 
 from emonav_drake.core.crowd import CrowdSnapshot
 from emonav_drake.core.lidar_objects import Detections
+from emonav_drake.params import EmoNavConfig
 
 # Cost of a pair outside the gate: far above any gated cost (d² ≤ gate, |ln det S| ≲ 50),
 # so the assignment never trades a gated pair for an impossible one.
@@ -411,3 +412,19 @@ def _correct(
     ikh = np.eye(4) - np.concatenate([gain, np.zeros_like(gain)], axis=2)  # I − K H
     cov = ikh @ cov @ ikh.transpose(0, 2, 1) + gain @ r @ gain.transpose(0, 2, 1)
     return x, cov
+
+
+# The tracker's per-axis std of a detected person's centre when people are legs [m]: a pair's
+# midpoint is within a few centimetres, a lone leg up to 0.22 m off (tuned on the tracking
+# study's seeds 700 000 and up, docs/perception.md).
+LEG_MEASUREMENT_STD = 0.1
+
+
+def tracker_params(config: EmoNavConfig) -> TrackerParams:
+    """The tracker for the configured sensor and `perception.still_duration`."""
+    still = config.perception.still_duration
+    if config.sensor.people_as == "legs":
+        return TrackerParams(
+            still_duration=still, measurement_std=LEG_MEASUREMENT_STD, sticky_fixed=True
+        )
+    return TrackerParams(still_duration=still)

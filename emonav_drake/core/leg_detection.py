@@ -5,9 +5,10 @@ half a metre apart, whose spacing changes with every step (`core/pedestrian_legs
 The disc detector of `core/lidar_objects.py` would fit each leg as an object of its own
 (too small for a circle: two fallback discs of a pedestrian's radius that jump with the
 gait). With `DetectionParams.legs` on (`detection_params` turns it on for a sensor with
-`people_as: legs`), `detect_objects` hands its clusters here instead (steps 1-2 of
-`core/lidar_objects.py` done, with ``max_missing_beams`` lost beams bridged inside a
-cluster: dropouts at a leg's grazing edges would otherwise cut it):
+`people_as: legs`; `core/crowd_tracker.py::tracker_params` widens the tracker's σ),
+`detect_scan` takes the clusters of `core/lidar_objects.py` (steps 1-2 there, with
+``max_missing_beams`` lost beams bridged inside a cluster — dropouts at a leg's grazing
+edges would otherwise cut it — and lone spurious returns despeckled) and goes on here:
 
 1. Clusters with fewer than ``leg_min_points`` beams are dropped (a spurious return, a
    mixed pixel on its own).
@@ -42,16 +43,37 @@ import math
 
 import numpy as np
 
-from emonav_drake.core.crowd_tracker import TrackerParams
-from emonav_drake.core.lidar_objects import DetectionParams, Detections, _split_walls, fit_circles
+from emonav_drake.core.lidar_objects import (
+    DetectionParams,
+    Detections,
+    _split_walls,
+    checked_scan,
+    detect_objects,
+    fit_circles,
+    segment_scan,
+)
 from emonav_drake.params import EmoNavConfig
 
-# The tracker's per-axis std of a detected person's centre when people are legs [m]: a pair's
-# midpoint is within a few centimetres, a lone leg up to 0.22 m off (tuned on the tracking
-# study's seeds 700 000 and up, docs/perception.md).
-LEG_MEASUREMENT_STD = 0.1
 # A leg cluster whose points lie this close to a fitted object's circle is part of it [m].
 ON_CIRCLE_TOLERANCE = 0.05
+
+
+def detect_scan(
+    ranges: np.ndarray,
+    robot_xy: np.ndarray,
+    heading: float,
+    max_range: float,
+    params: DetectionParams,
+) -> Detections:
+    """The detector of `params`: people as paired legs (``legs`` on, `detect_people`) or
+    `core/lidar_objects.py::detect_objects`; the same arguments and result."""
+    if not params.legs:
+        return detect_objects(ranges, robot_xy, heading, max_range, params)
+    r, origin, heading, max_range = checked_scan(ranges, robot_xy, heading, max_range, params)
+    seg = segment_scan(r, origin, heading, max_range, params)
+    if seg is None:
+        return Detections.empty()
+    return detect_people(seg, origin, params)
 
 
 def detection_params(config: EmoNavConfig) -> DetectionParams:
@@ -59,16 +81,6 @@ def detection_params(config: EmoNavConfig) -> DetectionParams:
     if config.sensor.people_as == "legs":
         return DetectionParams(legs=True, max_missing_beams=2, despeckle=True)
     return DetectionParams()
-
-
-def tracker_params(config: EmoNavConfig) -> TrackerParams:
-    """The tracker for the configured sensor and `perception.still_duration`."""
-    still = config.perception.still_duration
-    if config.sensor.people_as == "legs":
-        return TrackerParams(
-            still_duration=still, measurement_std=LEG_MEASUREMENT_STD, sticky_fixed=True
-        )
-    return TrackerParams(still_duration=still)
 
 
 def detect_people(

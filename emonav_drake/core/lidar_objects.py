@@ -191,25 +191,15 @@ def detect_objects(
         beam (a cluster across the seam behind the robot counts from its first beam
         before the seam).
     """
-    r = np.asarray(ranges, dtype=np.float64)
-    if r.ndim != 1 or r.size == 0:
-        raise ValueError(f"ranges must have shape (K,) with K >= 1, got {r.shape}")
-    if np.isnan(r).any() or (r < 0.0).any():
-        raise ValueError("ranges must be >= 0 (no NaN)")
-    params.validate()
-    ox, oy = as_point(robot_xy, "robot_xy")
-    heading, max_range = float(heading), float(max_range)
-    if not (math.isfinite(heading) and math.isfinite(max_range) and max_range > 0.0):
+    r, (ox, oy), heading, max_range = checked_scan(ranges, robot_xy, heading, max_range, params)
+    if params.legs:
         raise ValueError(
-            f"heading and max_range must be finite (max_range > 0): {heading}, {max_range}"
+            "DetectionParams.legs: people as legs are detected by "
+            "core/leg_detection.py::detect_scan, not detect_objects"
         )
     seg = segment_scan(r, (ox, oy), heading, max_range, params)
     if seg is None:
         return Detections.empty()
-    if params.legs:
-        from emonav_drake.core.leg_detection import detect_people
-
-        return detect_people(seg, (ox, oy), params)
     px, py, beams, order, starts, counts = seg
     big = counts >= params.min_points
     if not big.any():
@@ -241,6 +231,30 @@ def detect_objects(
     # Report clusters by their first beam index (deterministic and independent of `first`).
     idx = np.argsort(first_beam, kind="stable")
     return Detections(centers[idx], radii[idx], counts[idx].astype(np.int64), walls[idx])
+
+
+def checked_scan(
+    ranges: np.ndarray,
+    robot_xy: np.ndarray,
+    heading: float,
+    max_range: float,
+    params: DetectionParams,
+) -> tuple[np.ndarray, tuple[float, float], float, float]:
+    """The inputs of a detector, checked: (ranges (K,) float64, (x, y), heading,
+    max_range); ValueError naming what is wrong (`detect_objects` for the meaning)."""
+    r = np.asarray(ranges, dtype=np.float64)
+    if r.ndim != 1 or r.size == 0:
+        raise ValueError(f"ranges must have shape (K,) with K >= 1, got {r.shape}")
+    if np.isnan(r).any() or (r < 0.0).any():
+        raise ValueError("ranges must be >= 0 (no NaN)")
+    params.validate()
+    ox, oy = as_point(robot_xy, "robot_xy")
+    heading, max_range = float(heading), float(max_range)
+    if not (math.isfinite(heading) and math.isfinite(max_range) and max_range > 0.0):
+        raise ValueError(
+            f"heading and max_range must be finite (max_range > 0): {heading}, {max_range}"
+        )
+    return r, (ox, oy), heading, max_range
 
 
 def segment_scan(

@@ -37,10 +37,10 @@ from typing import Any
 import numpy as np
 
 from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.core.crowd_tracker import CrowdTracker, TrackerParams
-from emonav_drake.core.leg_detection import detection_params, tracker_params
+from emonav_drake.core.crowd_tracker import CrowdTracker, TrackerParams, tracker_params
+from emonav_drake.core.leg_detection import detect_scan, detection_params
 from emonav_drake.core.lidar import scan_discs
-from emonav_drake.core.lidar_objects import DetectionParams, detect_objects
+from emonav_drake.core.lidar_objects import DetectionParams
 from emonav_drake.core.lidar_sensor import seen_discs, sensed_ranges
 from emonav_drake.evaluation.scan_visibility import (
     OCCLUDED,
@@ -214,7 +214,7 @@ class EpisodeEvaluator:
             raise ValueError(f"scan at t={t}: {len(peds)} pedestrians, before {self._num_peds}")
         crowd = truth.snapshot(cfg)
         sensed = sensed_ranges(xy, truth.heading, crowd, cfg)
-        det = detect_objects(sensed, xy, truth.heading, li.max_range, self.detection)
+        det = detect_scan(sensed, xy, truth.heading, li.max_range, self.detection)
         self.tracker.update(t, det)
         scan = len(self._per_scan)
 

@@ -34,9 +34,9 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem, State
 
 from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.core.crowd_tracker import CrowdTracker, TrackerParams
-from emonav_drake.core.leg_detection import detection_params, tracker_params
-from emonav_drake.core.lidar_objects import DetectionParams, detect_objects
+from emonav_drake.core.crowd_tracker import CrowdTracker, TrackerParams, tracker_params
+from emonav_drake.core.leg_detection import detect_scan, detection_params
+from emonav_drake.core.lidar_objects import DetectionParams
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
@@ -84,7 +84,7 @@ class CrowdTrackerSystem(LeafSystem):
 
     def _scan(self, context: Context, state: State) -> None:
         robot = lip_state_from_vector(self._robot_in.Eval(context))
-        detections = detect_objects(
+        detections = detect_scan(
             np.asarray(self._scan_in.Eval(context), dtype=float),
             np.array([robot.x, robot.y]),
             robot.heading,
