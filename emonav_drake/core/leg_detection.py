@@ -26,6 +26,10 @@ edges would otherwise cut it — and lone spurious returns despeckled) and goes 
      rejected fit keeps the fallback disc, unflagged. A leg whose points lie on an
      accepted circle (median distance ≤ `ON_CIRCLE_TOLERANCE`) is a piece of that object
      cut off by lost beams at its grazing edge, and is dropped.
+   A whole-cluster "leg" of at least ``min_fit_points`` beams whose circle fit is
+   accepted with a radius of at least `SLIVER_MIN_RADIUS` (0.18 m) is a sliver of a
+   partly hidden object, not a leg (a leg's 0.07 m arc fails the fit's 0.1 m minimum):
+   it joins the objects.
 4. A leg's centre lies ``leg_radius`` behind the mean of its points along the line of
    sight. Legs are **paired** greedily, nearest centres first, while at most
    ``leg_pair_distance`` apart; each pair is one person at the midpoint of its legs (the
@@ -54,6 +58,8 @@ from emonav_drake.core.lidar_objects import (
 )
 from emonav_drake.params import EmoNavConfig
 
+# A "leg" cluster whose circle fits with at least this radius is a sliver of an object [m].
+SLIVER_MIN_RADIUS = 0.18
 # A leg cluster whose points lie this close to a fitted object's circle is part of it [m].
 ON_CIRCLE_TOLERANCE = 0.05
 
@@ -126,20 +132,25 @@ def detect_people(
     ox, oy = origin
     legs: list[tuple[int, int]] = []  # (start, stop) in x, y of each leg's points
     objects: list[int] = []  # clusters that are objects
+    whole: list[int] = []  # per leg: its cluster, or -1 (half of a split cluster)
     for j in range(counts.size):
         a, b = int(starts[j]), int(starts[j] + counts[j])
         width = math.hypot(x[b - 1] - x[a], y[b - 1] - y[a])
         if width <= params.leg_max_width:
             legs.append((a, b))
+            whole.append(j)
             continue
         if width <= 2.0 * params.leg_max_width:
             cut = _notch(x[a:b], y[a:b], (ox, oy), params)
             if cut is not None:
                 legs += [(a, a + cut), (a + cut + 1, b)]
+                whole += [-1, -1]
                 continue
         objects.append(j)
 
-    if objects:
+    legs, slivers = _without_slivers(x, y, legs, whole, origin, params)
+    if objects or slivers:
+        objects = sorted(objects + slivers)
         sel = np.asarray(objects)
         idx = np.concatenate([np.arange(starts[j], starts[j] + counts[j]) for j in objects])
         o_counts = counts[sel]
@@ -178,6 +189,33 @@ def detect_people(
         np.asarray(out_n, dtype=np.int64)[rank],
         np.asarray(out_fixed, dtype=bool)[rank],
     )
+
+
+def _without_slivers(
+    x: np.ndarray,
+    y: np.ndarray,
+    legs: list[tuple[int, int]],
+    whole: list[int],
+    origin: tuple[float, float],
+    params: DetectionParams,
+) -> tuple[list[tuple[int, int]], list[int]]:
+    """The legs that are legs, and the clusters among them that are slivers of objects: a
+    whole-cluster "leg" with ``min_fit_points`` beams whose circle fit is accepted with a
+    radius of at least `SLIVER_MIN_RADIUS` (a leg's arc has 0.07 m: its fit is rejected)."""
+    cand = [
+        i
+        for i, j in enumerate(whole)
+        if j >= 0 and legs[i][1] - legs[i][0] >= params.min_fit_points
+    ]
+    if not cand:
+        return legs, []
+    idx = np.concatenate([np.arange(*legs[i]) for i in cand])
+    counts = np.array([legs[i][1] - legs[i][0] for i in cand])
+    starts = np.concatenate(([0], np.cumsum(counts)[:-1]))
+    _, radii, ok = fit_circles(x[idx], y[idx], starts, counts, origin, params)
+    sliver = ok & (radii >= SLIVER_MIN_RADIUS)
+    drop = {cand[k] for k in np.flatnonzero(sliver).tolist()}
+    return [leg for i, leg in enumerate(legs) if i not in drop], sorted(whole[i] for i in drop)
 
 
 def _on_circle(
