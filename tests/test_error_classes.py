@@ -29,7 +29,7 @@ def test_an_exception_deep_inside_a_simulation_is_an_internal_error(capsys, monk
     def broken(*args, **kwargs):
         raise error
 
-    monkeypatch.setattr(tracker_system, "detect_objects", broken)
+    monkeypatch.setattr(tracker_system, "detect_scan", broken)
     code, err = run(capsys, *SIM)
     assert code == 1, err
     assert err.startswith(f"emonav: internal error: {type(error).__name__}: ")
