@@ -1,10 +1,17 @@
 """Shared fixtures of the test suite."""
 
 import json
+import signal
 
 import pytest
 
 from emonav_drake.cli import main
+
+# The tests that press Ctrl-C (a real SIGINT, `signal.raise_signal`) need Python's own
+# SIGINT handler, as a user's foreground run has it. A suite started as a background job
+# of a script (`make test &`) inherits SIGINT ignored, and Python then installs no
+# handler: those tests would wait for whole trainings to finish. Restore it.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture
