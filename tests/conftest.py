@@ -14,6 +14,21 @@ from emonav_drake.cli import main
 signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
+@pytest.fixture(autouse=True)
+def _python_sigint_handler():
+    """Every test starts with Python's SIGINT handler; a test that leaves another one
+    behind (ignored, or a handler of its own) is named in a warning, and the handler is
+    put back so the next test's Ctrl-C still stops it."""
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    left = signal.getsignal(signal.SIGINT)
+    if left is not signal.default_int_handler:
+        import warnings
+
+        warnings.warn(f"this test left the SIGINT handler {left!r}", stacklevel=1)
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 @pytest.fixture
 def sim_on_both_plants(tmp_path):
     """`run(planner_args, seed)` → {plant: record}: `emonav sim PLANNER_ARGS --seed SEED`

@@ -365,13 +365,13 @@ FULL_DISK_BENCH = textwrap.dedent(
     argv = ["benchmark", "--planners", "dwa", "--trials", "40", "--first-seed", "4",
             "--workers", "1", "--quiet", "--config", tiny, "--out", str(out)]
     filler = full / "filler"
-    with open(filler, "wb", buffering=0) as f:  # fill the disk, then free two pages:
-        try:  # one for settings.json, one for trials.jsonl (~13 trials)
+    with open(filler, "wb", buffering=0) as f:  # fill the disk, then free three pages:
+        try:  # two for settings.json (4.4 kB), one for trials.jsonl (~13 trials)
             while True:
                 f.write(b"x" * 4096)
         except OSError:
             pass
-    os.truncate(filler, os.path.getsize(filler) // 4096 * 4096 - 2 * 4096)
+    os.truncate(filler, os.path.getsize(filler) // 4096 * 4096 - 3 * 4096)
     code = main(argv)
     lines = (out / "trials.jsonl").read_bytes()
     report = {"code": code, "ends_with_newline": lines.endswith(b"\\n"),
