@@ -69,6 +69,7 @@ __all__ = [
     "SCENARIO_FAMILIES",
     "SENSOR_NAMES",
     "SENSOR_PRESETS",
+    "DEPLOYABLE_SENSOR",
     "STATE_SOURCES",
     "ConfigError",
     "CrowdParams",
@@ -82,7 +83,9 @@ __all__ = [
     "RobotParams",
     "SensorParams",
     "WalkingParams",
+    "apply_deployable",
     "apply_sensor_preset",
+    "is_deployable",
     "dump_config",
     "load_config",
     "pendulum_frequency",
@@ -249,6 +252,39 @@ def apply_sensor_preset(config: EmoNavConfig, name: str, keep: tuple[str, ...] =
     for field, value in SENSOR_PRESETS[name].items():
         if field not in keep:
             setattr(config.sensor, field, value)
+
+
+# The sensor of the `deployable` setting: the Velodyne VLP-16, the LiDAR Digit carries on
+# its head (docs/perception.md, "The deployable setting").
+DEPLOYABLE_SENSOR = "vlp16"
+
+
+def apply_deployable(config: EmoNavConfig, sensor: str | None = None) -> None:
+    """Make `config` the deployable setting, in place: what a robot can run. The
+    state-based planners read the crowd tracked in the LiDAR scan
+    (`perception.state_source = "lidar"`) and the scan is a real sensor's, the preset
+    `sensor` (default `DEPLOYABLE_SENSOR`) with its faults; the learned policies read
+    their grid maps of that scan. Without `sensor`, a sensor with faults that `config`
+    already has (a configuration file's) is kept. Emotions are not touched
+    (`--emotion-source`). A `ConfigError` for a sensor whose scan is exact (ideal: no
+    robot has it) or unknown."""
+    name = sensor
+    if name is None:
+        name = config.sensor.preset if not config.sensor.is_exact() else DEPLOYABLE_SENSOR
+    if sensor is not None or config.sensor.is_exact():
+        apply_sensor_preset(config, name)
+    require(
+        not config.sensor.is_exact(),
+        "sensor.preset",
+        name,
+        "a real sensor for the deployable setting (the ideal scan is exact: no robot has it)",
+    )
+    config.perception.state_source = "lidar"
+
+
+def is_deployable(config: EmoNavConfig) -> bool:
+    """True when `config` is a deployable setting: LiDAR state on a scan with faults."""
+    return config.perception.state_source == "lidar" and not config.sensor.is_exact()
 
 
 def dump_config(config: EmoNavConfig) -> str:

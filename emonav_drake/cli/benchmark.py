@@ -20,6 +20,7 @@ from emonav_drake.cli.common import (
 )
 from emonav_drake.cli.resolve import (
     add_config_choice,
+    add_deployable,
     add_family,
     add_sensor,
     add_state_source,
@@ -95,6 +96,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     add_config_choice(b)
     b.add_argument("--time-varying", action="store_true", help=TIME_VARYING_HELP)
     add_emotion_flags(b)
+    add_deployable(b)
     add_state_source(b)
     add_family(b)
     add_sensor(b)

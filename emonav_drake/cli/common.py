@@ -16,7 +16,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from emonav_drake.atomic_io import check_distinct, check_output_file, write_text_atomic
-from emonav_drake.cli.resolve import add_config_choice, add_family, add_sensor, add_state_source
+from emonav_drake.cli.resolve import (
+    add_config_choice,
+    add_deployable,
+    add_family,
+    add_sensor,
+    add_state_source,
+)
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners import is_learned, reads_crowd_state
 
@@ -147,7 +153,7 @@ def check_workers(workers: int, address: str | None = None) -> None:
 def add_episode_flags(p: argparse.ArgumentParser) -> None:
     """The flags `sim` and `eval` share: the configuration (`--config | --setting`), the
     learned planner's checkpoint and device, the emotion estimate, the state source, the
-    scenario family, the LiDAR sensor (`--sensor`), `--time-varying`."""
+    scenario family, the LiDAR sensor (`--sensor`), `--deployable`, `--time-varying`."""
     add_config_choice(p)
     p.add_argument(
         "--checkpoint",
@@ -158,6 +164,7 @@ def add_episode_flags(p: argparse.ArgumentParser) -> None:
         "--device", default="cpu", help="torch device for a learned planner (cpu, cuda, cuda:N)"
     )
     add_emotion_flags(p)
+    add_deployable(p)
     add_state_source(p)
     add_family(p)
     add_sensor(p)

@@ -17,7 +17,13 @@ import sys
 import textwrap
 from pathlib import Path
 
-from emonav_drake.cli.resolve import add_config_choice, add_family, add_sensor, resolve_config
+from emonav_drake.cli.resolve import (
+    add_config_choice,
+    add_deployable,
+    add_family,
+    add_sensor,
+    resolve_config,
+)
 from emonav_drake.params import ConfigError
 
 TIME_VARYING_HELP = "one pedestrian's emotion changes every 2 s (paper §IV-F)"
@@ -51,6 +57,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     add_config_choice(c)
     add_family(c)
     add_sensor(c)
+    add_deployable(c)
     c.add_argument("--time-varying", action="store_true", help=TIME_VARYING_HELP)
     c.set_defaults(func=cmd_config)
     return c
@@ -71,6 +78,8 @@ def cmd_config(args: argparse.Namespace) -> int:
                 ("--config", args.config),
                 ("--time-varying", args.time_varying),
                 ("--family", args.family),
+                ("--sensor", args.sensor),
+                ("--deployable", args.deployable),
             )
             if value
         ]

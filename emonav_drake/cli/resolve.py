@@ -20,7 +20,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from emonav_drake.configs import SETTINGS
-from emonav_drake.params import ConfigError, EmoNavConfig, apply_sensor_preset, load_config
+from emonav_drake.params import (
+    DEPLOYABLE_SENSOR,
+    ConfigError,
+    EmoNavConfig,
+    apply_deployable,
+    apply_sensor_preset,
+    load_config,
+)
 
 if TYPE_CHECKING:
     from emonav_drake.core.scenario import Scenario
@@ -44,12 +51,16 @@ class ResolvedConfig:
     state_source: str | None = None  # --state-source, if given (applied to `config`)
     family: str | None = None  # --family, if given (applied to `config`)
     sensor: str | None = None  # --sensor, if given (applied to `config`)
+    deployable: bool = False  # --deployable was given (applied to `config`)
 
     @property
     def source(self) -> str:
-        """`origin` plus " --time-varying" / " --state-source S" / " --family F" /
-        " --sensor P" when given (recorded by `benchmark`, printed by `config`)."""
+        """`origin` plus " --time-varying" / " --deployable" / " --state-source S" /
+        " --family F" / " --sensor P" when given (recorded by `benchmark`, printed by
+        `config`)."""
         flags = " --time-varying" if self.time_varying else ""
+        if self.deployable:
+            flags += " --deployable"
         if self.state_source is not None:
             flags += f" --state-source {self.state_source}"
         if self.family is not None:
@@ -85,13 +96,36 @@ def resolve_config(args: argparse.Namespace) -> ResolvedConfig:
     if family is not None:
         cfg.crowd.family = family
     sensor = getattr(args, "sensor", None)
-    if sensor is not None:
+    deployable = bool(getattr(args, "deployable", False))
+    if deployable:
+        _check_deployable_flags(state_source)
+        try:
+            apply_deployable(cfg, sensor)
+        except ConfigError as e:
+            raise ConfigError(f"--deployable --sensor {sensor}: {e}") from None
+        try:
+            cfg.validate()
+        except ConfigError as e:
+            raise ConfigError(f"--deployable with {origin}: {e}") from None
+    elif sensor is not None:
         apply_sensor_preset(cfg, sensor)  # a ConfigError naming sensor.preset if unknown
         try:
             cfg.validate()
         except ConfigError as e:
             raise ConfigError(f"--sensor {sensor} with {origin}: {e}") from None
-    return ResolvedConfig(cfg, setting, origin, time_varying, state_source, family, sensor)
+    return ResolvedConfig(
+        cfg, setting, origin, time_varying, state_source, family, sensor, deployable
+    )
+
+
+def _check_deployable_flags(state_source: str | None) -> None:
+    """`--deployable` with `--state-source truth` contradicts itself (`--sensor ideal` is
+    refused by `apply_deployable`)."""
+    if state_source is not None and state_source != "lidar":
+        raise ConfigError(
+            f"--deployable with --state-source {state_source}: the deployable setting reads "
+            "the crowd from the LiDAR tracker (state source lidar); drop one of the flags"
+        )
 
 
 def check_input_file(path: str | Path, flag: str) -> Path:
@@ -159,6 +193,20 @@ def add_sensor(p: argparse.ArgumentParser) -> None:
     from emonav_drake.params import SENSOR_NAMES
 
     p.add_argument("--sensor", choices=SENSOR_NAMES, help=SENSOR_HELP)
+
+
+DEPLOYABLE_HELP = (
+    "what a robot could run: the state-based planners read the crowd tracked in the LiDAR "
+    "scan (--state-source lidar) and the scan is a real sensor's, with its faults "
+    f"(--sensor {DEPLOYABLE_SENSOR}, Digit's head LiDAR, unless --sensor names another real "
+    "one); the learned policies read their grid maps of that scan. Emotions still come from "
+    "--emotion-source (default: the simulator's)"
+)
+
+
+def add_deployable(p: argparse.ArgumentParser) -> None:
+    """`--deployable` (`params.apply_deployable`)."""
+    p.add_argument("--deployable", action="store_true", help=DEPLOYABLE_HELP)
 
 
 def sample(seed: int, resolved: ResolvedConfig) -> Scenario:

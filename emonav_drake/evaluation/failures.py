@@ -54,12 +54,13 @@ def failing_trials(trials: list[dict], methods: list[str]) -> list[dict]:
 
 
 def config_flags(settings: dict) -> list[str] | None:
-    """The `--setting` / `--config` / `--time-varying` / `--state-source` / `--family`
-    flags of the run's `config_source` if they still give its configuration (the same
-    `config_sha256`), else None (the defaults, a setting or the file have changed since:
-    use its `config_yaml`)."""
+    """The `--setting` / `--config` / `--time-varying` / `--deployable` / `--state-source` /
+    `--family` / `--sensor` flags of the run's `config_source` if they still give its
+    configuration (the same `config_sha256`), else None (the defaults, a setting, a preset
+    or the file have changed since: use its `config_yaml`). Applied in the order of
+    `cli.resolve.resolve_config`."""
     from emonav_drake.configs import load_setting
-    from emonav_drake.params import dump_config, load_config
+    from emonav_drake.params import apply_deployable, apply_sensor_preset, dump_config, load_config
     from emonav_drake.provenance import sha256_bytes
 
     words = str(settings.get("config_source") or "").split(" ")
@@ -71,20 +72,27 @@ def config_flags(settings: dict) -> list[str] | None:
         else:  # "defaults", "the default configuration", then the flags
             first = next((i for i, w in enumerate(words) if w.startswith("--")), len(words))
             cfg, flags, rest = load_config(), [], words[first:]
+        given: dict[str, str | None] = {}
         while rest:
             flag = rest.pop(0)
-            if flag == "--time-varying":
-                cfg.crowd.time_varying_emotions = True
+            if flag in ("--time-varying", "--deployable"):
+                given[flag] = None
                 flags.append(flag)
-            elif flag in ("--state-source", "--family") and rest:
-                value = rest.pop(0)
-                if flag == "--state-source":
-                    cfg.perception.state_source = value
-                else:
-                    cfg.crowd.family = value
-                flags += [flag, value]
+            elif flag in ("--state-source", "--family", "--sensor") and rest:
+                given[flag] = rest.pop(0)
+                flags += [flag, given[flag]]
             else:
                 return None
+        if "--time-varying" in given:
+            cfg.crowd.time_varying_emotions = True
+        if "--state-source" in given:
+            cfg.perception.state_source = str(given["--state-source"])
+        if "--family" in given:
+            cfg.crowd.family = str(given["--family"])
+        if "--deployable" in given:
+            apply_deployable(cfg, given.get("--sensor"))
+        elif "--sensor" in given:
+            apply_sensor_preset(cfg, str(given["--sensor"]))
     except (OSError, ValueError, KeyError, IndexError):  # ConfigError is a ValueError
         return None
     return flags if sha256_bytes(dump_config(cfg).encode()) == settings["config_sha256"] else None

@@ -32,7 +32,13 @@ from emonav_drake.diagrams.trials import (
     BenchmarkSpec,
     MethodSpec,
 )
-from emonav_drake.params import ConfigError, EmoNavConfig, dump_config, load_config
+from emonav_drake.params import (
+    ConfigError,
+    EmoNavConfig,
+    dump_config,
+    is_deployable,
+    load_config,
+)
 from emonav_drake.provenance import package_identity, sha256_bytes
 
 log = logging.getLogger(__name__)
@@ -46,17 +52,20 @@ class BenchmarkSettingsError(ConfigError):
 
 
 def setting_label(config: EmoNavConfig, name: str | None) -> str:
-    """E.g. "var_dd [0.2, 0.35, 0.5] m" (+ ", time-varying"): the DD column of Table III."""
+    """E.g. "var_dd [0.2, 0.35, 0.5] m" (+ ", time-varying", ", deployable (lidar state,
+    sensor vlp16)", …): the DD column of Table III."""
     r = config.reward
     label = f"{name or 'config'} [{r.happy_discomfort:g}, {r.neutral_discomfort:g}, "
     label += f"{r.negative_discomfort:g}] m"
     if config.crowd.time_varying_emotions:
         label += ", time-varying"
-    if config.perception.state_source != "truth":
+    if is_deployable(config):
+        label += f", deployable (lidar state, sensor {config.sensor.preset})"
+    elif config.perception.state_source != "truth":
         label += f", {config.perception.state_source} state"
     if config.crowd.family != "paper":
         label += f", family {config.crowd.family}"
-    if not config.sensor.is_exact():
+    if not config.sensor.is_exact() and not is_deployable(config):
         label += f", sensor {config.sensor.preset}"
     return label
 
@@ -74,7 +83,8 @@ def make_settings(
 ) -> dict:
     """The `settings.json` of a run (`planner_modules` and `planner_modules_sha256`, the
     sha256 of each module's source, only when there are any, so a run of the package's
-    own planners keeps the settings it always had)."""
+    own planners keeps the settings it always had; likewise `sensor`, the sensor section,
+    and `deployable`, only for a sensor with faults)."""
     from emonav_drake.planners.plugins import modules_sha256
 
     cfg_yaml = dump_config(config)
@@ -84,6 +94,9 @@ def make_settings(
             "planner_modules": list(planner_modules),
             "planner_modules_sha256": modules_sha256(planner_modules),
         }
+    if not config.sensor.is_exact():  # the preset and its parameters, readable at a glance
+        extra["sensor"] = dc.asdict(config.sensor)
+        extra["deployable"] = is_deployable(config)
     return extra | {
         "format": FORMAT,
         "planners": [m.name for m in methods],
@@ -189,6 +202,11 @@ def _kind_problem(settings: dict) -> str | None:
             f"planner_modules_sha256 = {_short(hashes)} is not an object: planner module → "
             "SHA-256 or null"
         )
+    sensor = settings.get("sensor", {})
+    if not isinstance(sensor, dict):
+        return f"sensor = {_short(sensor)} is not an object: the sensor section"
+    if not isinstance(settings.get("deployable", False), bool):
+        return f"deployable = {_short(settings.get('deployable'))} is not true or false"
     extended = settings.get("extended", [])
     if not (isinstance(extended, list) and all(isinstance(e, dict) for e in extended)):
         return f"extended = {_short(extended)} is not a list of objects"
