@@ -35,7 +35,7 @@ from emonav_drake.cli.resolve import resolve_config, resolve_scenario
 from emonav_drake.core.metrics import format_idt
 from emonav_drake.diagrams.episode import EpisodeRequest
 from emonav_drake.diagrams.plants import DEFAULT_PLANT, PLANTS, Plant, plant_named
-from emonav_drake.params import ConfigError
+from emonav_drake.params import ConfigError, is_deployable
 from emonav_drake.planners import planner_names
 
 
@@ -146,6 +146,8 @@ def cmd_sim(args: argparse.Namespace) -> int:
     out = record.to_json()
     out["seed"] = scenario.seed
     out["state_source"] = cfg.perception.state_source  # what the planner read of the crowd
+    out["sensor"] = cfg.sensor.preset  # the LiDAR the scan came from (ideal: exact)
+    out["deployable"] = is_deployable(cfg)
     if rates is not None and rates.report is not None:
         out.update(rates.report.to_json())
         print(_format_rates(rates.report))
