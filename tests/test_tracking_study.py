@@ -210,3 +210,24 @@ def test_script_writes_every_result_and_the_tables_the_docs_quote(tmp_path, caps
         assert section_of(out / "tables.md", section).startswith("| ")
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert not list(out.glob("*.tmp*")) and not list(png.parent.glob("*.tmp*"))
+
+
+def test_a_track_of_a_pedestrian_outside_the_scored_region_is_dont_care():
+    """CLEAR-MOT's scored region (range and field of view): a hypothesis within the match
+    distance of a pedestrian takes that pedestrian's side of the border; others count
+    where they are."""
+    from emonav_drake.evaluation.tracking_evaluator import _scored_hypotheses
+
+    ped_scored = np.array([True, False])
+    # hypotheses: 0 follows the scored pedestrian from just outside the view; 1 follows
+    # the unscored one from just inside; 2 is alone inside, 3 alone outside
+    gap = np.array([[0.1, 5.0, 5.0, 5.0], [5.0, 0.2, 5.0, 5.0]])
+    in_view = np.array([False, True, True, False])
+    scored = _scored_hypotheses(gap, ped_scored, in_view, MATCH_DISTANCE)
+    assert scored.tolist() == [True, False, True, False]
+    assert MATCH_DISTANCE < 5.0
+    # nearest pedestrian decides when two are within reach
+    gap = np.array([[0.4], [0.1]])
+    assert _scored_hypotheses(gap, ped_scored, np.array([True]), 0.5).tolist() == [False]
+    empty = _scored_hypotheses(np.zeros((0, 2)), np.zeros(0, bool), np.array([True, False]), 0.5)
+    assert empty.tolist() == [True, False]

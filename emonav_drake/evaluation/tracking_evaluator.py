@@ -124,6 +124,22 @@ def _in_view(
     return inside
 
 
+def _scored_hypotheses(
+    gap: np.ndarray, ped_scored: np.ndarray, hyp_in_view: np.ndarray, match_distance: float
+) -> np.ndarray:
+    """Which hypotheses CLEAR-MOT scores, given `gap` (pedestrians × hypotheses) [m]: a
+    hypothesis within `match_distance` of a pedestrian takes that nearest pedestrian's
+    `ped_scored` (a track of a pedestrian outside the scored region is "don't care", not
+    a false track; one just outside the view that follows a scored pedestrian is its
+    match, not a miss); any other counts where it is (`hyp_in_view`)."""
+    scored = hyp_in_view.copy()
+    if gap.size:
+        nearest = np.argmin(gap, axis=0)
+        near = gap[nearest, np.arange(gap.shape[1])] <= match_distance
+        scored[near] = ped_scored[nearest[near]]
+    return scored
+
+
 def _within(a: np.ndarray, b: np.ndarray, d: float) -> np.ndarray:
     """For each point of `a` (n, 2): whether a point of `b` (m, 2) lies within `d`."""
     if len(a) == 0 or len(b) == 0:
@@ -258,7 +274,12 @@ class EpisodeEvaluator:
         h_in = np.ones(len(h_ids), dtype=bool)
         if self.scored_range is not None:
             o_in = _in_view(peds, xy, truth.heading, self.scored_range, cfg.sensor)
-            h_in = _in_view(h_pos, xy, truth.heading, self.scored_range, cfg.sensor)
+            h_in = _scored_hypotheses(
+                gap,
+                o_in,
+                _in_view(h_pos, xy, truth.heading, self.scored_range, cfg.sensor),
+                self.match_distance,
+            )
         self.accumulator.update(
             np.flatnonzero(o_in).tolist(),
             h_ids[h_in].tolist(),
