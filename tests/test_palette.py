@@ -384,10 +384,11 @@ def test_meshcat_and_its_replay_legend_draw_with_the_palette():
         rgb(style.ROBOT_RGBA) == palette.ROBOT_RGB and rgb(style.STATIC_RGBA) == palette.STATIC_RGB
     )
     assert [rgb(c) for c in style.FOOT_RGBA] == list(palette.FOOTSTEP_RGB)
-    legend = dict([*mv.LEGEND, mv.RAYS_LEGEND, *mv.FOOTSTEP_LEGEND])
+    legend = dict([*mv.LEGEND, *mv.RAYS_LEGEND, *mv.FOOTSTEP_LEGEND])
     assert legend["goal"] == palette.css(palette.GOAL_RGB) == "#000000"
     assert legend["negative pedestrian"] == "#d55e00"
     assert legend["LiDAR rays (per walking step)"] == palette.css(palette.LIDAR_RAY_RGB)
+    assert legend["LiDAR returns (per walking step)"] == palette.css(palette.LIDAR_HIT_RGB)
 
 
 def test_methods_are_named_and_coloured_as_in_every_figure():

@@ -204,6 +204,36 @@ def test_rays_are_recorded_per_walking_step_from_the_robot(lip_replay):
     assert np.abs(first - later).max() > 0.1  # the replay's rays move with the episode
 
 
+def test_lidar_returns_are_recorded_per_walking_step_on_the_surfaces(lip_replay):
+    """Every beam's return as a point at scan height, one object per step shown from t_k to
+    t_{k+1}; with the exact scan each lies on a pedestrian's or a disc's surface."""
+    rec, truth, scenario = lip_replay["rec"], lip_replay["truth"], lip_replay["scenario"]
+    cfg = EmoNavConfig()
+    hits = rec.children(f"{PREFIX}/hits")
+    assert len(hits) == STEPS + 1
+    centres = np.array([d.center for d in scenario.obstacles]).reshape(-1, 2)
+    radii = np.array([d.radius for d in scenario.obstacles])
+    on_surface = total = 0
+    for k, s in enumerate(truth):
+        shown = [p for p in hits if rec.visible(p, s["t"])]
+        assert shown == [f"{PREFIX}/hits/{k}"], (k, shown)
+        pts = float32_points(rec.objects[shown[0]])
+        assert len(pts) > 20 and np.allclose(pts[:, 2], 0.3)
+        reach = np.hypot(*(pts[:, :2] - s["robot"][:2]).T)
+        assert reach.max() < cfg.lidar.max_range
+        gap_ped = np.abs(
+            np.hypot(*(pts[:, None, :2] - s["positions"][None]).transpose(2, 0, 1))
+            - cfg.crowd.pedestrian_radius
+        ).min(axis=1)
+        gap_disc = np.abs(
+            np.hypot(*(pts[:, None, :2] - centres[None]).transpose(2, 0, 1)) - radii[None]
+        ).min(axis=1)
+        # a pedestrian moves ≤ 0.15 m between the scan and the step's state
+        on_surface += int((np.minimum(gap_ped, gap_disc) < 0.15).sum())
+        total += len(pts)
+    assert on_surface >= 0.97 * total
+
+
 def test_trail_appears_step_by_step_and_fades(lip_replay):
     rec, truth = lip_replay["rec"], lip_replay["truth"]
     trail = rec.children(f"{PREFIX}/trail")

@@ -84,7 +84,7 @@ STATIC_RGB: RGB = _grey(0.40)  # static discs and their d_static rings
 ZONE_EDGE_RGB: RGB = _grey(0.30)  # "discomfort zone edge" in a legend (any colour's)
 
 LIDAR_RAY_RGB: RGB = _grey(0.75)  # LiDAR rays (Meshcat) and the range circle (figures)
-LIDAR_HIT_RGB: RGB = _grey(0.15)  # LiDAR hit points (figures)
+LIDAR_HIT_RGB: RGB = _grey(0.15)  # LiDAR hit points (figures and Meshcat)
 
 FOOTSTEP_RGB: tuple[RGB, RGB] = (OKABE_ITO["sky_blue"], OKABE_ITO["reddish_purple"])  # L, R
 

@@ -51,7 +51,10 @@ LEGEND = (
     ("start (square pad)", palette.css(palette.ROBOT_RGB, style.START_RGBA.a())),
     ("goal", _css(style.GOAL_RGBA)),
 )
-RAYS_LEGEND = ("LiDAR rays (per walking step)", _css(style.RAY_RGBA))
+RAYS_LEGEND = (
+    ("LiDAR rays (per walking step)", _css(style.RAY_RGBA)),
+    ("LiDAR returns (per walking step)", _css(style.HIT_RGBA)),
+)
 TRACKS_LEGEND = (
     ("tracked pedestrian (LiDAR), arrow: 1 s of its velocity", palette.css(palette.TRACK_RGB)),
     ("tracked static obstacle (LiDAR)", palette.css(palette.TRACK_STATIC_RGB)),
@@ -268,7 +271,7 @@ class ReplayCaption:
     def legend(self) -> list[tuple[str, str]]:
         items = list(LEGEND)
         if self.rays:
-            items.append(RAYS_LEGEND)
+            items.extend(RAYS_LEGEND)
         if self.footsteps:
             items.extend(FOOTSTEP_LEGEND)
         if self.tracks:

@@ -27,7 +27,9 @@ colours here are its roles):
     * once per walking step t_k = kT: the robot's trail (blue, one segment from its
       position at t_{k−1} to t_k, bright for `TRAIL_RECENT_STEPS` steps, then pale) and,
       with `show_rays`, the LiDAR rays of t_k (light grey, every `RAY_STRIDE`-th beam, one
-      line-segment object per step, visible from t_k to t_{k+1});
+      line-segment object per step, visible from t_k to t_{k+1}) and every beam's return
+      as a dark point at scan height (the scan as the sensor measured it: with a real
+      sensor preset its noise, lost beams, spurious returns and the pedestrians' legs);
     * with `tracks` connected (`navigation_meshcat_tracks.py`), every `publish_period`,
       beside the true crowd: each tracked pedestrian as a flat violet ring at waist height
       (`TRACK_HEIGHT`), just wider than a pedestrian, with a velocity arrow from its
@@ -64,6 +66,7 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.geometry import Box, Cylinder, Meshcat, Rgba, Sphere
 from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.perception import PointCloud
 from pydrake.systems.framework import Context, EventStatus, LeafSystem
 
 from emonav_drake.core.scenario import Scenario
@@ -74,6 +77,7 @@ from emonav_drake.systems.navigation_meshcat_style import (
     GOAL_RADIUS_RGBA,
     GOAL_RGBA,
     HEADING_RGBA,
+    HIT_RGBA,
     PREFIX,
     RAY_RGBA,
     ROBOT_RGBA,
@@ -87,6 +91,7 @@ from emonav_drake.systems.navigation_meshcat_tracks import TrackDrawing
 TRAIL_RECENT_STEPS = 10  # trail segments drawn bright for this many walking steps
 FOOTSTEPS_RECENT = 6  # footstep markers drawn bright until this many newer steps
 RAY_STRIDE = 15  # draw every RAY_STRIDE-th LiDAR beam
+HIT_POINT_SIZE = 0.05  # [m] of a drawn LiDAR return
 OVERVIEW_FOV = 45.0  # vertical field of view of the overview camera [deg]
 # the arena fits a horizontal field of view of this much [deg]; a replay widens the
 # vertical one in windows narrower than that (`meshcat_viewing.replay_html`)
@@ -164,7 +169,7 @@ class NavigationMeshcatVisualizer(LeafSystem):
         self._last_step = -1
         self._trail_point: np.ndarray | None = None
         self._trail_count = 0
-        self._last_rays: str | None = None
+        self._last_rays: tuple[str, str] | None = None  # the rays and hits shown now
         self._step_start: float | None = None
         self._footstep_count = 0
         self._track_drawing.reset()
@@ -368,9 +373,26 @@ class NavigationMeshcatVisualizer(LeafSystem):
         path = f"{PREFIX}/rays/{k}"
         self._meshcat.SetLineSegments(path, start, end, 1.0, RAY_RGBA)
         self._appear(path, t)
+        hits = self._draw_hits(k, scan, x, y, th, t)
         if self._last_rays is not None:
-            self._meshcat.SetProperty(self._last_rays, "visible", False, t)
-        self._last_rays = path
+            for old in self._last_rays:
+                self._meshcat.SetProperty(old, "visible", False, t)
+        self._last_rays = (path, hits)
+
+    def _draw_hits(self, k: int, scan: np.ndarray, x: float, y: float, th: float, t: float) -> str:
+        """Every beam's return (range below the maximum) as a point at scan height: the
+        scan as the sensor measured it (noise, lost beams, spurious returns, legs)."""
+        num = len(scan)
+        beams = np.flatnonzero(scan < self._config.lidar.max_range - 1e-6)
+        ang = th + (beams - (num - 1) / 2) * (2 * np.pi / num)
+        cloud = PointCloud(len(beams))
+        cloud.mutable_xyzs()[:] = np.vstack(
+            [x + scan[beams] * np.cos(ang), y + scan[beams] * np.sin(ang), np.full(len(beams), 0.3)]
+        )
+        path = f"{PREFIX}/hits/{k}"
+        self._meshcat.SetObject(path, cloud, HIT_POINT_SIZE, HIT_RGBA)
+        self._appear(path, t)
+        return path
 
 
 def set_overview_camera(meshcat: Meshcat, config: EmoNavConfig) -> None:

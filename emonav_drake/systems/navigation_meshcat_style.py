@@ -26,6 +26,7 @@ TRAIL_RGBA = _rgba(palette.TRAIL_RGB)
 GOAL_RGBA = _rgba(palette.GOAL_RGB)
 GOAL_RADIUS_RGBA = _rgba(palette.GOAL_RADIUS_RGB)
 RAY_RGBA = _rgba(palette.LIDAR_RAY_RGB, 0.8)
+HIT_RGBA = _rgba(palette.LIDAR_HIT_RGB)  # a LiDAR return (a point at scan height)
 START_RGBA = _rgba(palette.ROBOT_RGB, 0.45)  # the start pad: the robot's colour, see-through
 FOOT_RGBA = tuple(_rgba(rgb, 0.9) for rgb in palette.FOOTSTEP_RGB)  # left, right
 TRACK_RGBA = _rgba(palette.TRACK_RGB)  # a tracked pedestrian: ring and velocity arrow
