@@ -330,3 +330,55 @@ def test_bad_inputs_are_refused():
         DetectionParams(min_radius=0.8).validate()
     with pytest.raises(ValueError, match="ranges"):
         detect_objects(np.zeros((2, 3)), np.zeros(2), 0.0, L)
+
+
+def _one(center, fixed: bool, radius: float = 0.3):
+    from emonav_drake.core.lidar_objects import Detections
+
+    return Detections(
+        np.array([center], dtype=float), np.array([radius]), np.array([12]), np.array([fixed])
+    )
+
+
+def test_a_fixed_object_neither_drifts_while_unseen_nor_takes_a_neighbours_detection():
+    """The leg detector's tracker (`sticky_fixed`): a disc found as a fixed detection with
+    noisy centres is a static object; hidden for 1.2 s it stays where it was (a tracker
+    that predicts it with its noise-born velocity drifted and, its gate widened, took the
+    detection of the disc beside it: a static obstacle where there is none)."""
+    from emonav_drake.core.crowd_tracker import CrowdTracker, tracker_params
+    from emonav_drake.params import apply_sensor_preset
+
+    cfg = EmoNavConfig()
+    apply_sensor_preset(cfg, "vlp16")
+    params = tracker_params(cfg)
+    assert params.sticky_fixed
+    rng = np.random.default_rng(3)
+    tracker = CrowdTracker(params)
+    centre = np.array([2.0, -1.0])
+    for k in range(20):  # 2 s of fits scattered by 5 cm
+        tracker.update(0.1 * k, _one(centre + rng.normal(0, 0.05, 2), True))
+    (track,) = tracker.tracks()
+    assert tracker.is_static(track) and np.all(track.velocity == 0.0)
+    for k in range(20, 32):  # hidden
+        tracker.update(0.1 * k, Detections.empty())
+    held = [tr for tr in tracker.tracks() if tr.id == track.id]
+    assert held and np.linalg.norm(held[0].position - centre) < 0.05
+    # a detection 0.6 m away (the next disc) starts its own track
+    tracker.update(3.2, _one(centre + [0.5, -0.35], True))
+    old, new = tracker.all_tracks()
+    assert old.id == track.id and np.linalg.norm(old.position - centre) < 0.05
+    assert np.linalg.norm(new.position - centre - [0.5, -0.35]) < 1e-9
+
+
+def test_a_walking_person_with_one_disc_like_scan_keeps_walking():
+    from emonav_drake.core.crowd_tracker import CrowdTracker, tracker_params
+    from emonav_drake.params import apply_sensor_preset
+
+    cfg = EmoNavConfig()
+    apply_sensor_preset(cfg, "vlp16")
+    tracker = CrowdTracker(tracker_params(cfg))
+    for k in range(30):  # 1 m/s along +x; scan 15 looks like a disc (a fixed detection)
+        tracker.update(0.1 * k, _one([0.1 * k, 2.0], k == 15, 0.15))
+    (track,) = tracker.tracks()
+    assert not tracker.is_static(track)
+    assert abs(track.velocity[0] - 1.0) < 0.15 and abs(track.position[0] - 2.9) < 0.1

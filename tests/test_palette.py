@@ -388,7 +388,9 @@ def test_meshcat_and_its_replay_legend_draw_with_the_palette():
     assert legend["goal"] == palette.css(palette.GOAL_RGB) == "#000000"
     assert legend["negative pedestrian"] == "#d55e00"
     assert legend["LiDAR rays (per walking step)"] == palette.css(palette.LIDAR_RAY_RGB)
-    assert legend["LiDAR returns (per walking step)"] == palette.css(palette.LIDAR_HIT_RGB)
+    assert legend["LiDAR returns (per walking step, drawn above the heads)"] == palette.css(
+        palette.LIDAR_HIT_RGB
+    )
 
 
 def test_methods_are_named_and_coloured_as_in_every_figure():

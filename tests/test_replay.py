@@ -40,6 +40,7 @@ from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.systems.navigation_meshcat import (
     FOOTSTEPS_RECENT,
+    HIT_LIFT,
     OVERVIEW_MIN_HFOV,
     RAY_STRIDE,
     TRAIL_RECENT_STEPS,
@@ -205,8 +206,8 @@ def test_rays_are_recorded_per_walking_step_from_the_robot(lip_replay):
 
 
 def test_lidar_returns_are_recorded_per_walking_step_on_the_surfaces(lip_replay):
-    """Every beam's return as a point at scan height, one object per step shown from t_k to
-    t_{k+1}; with the exact scan each lies on a pedestrian's or a disc's surface."""
+    """Every beam's return as a point above the heads, one object per step shown from t_k
+    to t_{k+1}; with the exact scan each lies on a pedestrian's or a disc's outline."""
     rec, truth, scenario = lip_replay["rec"], lip_replay["truth"], lip_replay["scenario"]
     cfg = EmoNavConfig()
     hits = rec.children(f"{PREFIX}/hits")
@@ -218,7 +219,7 @@ def test_lidar_returns_are_recorded_per_walking_step_on_the_surfaces(lip_replay)
         shown = [p for p in hits if rec.visible(p, s["t"])]
         assert shown == [f"{PREFIX}/hits/{k}"], (k, shown)
         pts = float32_points(rec.objects[shown[0]])
-        assert len(pts) > 20 and np.allclose(pts[:, 2], 0.3)
+        assert len(pts) > 20 and np.allclose(pts[:, 2], 1.7 + HIT_LIFT)
         reach = np.hypot(*(pts[:, :2] - s["robot"][:2]).T)
         assert reach.max() < cfg.lidar.max_range
         gap_ped = np.abs(

@@ -23,6 +23,12 @@ Kalman filter on ``x = [x, y, vx, vy]`` (world frame, m and m/s):
 * **Delete**: a tentative track at its first miss; a confirmed one once it has not been
   seen for more than ``max_coast`` seconds. Until then an unmatched confirmed track
   coasts on its prediction (a pedestrian hidden behind another, or behind a disc).
+* **Fixed** (``sticky_fixed``, the leg detector's tracker): a slow track (or a new one)
+  matched to a fixed detection (a well-fitted disc or a wall piece) is a static object:
+  its velocity is held at zero and it is not predicted (no process noise), so it neither
+  drifts while it is unseen nor widens its gate until it takes another object's
+  detection; it stays so while matched. A walking person's track that gets one disc-like
+  detection is not held (it was not slow).
 * **Still**: a track whose estimated speed stays below ``still_speed`` for
   ``still_duration`` seconds is a static obstacle (until it moves again); a track whose
   last detection was a piece of a wall (`Detections.walls`) is one at once.
@@ -220,11 +226,15 @@ class CrowdTracker:
         if tracks:
             x = np.stack([tr.x for tr in tracks])
             cov = np.stack([tr.P for tr in tracks])
+            held = np.array([self._held(tr) and _is_held(tr) for tr in tracks], dtype=bool)
+            x0, cov0 = x[held], cov[held]
             x, cov = _predict(x, cov, dt, p.accel_std)
+            x[held], cov[held] = x0, cov0  # a fixed object does not move
         else:
             x, cov = np.zeros((0, 4)), np.zeros((0, 4, 4))
 
         rows, cols = self._associate(x, cov, z)
+        was_slow = np.hypot(x[:, 2], x[:, 3]) < p.still_speed  # before this scan's update
         if rows.size:
             x[rows], cov[rows] = _correct(x[rows], cov[rows], z[cols], p.measurement_std)
         matched = np.zeros(len(tracks), dtype=bool)
@@ -240,6 +250,8 @@ class CrowdTracker:
             slow = math.hypot(tr.x[2], tr.x[3]) < p.still_speed
             tr.wall = bool(walls[j]) or (p.sticky_fixed and tr.wall and slow)
             tr.confirmed = tr.confirmed or tr.hits >= p.confirm_hits
+            if self._held(tr) and was_slow[i]:  # a walking person's one disc-like scan: no
+                _hold_still(tr, p.still_speed)
 
         survivors: list[Track] = []
         for i, tr in enumerate(tracks):
@@ -259,6 +271,11 @@ class CrowdTracker:
             elif tr.still_since is None:
                 tr.still_since = t
         self._tracks = survivors
+
+    def _held(self, track: Track) -> bool:
+        """With `sticky_fixed`, a fixed track is a static object: zero velocity, no
+        process noise (it neither drifts while unseen nor widens its gate)."""
+        return self.params.sticky_fixed and track.wall
 
     def _associate(
         self, x: np.ndarray, cov: np.ndarray, z: np.ndarray
@@ -298,6 +315,8 @@ class CrowdTracker:
             wall=wall,
         )
         self._next_id += 1
+        if self._held(tr):
+            _hold_still(tr, p.still_speed)
         return tr
 
     # -- output --------------------------------------------------------------------------
@@ -385,6 +404,20 @@ def _detection_arrays(detections: Detections) -> tuple[np.ndarray, np.ndarray]:
     if not (np.isfinite(z).all() and np.isfinite(r).all()):
         raise ValueError("detections must be finite")
     return z, r
+
+
+def _is_held(track: Track) -> bool:
+    """Whether `_hold_still` made `track` a static object's (zero velocity, uncorrelated)."""
+    return not track.x[2:].any() and not track.P[:2, 2:].any()
+
+
+def _hold_still(track: Track, still_speed: float) -> None:
+    """Make `track` a static object's, in place: zero velocity, uncorrelated with the
+    position, with a velocity std of half `still_speed` per axis."""
+    track.x[2:] = 0.0
+    track.P[2:, :] = 0.0
+    track.P[:, 2:] = 0.0
+    track.P[2, 2] = track.P[3, 3] = (0.5 * still_speed) ** 2
 
 
 def _predict(

@@ -53,7 +53,7 @@ LEGEND = (
 )
 RAYS_LEGEND = (
     ("LiDAR rays (per walking step)", _css(style.RAY_RGBA)),
-    ("LiDAR returns (per walking step)", _css(style.HIT_RGBA)),
+    ("LiDAR returns (per walking step, drawn above the heads)", _css(style.HIT_RGBA)),
 )
 TRACKS_LEGEND = (
     ("tracked pedestrian (LiDAR), arrow: 1 s of its velocity", palette.css(palette.TRACK_RGB)),

@@ -28,8 +28,10 @@ colours here are its roles):
       position at t_{k−1} to t_k, bright for `TRAIL_RECENT_STEPS` steps, then pale) and,
       with `show_rays`, the LiDAR rays of t_k (light grey, every `RAY_STRIDE`-th beam, one
       line-segment object per step, visible from t_k to t_{k+1}) and every beam's return
-      as a dark point at scan height (the scan as the sensor measured it: with a real
-      sensor preset its noise, lost beams, spurious returns and the pedestrians' legs);
+      as a dark point (the scan as the sensor measured it: with a real sensor preset its
+      noise, lost beams, spurious returns and the pedestrians' legs), drawn
+      `HIT_LIFT` above the pedestrians' heads so the bodies do not hide it (seen from
+      above it lies on the outlines the scan plane cuts);
     * with `tracks` connected (`navigation_meshcat_tracks.py`), every `publish_period`,
       beside the true crowd: each tracked pedestrian as a flat violet ring at waist height
       (`TRACK_HEIGHT`), just wider than a pedestrian, with a velocity arrow from its
@@ -92,6 +94,7 @@ TRAIL_RECENT_STEPS = 10  # trail segments drawn bright for this many walking ste
 FOOTSTEPS_RECENT = 6  # footstep markers drawn bright until this many newer steps
 RAY_STRIDE = 15  # draw every RAY_STRIDE-th LiDAR beam
 HIT_POINT_SIZE = 0.05  # [m] of a drawn LiDAR return
+HIT_LIFT = 0.05  # [m] the returns are drawn above the pedestrians' heads
 OVERVIEW_FOV = 45.0  # vertical field of view of the overview camera [deg]
 # the arena fits a horizontal field of view of this much [deg]; a replay widens the
 # vertical one in windows narrower than that (`meshcat_viewing.replay_html`)
@@ -380,14 +383,18 @@ class NavigationMeshcatVisualizer(LeafSystem):
         self._last_rays = (path, hits)
 
     def _draw_hits(self, k: int, scan: np.ndarray, x: float, y: float, th: float, t: float) -> str:
-        """Every beam's return (range below the maximum) as a point at scan height: the
-        scan as the sensor measured it (noise, lost beams, spurious returns, legs)."""
+        """Every beam's return (range below the maximum) as a point just above the heads:
+        the scan as the sensor measured it (noise, lost beams, spurious returns, legs)."""
         num = len(scan)
         beams = np.flatnonzero(scan < self._config.lidar.max_range - 1e-6)
         ang = th + (beams - (num - 1) / 2) * (2 * np.pi / num)
         cloud = PointCloud(len(beams))
         cloud.mutable_xyzs()[:] = np.vstack(
-            [x + scan[beams] * np.cos(ang), y + scan[beams] * np.sin(ang), np.full(len(beams), 0.3)]
+            [
+                x + scan[beams] * np.cos(ang),
+                y + scan[beams] * np.sin(ang),
+                np.full(len(beams), self._pedestrian_height + HIT_LIFT),
+            ]
         )
         path = f"{PREFIX}/hits/{k}"
         self._meshcat.SetObject(path, cloud, HIT_POINT_SIZE, HIT_RGBA)
