@@ -134,3 +134,17 @@ def test_an_episode_runs_on_the_noisy_scan(tmp_path, capsys, planner):
     assert deployable["sensor"] == "vlp16" and deployable["deployable"]
     assert deployable["state_source"] == "lidar"
     assert deployable["path_length"] != exact["path_length"]
+
+
+def test_eval_says_what_the_robot_sensed(tmp_path, capsys):
+    config = tmp_path / "short.yaml"
+    config.write_text("episode: {max_steps: 10}\n")
+    out = tmp_path / "eval.json"
+    argv = ["eval", "--planner", "dwa", "--episodes", "1", "--first-seed", "900000"]
+    assert main([*argv, "--config", str(config), "--deployable", "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "sensed: short [0.2, 0.35, 0.5] m, deployable (lidar state, sensor vlp16)" in printed
+    assert "emotions: ground truth" in printed
+    result = json.loads(out.read_text())
+    assert result["deployable"] is True and result["sensor"] == "vlp16"
+    assert result["state_source"] == "lidar" and result["emotion_source"] == "ground truth"

@@ -23,7 +23,7 @@ from emonav_drake.cli.common import (
 from emonav_drake.cli.resolve import resolve_config, sample
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.errors import RunInterrupted
-from emonav_drake.params import ConfigError
+from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners import planner_names
 
 # `eval --episodes` at most: every scenario is sampled before the first episode (a crowd
@@ -89,6 +89,9 @@ def cmd_eval(args: argparse.Namespace) -> int:
     cfg, grid_kind = configure_for(planner, cfg)
     if hasattr(planner, "describe"):
         print(f"planner {args.planner}: {planner.describe()}")
+    name = resolved.setting or (Path(args.config).stem if args.config else "default")
+    sensed = _sensed(cfg, name, estimate)
+    print(f"sensed: {sensed['setting_label']}; emotions: {sensed['emotion_source']}")
     records = []
     interrupted = False
     with progress_bar(total=len(seeds), desc=f"{args.planner}/{args.plant}", unit="ep") as bar:
@@ -115,6 +118,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
             "seeds": [seeds.start, seeds.stop],
             "interrupted": interrupted,
             "seeds_done": done,
+            **sensed,
             "summary": summary,
             "episodes": [r.to_json() for r in records],
         }
@@ -126,3 +130,18 @@ def cmd_eval(args: argparse.Namespace) -> int:
             f"{done[0]}-{done[-1]}); the summary above covers them{where}"
         )
     return 0
+
+
+def _sensed(cfg: EmoNavConfig, setting: str | None, estimate: object | None) -> dict:
+    """What the robot sensed to get the numbers: the setting's label (state source,
+    sensor, deployable), the sensor preset and the emotions' source."""
+    from emonav_drake.evaluation.run_settings import setting_label
+    from emonav_drake.params import is_deployable
+
+    return {
+        "setting_label": setting_label(cfg, setting),
+        "state_source": cfg.perception.state_source,
+        "sensor": cfg.sensor.preset,
+        "deployable": is_deployable(cfg),
+        "emotion_source": "ground truth" if estimate is None else str(estimate.mode),
+    }
