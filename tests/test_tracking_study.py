@@ -231,3 +231,24 @@ def test_a_track_of_a_pedestrian_outside_the_scored_region_is_dont_care():
     assert _scored_hypotheses(gap, ped_scored, np.array([True]), 0.5).tolist() == [False]
     empty = _scored_hypotheses(np.zeros((0, 2)), np.zeros(0, bool), np.array([True, False]), 0.5)
     assert empty.tolist() == [True, False]
+
+
+def test_the_sensor_table_runs_each_study_once_and_refuses_the_tuning_seeds(tmp_path, capsys):
+    from scripts.tracking_sensors import main
+
+    out = tmp_path / "sensors"
+    argv = ["--episodes", "1", "--first-seed", "800000", "--out", str(out)]
+    argv += ["--presets", "vlp16", "--families", "paper"]
+    assert main(argv) == 0
+    table = (out / "table.md").read_text()
+    assert "| vlp16 | paper | 1 (" in table and "--presets vlp16" in table
+    rows = json.loads((out / "table.json").read_text())["rows"]
+    summary = json.loads((out / "vlp16_paper" / "summary.json").read_text())
+    assert rows[0]["mota"] == summary["clear_mot"]["mota"]
+    assert summary["sensor"]["preset"] == "vlp16" and summary["family"] == "paper"
+    capsys.readouterr()
+    assert main(argv) == 0  # the study is kept, not run again
+    assert "done before, kept" in capsys.readouterr().out
+    bad = ["--episodes", "5", "--first-seed", "700010", "--out", str(tmp_path / "bad")]
+    assert main(bad) == 2
+    assert "tuning seeds" in capsys.readouterr().err and not (tmp_path / "bad").exists()
