@@ -32,12 +32,14 @@ def assign_faces(
     pedestrian_bearing: np.ndarray,
     pedestrian_distance: np.ndarray,
     gate: np.ndarray,
+    allowed: np.ndarray | None = None,
 ) -> np.ndarray:
     """Pedestrian index of each face (−1: none), greedily by smallest bearing error.
 
-    A face may go to pedestrian p only if |bearing difference| ≤ gate[p]; each
-    pedestrian takes at most one face. Pairs are taken in order of bearing error, ties
-    to the nearer pedestrian (the one more likely to show its face).
+    A face may go to pedestrian p only if |bearing difference| ≤ gate[p] (and
+    `allowed[f, p]`, when given: e.g. a range gate); each pedestrian takes at most one
+    face. Pairs are taken in order of bearing error, ties to the nearer pedestrian (the
+    one more likely to show its face).
 
     Args:
         face_bearing: (F,) [rad].
@@ -45,6 +47,7 @@ def assign_faces(
             cannot be seen (behind, out of range).
         pedestrian_distance: (P,) [m].
         gate: (P,) largest accepted bearing error [rad].
+        allowed: (F, P) bool, pairs that other evidence permits (None: all).
     """
     fb = np.asarray(face_bearing, dtype=float).reshape(-1)
     pb = np.asarray(pedestrian_bearing, dtype=float).reshape(-1)
@@ -53,6 +56,8 @@ def assign_faces(
         return out
     err = np.abs(np.angle(np.exp(1j * (fb[:, None] - pb[None, :]))))
     ok = np.isfinite(err) & (err <= np.asarray(gate, dtype=float)[None, :])
+    if allowed is not None:
+        ok &= np.asarray(allowed, dtype=bool).reshape(ok.shape)
     pairs = sorted(
         (err[f, p], float(pedestrian_distance[p]), f, p)
         for f, p in zip(*np.nonzero(ok), strict=True)
