@@ -118,11 +118,16 @@ def _emotion_estimate_yaml(args: argparse.Namespace) -> str | None:
     params = emotion_estimate_of(args)
     if params is None:
         return None
+    from emonav_drake.perception.noisy_emotions import CAMERA_MODES
     from emonav_drake.typed_yaml import dump_typed_yaml
 
     text = dump_typed_yaml(params)
-    if params.mode != "camera":  # as written before the camera existed: old runs resume
+    # as written before these fields existed, so old runs resume: the camera's section
+    # only with a camera, the tracks' decay only with camera_tracks
+    if params.mode not in CAMERA_MODES:
         text = text[: text.index("camera:\n")]
+    elif params.mode == "camera":
+        text = text[: text.index("track_decay:")]
     return text
 
 

@@ -203,7 +203,7 @@ def check_planner_flags(args: argparse.Namespace) -> None:
     resolve_device(args.device)
 
 
-EMOTION_SOURCES = ("truth", "camera")
+EMOTION_SOURCES = ("truth", "camera", "camera_tracks")
 
 
 def add_emotion_flags(p: argparse.ArgumentParser) -> None:
@@ -214,7 +214,9 @@ def add_emotion_flags(p: argparse.ArgumentParser) -> None:
         default="truth",
         help="truth: the simulator's emotions; camera: the robot's head camera renders the "
         "pedestrians' faces and the face cascade + CNN read them at 0.5 Hz, neutral when no "
-        "face is seen (docs/perception.md)",
+        "face is seen; camera_tracks: the same faces, each emotion kept with the LiDAR track "
+        "of its person until 10 s after the last sighting (needs --state-source lidar or "
+        "--deployable; docs/perception.md)",
     )
     p.add_argument(
         "--emotion-estimate",
@@ -229,14 +231,14 @@ def emotion_estimate_of(args: argparse.Namespace) -> Any:
     the ground truth; `ConfigError` when the two disagree."""
     source = getattr(args, "emotion_source", "truth")
     params = load_emotion_estimate(args.emotion_estimate)
-    if source == "camera":
+    if source in ("camera", "camera_tracks"):
         if params is None:
             from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 
-            return EmotionEstimateParams(mode="camera").validate()
-        if params.mode != "camera":
+            return EmotionEstimateParams(mode=source).validate()
+        if params.mode != source:
             raise ConfigError(
-                f"--emotion-source camera and --emotion-estimate {args.emotion_estimate} "
+                f"--emotion-source {source} and --emotion-estimate {args.emotion_estimate} "
                 f"(mode {params.mode}) disagree: give one of them"
             )
     return params

@@ -110,7 +110,9 @@ def cmd_sim(args: argparse.Namespace) -> int:
     cfg = resolved.config
     scenario = resolve_scenario(args, resolved)
     estimate = emotion_estimate_of(args)
-    if args.camera_gif is not None and (estimate is None or estimate.mode != "camera"):
+    from emonav_drake.perception.noisy_emotions import CAMERA_MODES
+
+    if args.camera_gif is not None and (estimate is None or estimate.mode not in CAMERA_MODES):
         raise ConfigError(
             "--camera-gif needs the camera as the emotion source: --emotion-source camera"
         )

@@ -329,15 +329,19 @@ class CrowdTracker:
         pedestrian_radius: float,
         static_discomfort: float,
         default_code: int,
+        track_emotions: dict[int, int] | None = None,
     ) -> CrowdSnapshot:
         """The confirmed tracks as the crowd a planner reads, at the last update's time.
 
         Moving tracks are pedestrians: estimated position and velocity, the nominal
         `pedestrian_radius`, the emotion code of the nearest entry of
         (`emotion_positions` (E, 2) [m], `emotion_codes` (E,)) within
-        `TrackerParams.emotion_gate` (else `default_code`) and its discomfort distance
-        ``emotion_distances[code]`` [m]. Still tracks (`is_static`) are static discs:
-        estimated centre and the mean fitted radius; `static_discomfort` [m] is passed on.
+        `TrackerParams.emotion_gate` (else `default_code`) — or, with `track_emotions`
+        (track id → code, e.g. `perception/track_emotions.py`), the code kept for the
+        track's id (else `default_code`), and the reports are not read — and its
+        discomfort distance ``emotion_distances[code]`` [m]. Still tracks (`is_static`)
+        are static discs: estimated centre and the mean fitted radius;
+        `static_discomfort` [m] is passed on.
         """
         pos = np.asarray(emotion_positions, dtype=np.float64).reshape(-1, 2)
         codes = np.asarray(emotion_codes).reshape(-1).astype(np.int64)
@@ -347,11 +351,14 @@ class CrowdTracker:
             )
         distances = np.asarray(emotion_distances, dtype=np.float64).reshape(-1)
         confirmed = self.tracks()
-        moving = [tr for tr in confirmed if not self.is_static(tr)]
+        moving = self.moving_tracks()
         still = [tr for tr in confirmed if self.is_static(tr)]
         xs = np.array([tr.x for tr in moving], dtype=np.float64).reshape(-1, 4)
         emotions = np.full(len(moving), int(default_code), dtype=np.int64)
-        if len(moving) and len(pos):
+        if track_emotions is not None:
+            for i, tr in enumerate(moving):
+                emotions[i] = int(track_emotions.get(tr.id, default_code))
+        elif len(moving) and len(pos):
             gap = np.hypot(
                 xs[:, None, 0] - pos[None, :, 0], xs[:, None, 1] - pos[None, :, 1]
             )  # (tracks, reports)
@@ -370,6 +377,11 @@ class CrowdTracker:
         )
 
     # -- state ---------------------------------------------------------------------------
+
+    def moving_tracks(self) -> list[Track]:
+        """The confirmed tracks that are not static: the pedestrians of `snapshot`, in
+        its order."""
+        return [tr for tr in self.tracks() if not self.is_static(tr)]
 
     def state_dict(self) -> dict:
         """The tracker's state as plain data (lists, floats, ints, None)."""

@@ -30,8 +30,9 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, DiagramBuilder, InputPort, LeafSystem, OutputPort
 
 from emonav_drake.core.scenario import Scenario
-from emonav_drake.params import EmoNavConfig
-from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.perception.noisy_emotions import CAMERA_MODES, EmotionEstimateParams
+from emonav_drake.perception.track_emotions import TrackEmotionParams
 from emonav_drake.systems.emotion_classifier import EmotionClassifier, EmotionEstimate
 from emonav_drake.systems.emotion_estimate_source import (
     AddEmotionEstimateSource,
@@ -44,6 +45,7 @@ from emonav_drake.systems.head_camera import (
     HeadCamera,
 )
 from emonav_drake.systems.pedestrian_bodies import AddPedestrianBodies, PedestrianBodies
+from emonav_drake.systems.track_emotion_fusion import TrackEmotionFusion
 
 
 class ClassifiedFrameLog(LeafSystem):
@@ -167,6 +169,7 @@ def AddCameraPerception(
     consumers: list[InputPort],
     params: EmotionEstimateParams,
     frames: list | None = None,
+    tracker: Any = None,
 ) -> CameraPerception:
     """Add the camera chain (module docstring) and feed `consumers` the perceived crowd.
 
@@ -175,13 +178,20 @@ def AddCameraPerception(
         robot_state: (x [m], y [m], θ [rad], v [m/s]) of the robot, world frame.
         mount: the camera's mount body pose and offset.
         consumers: inputs that should see the perceived emotions (grid maps, planner).
-        params: mode "camera", the classification period and the camera.
+        params: mode "camera" or "camera_tracks", the classification period and the camera.
         frames: when given, every classified image, annotated, is appended to it
             (`ClassifiedFrameLog`; `write_camera_gif`).
+        tracker: the diagram's `CrowdTrackerSystem`, required by "camera_tracks": its
+            tracks take the faces (`TrackEmotionFusion`) and its crowd the emotions kept.
     """
     params.validate()
-    if params.mode != "camera":
-        raise ValueError(f"AddCameraPerception needs mode 'camera', not {params.mode!r}")
+    if params.mode not in CAMERA_MODES:
+        raise ValueError(f"AddCameraPerception needs a camera mode, not {params.mode!r}")
+    if params.mode == "camera_tracks" and tracker is None:
+        raise ConfigError(
+            "emotion source camera_tracks keeps emotions on the LiDAR tracks: it needs the "
+            "LiDAR state source (--state-source lidar or --deployable)"
+        )
     scene = AddCameraScene(builder)
     bodies = AddPedestrianBodies(builder, scene, scenario, crowd)
     camera = AddHeadCamera(builder, scene, mount.pose, mount.offset, params.camera)
@@ -194,6 +204,28 @@ def AddCameraPerception(
     builder.Connect(camera.color_image, classifier.GetInputPort("image"))
     builder.Connect(robot_state, classifier.GetInputPort("robot_state"))
     builder.Connect(crowd, classifier.GetInputPort("crowd"))
+    if tracker is not None and params.mode == "camera_tracks":
+        fusion = builder.AddNamedSystem(
+            "track_emotions",
+            TrackEmotionFusion(
+                config.crowd.dt,
+                classifier.camera.fov_x() / 2.0,
+                classifier.max_range,
+                classifier.camera_yaw,
+                TrackEmotionParams(
+                    decay_time=params.track_decay,
+                    pedestrian_radius=config.crowd.pedestrian_radius,
+                ),
+            ),
+        )
+        builder.Connect(classifier.GetOutputPort("detections"), fusion.GetInputPort("detections"))
+        builder.Connect(robot_state, fusion.GetInputPort("robot_state"))
+        builder.Connect(tracker.GetOutputPort("tracks"), fusion.GetInputPort("tracks"))
+        builder.Connect(
+            fusion.GetOutputPort("track_emotions"), tracker.GetInputPort("track_emotions")
+        )
+        # the tracker reads its emotions from the fusion: the others take the per-frame ones
+        consumers = [c for c in consumers if c is not tracker.GetInputPort("crowd")]
     estimate = AddEmotionEstimateSource(
         builder,
         crowd,

@@ -56,7 +56,7 @@ from emonav_drake.diagrams.episode import (
     training_request,
 )
 from emonav_drake.params import EmoNavConfig
-from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+from emonav_drake.perception.noisy_emotions import CAMERA_MODES, EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.crowd_tracker_system import CrowdTrackerSystem
@@ -150,7 +150,7 @@ def AddNavigationStack(
         planner_crowd = tracker.GetInputPort("crowd")  # its emotion reports
     perceivers = [maps.GetInputPort("crowd"), planner_crowd]
     perception = None
-    if emotion_estimate is not None and emotion_estimate.mode == "camera":
+    if emotion_estimate is not None and emotion_estimate.mode in CAMERA_MODES:
         from emonav_drake.diagrams.camera_perception import AddCameraPerception
 
         if camera_mount is None:
@@ -165,6 +165,7 @@ def AddNavigationStack(
             perceivers,
             emotion_estimate,
             camera_frames,
+            tracker,
         )
     elif emotion_estimate is not None and emotion_estimate.mode != "ground_truth":
         AddEmotionEstimateSource(
@@ -253,7 +254,7 @@ def build_navigation_diagram(
     robot = b.AddNamedSystem("robot", LipRobotPlant(scenario, config))
     state = robot.GetOutputPort("robot_state")
     mount = None
-    if emotion_estimate is not None and emotion_estimate.mode == "camera":
+    if emotion_estimate is not None and emotion_estimate.mode in CAMERA_MODES:
         mount = lip_camera_mount(b, state, emotion_estimate.camera)
     stack = AddNavigationStack(
         b,

@@ -56,7 +56,7 @@ from emonav_drake.diagrams.episode import (
 )
 from emonav_drake.diagrams.navigation import AddNavigationStack, AddNavigationVisualizer
 from emonav_drake.params import EmoNavConfig
-from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+from emonav_drake.perception.noisy_emotions import CAMERA_MODES, EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.episode_monitor import EpisodeMonitor
@@ -113,7 +113,7 @@ def build_digit_navigation_diagram(
     station = AddDigitStation(b, config, pose=pose)
     robot_state = station.GetOutputPort("robot_state")
     mount = None
-    if emotion_estimate is not None and emotion_estimate.mode == "camera":
+    if emotion_estimate is not None and emotion_estimate.mode in CAMERA_MODES:
         torso = station.model.torso_body.index()
         mount = body_camera_mount(
             b, station.GetOutputPort("body_poses"), int(torso), emotion_estimate.camera

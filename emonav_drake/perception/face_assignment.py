@@ -27,6 +27,30 @@ def face_bearings(
     return camera_yaw + np.arctan2(center_x - u, focal_x)
 
 
+def pedestrian_bearings(
+    positions: np.ndarray,
+    robot_xy: np.ndarray,
+    heading: float,
+    camera_yaw: float,
+    half_fov: float,
+    max_range: float,
+    radius: float,
+    tolerance: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(bearing [rad] or NaN when the camera cannot see it, distance [m], gate [rad]) of
+    each pedestrian at `positions` (P, 2) [m, world], for a camera at `robot_xy` whose
+    optical axis is `camera_yaw` off the robot's `heading` [rad]. Bearings are relative
+    to the heading (as `face_bearings` with that yaw); the gate is the pedestrian's
+    angular radius (`radius` [m]) plus `tolerance` [rad]; a pedestrian farther than
+    `max_range` [m] or more than `half_fov` + its gate off the axis is not seen."""
+    d = np.asarray(positions, dtype=float).reshape(-1, 2) - np.asarray(robot_xy, dtype=float)
+    dist = np.hypot(d[:, 0], d[:, 1])
+    rel = np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) - heading - camera_yaw)))
+    gate = np.arctan2(radius, np.maximum(dist, 1e-6)) + tolerance
+    visible = (dist <= max_range) & (np.abs(rel) <= half_fov + gate)
+    return np.where(visible, rel + camera_yaw, np.nan), dist, gate
+
+
 def assign_faces(
     face_bearing: np.ndarray,
     pedestrian_bearing: np.ndarray,

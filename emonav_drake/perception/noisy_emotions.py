@@ -27,7 +27,8 @@ from emonav_drake.params import EMOTION_NAMES, ConfigError
 from emonav_drake.typed_yaml import validate_fields
 
 NUM_EMOTIONS = len(EMOTION_NAMES)
-ESTIMATE_MODES = ("ground_truth", "confusion", "classifier", "camera")
+ESTIMATE_MODES = ("ground_truth", "confusion", "classifier", "camera", "camera_tracks")
+CAMERA_MODES = ("camera", "camera_tracks")  # the modes that render faces for the head camera
 
 
 def validate_confusion(matrix: object, name: str = "confusion") -> np.ndarray:
@@ -179,7 +180,9 @@ class EmotionEstimateParams:
         '"ground_truth" (simulation default), "confusion" (truth through `confusion`, '
         'seeded), "classifier" (the estimates of a face classifier the caller wires in) or '
         "\"camera\" (the robot's head camera renders the crowd's faces and the face classifier "
-        "reads them: `diagrams/camera_perception.py`)",
+        'reads them: `diagrams/camera_perception.py`) or "camera_tracks" (the same faces, '
+        "each kept with the LiDAR track it is assigned to: `systems/track_emotion_fusion.py`; "
+        "needs the LiDAR state source)",
     )
     confusion: list[list[float]] = setting(
         np.eye(NUM_EMOTIONS).tolist(),
@@ -197,6 +200,13 @@ class EmotionEstimateParams:
     )
     camera: HeadCameraParams = setting(
         doc='the head camera of mode "camera"', factory=HeadCameraParams
+    )
+    track_decay: float = setting(
+        10.0,
+        'mode "camera_tracks": a track\'s emotion falls back to neutral this long after its '
+        "last face",
+        "s",
+        (0.1, 1000.0),
     )
 
     def validate(self) -> "EmotionEstimateParams":

@@ -16,11 +16,16 @@ Input ports:
     crowd (abstract `CrowdSnapshot`): the crowd as the emotion source reports it; only
         its pedestrians' positions and emotion codes are read, to attach an emotion to a
         track (the nearest report within the tracker's association gate, else neutral).
-Output port:
+        Not read when `track_emotions` is connected.
+    track_emotions (abstract `TrackEmotions`, optional): the emotion kept for each
+        track id (`TrackEmotionFusion`); a track it does not list is neutral.
+Output ports:
     crowd (abstract `CrowdSnapshot`), world frame, SI units: the confirmed moving tracks as
         pedestrians (position predicted to the current time with the track's velocity,
         velocity, the nominal pedestrian radius, the associated emotion and its discomfort
         distance) and the confirmed still tracks as static discs (centre, fitted radius).
+    tracks (abstract `TrackedPeople`): every confirmed track's id, position [m, world]
+        and whether it is static, at the last scan (what a face is assigned to).
 Abstract state: the tracker (its tracks and the time of its last scan).
 """
 
@@ -41,6 +46,25 @@ from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
 NEUTRAL = EMOTION_NAMES.index("neutral")  # a track no emotion report is near
+
+
+@dc.dataclass(frozen=True)
+class TrackedPeople:
+    """The tracker's confirmed tracks at its last scan: ids (T,) int64, positions (T, 2)
+    [m, world], whether each is static (a still person or an obstacle; the crowd's
+    static discs) and the scan's time [s] (NaN before the first scan)."""
+
+    ids: np.ndarray
+    positions: np.ndarray
+    static: np.ndarray
+    time: float
+
+
+@dc.dataclass(frozen=True)
+class TrackEmotions:
+    """The emotion code kept for each track id (`TrackEmotionFusion`'s output)."""
+
+    codes: dict[int, int]
 
 
 class CrowdTrackerSystem(LeafSystem):
@@ -69,12 +93,27 @@ class CrowdTrackerSystem(LeafSystem):
         self._robot_in = self.DeclareVectorInputPort("robot_state", 4)
         self._scan_in = self.DeclareVectorInputPort("scan", config.lidar.num_beams)
         self._crowd_in = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
+        self._emotions_in = self.DeclareAbstractInputPort(
+            "track_emotions", AbstractValue.Make(TrackEmotions({}))
+        )
         self._tracker = self.DeclareAbstractState(AbstractValue.Make(CrowdTracker(self._tracking)))
         self.DeclareAbstractOutputPort(
             "crowd",
             lambda: AbstractValue.Make(object()),
             self._calc_crowd,
-            {self.all_state_ticket(), self.input_port_ticket(self._crowd_in.get_index())},
+            {
+                self.all_state_ticket(),
+                self.input_port_ticket(self._crowd_in.get_index()),
+                self.input_port_ticket(self._emotions_in.get_index()),
+            },
+        )
+        self.DeclareAbstractOutputPort(
+            "tracks",
+            lambda: AbstractValue.Make(
+                TrackedPeople(np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros(0, bool), 0.0)
+            ),
+            self._calc_tracks,
+            {self.all_state_ticket()},
         )
         self.DeclarePeriodicUnrestrictedUpdateEvent(config.crowd.dt, 0.0, self._scan)
 
@@ -98,17 +137,37 @@ class CrowdTrackerSystem(LeafSystem):
     def _calc_crowd(self, context: Context, output: AbstractValue) -> None:
         output.set_value(self.perceived(context))
 
+    def _calc_tracks(self, context: Context, output: AbstractValue) -> None:
+        tracker = self.tracker(context)
+        confirmed = tracker.tracks()
+        output.set_value(
+            TrackedPeople(
+                np.array([tr.id for tr in confirmed], dtype=np.int64),
+                np.array([tr.x[:2] for tr in confirmed], dtype=float).reshape(-1, 2),
+                np.array([tracker.is_static(tr) for tr in confirmed], dtype=bool),
+                float("nan") if tracker.time is None else tracker.time,
+            )
+        )
+
     def perceived(self, context: Context) -> CrowdSnapshot:
         """The crowd snapshot of the tracks now (see the output port)."""
-        reported: CrowdSnapshot = self._crowd_in.Eval(context)
         tracker = self.tracker(context)
+        kept = None
+        if self._emotions_in.HasValue(context):
+            kept = self._emotions_in.Eval(context).codes
+            positions, codes = np.zeros((0, 2)), np.zeros(0, dtype=int)
+        else:
+            reported: CrowdSnapshot = self._crowd_in.Eval(context)
+            positions = np.asarray(reported.positions, dtype=float).reshape(-1, 2)
+            codes = np.asarray(reported.emotions, dtype=int).reshape(-1)
         snap = tracker.snapshot(
-            np.asarray(reported.positions, dtype=float).reshape(-1, 2),
-            np.asarray(reported.emotions, dtype=int).reshape(-1),
+            positions,
+            codes,
             self._distances,
             self._config.crowd.pedestrian_radius,
             self._config.reward.static_discomfort,
             NEUTRAL,
+            track_emotions=kept,
         )
         lag = context.get_time() - tracker.time if tracker.time is not None else 0.0
         if lag > 0 and len(snap.positions):  # the last scan's tracks, predicted to now

@@ -38,7 +38,11 @@ from pydrake.systems.framework import Context, LeafSystem, State
 from pydrake.systems.sensors import CameraInfo, ImageRgba8U
 
 from emonav_drake.params import NEUTRAL
-from emonav_drake.perception.face_assignment import assign_faces, face_bearings
+from emonav_drake.perception.face_assignment import (
+    assign_faces,
+    face_bearings,
+    pedestrian_bearings,
+)
 from emonav_drake.perception.face_emotion import SEVEN_TO_THREE, FaceEmotionClassifier
 from emonav_drake.perception.mini_xception import CLASS_NAMES
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
@@ -162,14 +166,16 @@ class EmotionClassifier(LeafSystem):
         """(bearing [rad] or NaN when out of view, distance [m], gate [rad]) per pedestrian."""
         crowd = self._crowd_in.Eval(context)
         robot = lip_state_from_vector(self._robot_in.Eval(context))
-        d = np.asarray(crowd.positions, dtype=float).reshape(-1, 2) - [robot.x, robot.y]
-        dist = np.hypot(d[:, 0], d[:, 1])
-        yaw = robot.heading + self.camera_yaw
-        rel = np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) - yaw)))
-        gate = np.arctan2(crowd.radius, np.maximum(dist, 1e-6)) + self.bearing_tolerance
-        half_fov = self.camera.fov_x() / 2.0
-        visible = (dist <= self.max_range) & (np.abs(rel) <= half_fov + gate)
-        return np.where(visible, rel + self.camera_yaw, np.nan), dist, gate
+        return pedestrian_bearings(
+            crowd.positions,
+            np.array([robot.x, robot.y]),
+            robot.heading,
+            self.camera_yaw,
+            self.camera.fov_x() / 2.0,
+            self.max_range,
+            crowd.radius,
+            self.bearing_tolerance,
+        )
 
     def estimate(
         self, context: Context, previous: EmotionEstimate | None = None

@@ -39,6 +39,7 @@ from pydrake.systems.framework import Context, DiagramBuilder, InputPort, LeafSy
 
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import (
+    CAMERA_MODES,
     ConfusionEmotionModel,
     EmotionEstimateParams,
     replace_emotions,
@@ -112,7 +113,7 @@ def AddEmotionEstimateSource(
     "classifier" and "camera" modes) is connected to the source's input of that name.
     """
     system = EmotionEstimateSource(config, params)
-    if system.params.mode in ("classifier", "camera") and estimated_emotions is None:
+    if system.params.mode in ("classifier", *CAMERA_MODES) and estimated_emotions is None:
         raise ValueError(f"mode {system.params.mode!r} needs the estimated_emotions output port")
     source = builder.AddNamedSystem(name, system)
     builder.Connect(crowd_output, source.GetInputPort("crowd"))

@@ -1,0 +1,109 @@
+"""Emotions kept per LiDAR track in the diagram (`--emotion-source camera_tracks`).
+
+A real LIP episode: the head camera renders the faces, the cascade and the CNN classify
+them every 2 s, `TrackEmotionFusion` assigns them to the tracker's tracks and the tracker's
+crowd carries each track's kept emotion. Against the per-frame camera on the same seed the
+emotions outlive the frame they were seen in, and every emotion a track carries is one the
+classifier read on its own person's face (assignment by track: the CNN itself errs, e.g. a
+happy face read as negative). Real diagrams, the real classifier.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+
+from emonav_drake.core.scenario import sample_scenario
+from emonav_drake.diagrams.navigation import build_navigation_diagram
+from emonav_drake.params import NEUTRAL, ConfigError, EmoNavConfig
+from emonav_drake.perception.face_emotion import three_way_probabilities
+from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+from emonav_drake.planners import make_planner
+
+SEED = 1  # two happy pedestrians walk towards the robot: their faces are found
+
+
+def run(mode: str, until: float = 20.0) -> list[dict]:
+    """Every 0.5 s: the tracker's pedestrians (positions, emotions), the true crowd, the
+    last classification's faces assigned to pedestrians and, per true pedestrian, the
+    emotions read on their face so far (argmax of the 3-way probabilities)."""
+    cfg = EmoNavConfig()
+    cfg.perception.state_source = "lidar"
+    scenario = sample_scenario(SEED, cfg)
+    nav = build_navigation_diagram(
+        scenario, cfg, make_planner("mpc", cfg), emotion_estimate=EmotionEstimateParams(mode=mode)
+    )
+    d = nav.diagram
+    tracker = d.GetSubsystemByName("crowd_tracker")
+    classifier = d.GetSubsystemByName("emotion_classifier")
+    sim = Simulator(d)
+    ctx = sim.get_mutable_context()
+    sim.Initialize()
+    out, t, read = [], 0.0, {}
+    while t < until:
+        t += 0.5
+        sim.AdvanceTo(t)
+        snap = tracker.GetOutputPort("crowd").Eval(tracker.GetMyContextFromRoot(ctx))
+        truth = nav.crowd.GetOutputPort("crowd").Eval(nav.crowd.GetMyContextFromRoot(ctx))
+        faces = classifier.GetOutputPort("detections").Eval(classifier.GetMyContextFromRoot(ctx))
+        for f, p in enumerate(faces.face_pedestrian.tolist()):
+            if p >= 0:
+                code = int(np.argmax(three_way_probabilities(faces.probabilities[f])))
+                read.setdefault(p, set()).add(code)
+        out.append(
+            {
+                "t": t,
+                "positions": snap.positions.copy(),
+                "emotions": snap.emotions.copy(),
+                "true_positions": truth.positions.copy(),
+                "true_emotions": truth.emotions.copy(),
+                "faces": int((faces.face_pedestrian >= 0).sum()),
+                "read": {p: set(c) for p, c in read.items()},
+            }
+        )
+    return out
+
+
+@pytest.fixture(scope="module")
+def tracks_run():
+    return run("camera_tracks")
+
+
+def test_a_tracks_emotion_outlives_the_frame_its_face_was_in(tracks_run):
+    kept = [s for s in tracks_run if (s["emotions"] != NEUTRAL).any() and s["faces"] == 0]
+    assert kept, "no emotion was kept through a classification without a face"
+    per_frame = run("camera")
+    known = lambda steps: sum(int((s["emotions"] != NEUTRAL).sum()) for s in steps)  # noqa: E731
+    assert known(tracks_run) > known(per_frame)
+
+
+def test_every_kept_emotion_was_read_on_its_own_persons_face(tracks_run):
+    checked = 0
+    for s in tracks_run:
+        for pos, code in zip(s["positions"], s["emotions"], strict=True):
+            if code == NEUTRAL:
+                continue
+            person = int(np.argmin(np.hypot(*(s["true_positions"] - pos).T)))
+            assert code in s["read"].get(person, set()), (s["t"], person, code)
+            checked += 1
+    assert checked >= 10
+
+
+def test_the_same_episode_twice_gives_the_same_emotions(tracks_run):
+    again = run("camera_tracks", until=10.0)
+    for a, b in zip(tracks_run, again, strict=False):
+        assert np.array_equal(a["emotions"], b["emotions"]) and np.array_equal(
+            a["positions"], b["positions"]
+        )
+
+
+def test_camera_tracks_needs_the_lidar_tracker():
+    cfg = EmoNavConfig()  # truth state source: no tracker
+    with pytest.raises(ConfigError, match="camera_tracks.*--state-source lidar"):
+        build_navigation_diagram(
+            sample_scenario(SEED, cfg),
+            cfg,
+            make_planner("mpc", cfg),
+            emotion_estimate=EmotionEstimateParams(mode="camera_tracks"),
+        )
