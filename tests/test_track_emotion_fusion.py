@@ -107,3 +107,26 @@ def test_camera_tracks_needs_the_lidar_tracker():
             make_planner("mpc", cfg),
             emotion_estimate=EmotionEstimateParams(mode="camera_tracks"),
         )
+
+
+def test_a_benchmark_with_kept_emotions_on_ray_equals_the_serial_run(tmp_path):
+    from emonav_drake.diagrams.trials import method_specs
+    from emonav_drake.evaluation.benchmark import run_benchmark
+    from emonav_drake.evaluation.run_directory import comparable, read_trials
+    from emonav_drake.params import load_config
+    from emonav_drake.typed_yaml import dump_typed_yaml
+
+    cfg = load_config()
+    cfg.perception.state_source = "lidar"
+    estimate = dump_typed_yaml(EmotionEstimateParams(mode="camera_tracks"))
+    kwargs = dict(methods=method_specs("mpc"), plant="lip", trials=2, first_seed=SEED, config=cfg)
+    kwargs.update(emotion_estimate_yaml=estimate, progress=False)
+    run_benchmark(out=tmp_path / "serial", workers=1, **kwargs)
+    run_benchmark(out=tmp_path / "ray", workers=2, **kwargs)
+
+    def records(run):
+        return [comparable(t) for t in read_trials(run / "trials.jsonl")]
+
+    serial = sorted(records(tmp_path / "serial"), key=lambda t: t["seed"])
+    assert serial == sorted(records(tmp_path / "ray"), key=lambda t: t["seed"])
+    assert len(serial) == 2
