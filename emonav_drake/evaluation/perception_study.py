@@ -120,6 +120,29 @@ class CameraRig:
             "faces": len(est.boxes),
         }
 
+    def place(self, distance: float, bearing_deg: float, facing_deg: float, emotion: int) -> None:
+        """Place the pedestrian (as `shot`) without classifying."""
+        b = math.radians(bearing_deg)
+        x, y = distance * math.cos(b), distance * math.sin(b)
+        heading = math.atan2(-y, -x) - math.radians(facing_deg)
+        self.diagram.get_input_port(0).FixValue(
+            self.context, AbstractValue.Make(self._snapshot(x, y, heading, emotion))
+        )
+
+    def face_pixel(self, distance: float, bearing_deg: float) -> tuple[float, float, float]:
+        """(u, v, height) [px] of the placed pedestrian's face in the image: the head's
+        centre projected by the pinhole camera (`PedestrianBody.head_center_height`, the
+        face's height `face_height`)."""
+        from emonav_drake.core.pedestrian_pose import PedestrianBody
+
+        cam, body = self.params.camera, PedestrianBody()
+        f = (cam.height / 2.0) / math.tan(math.radians(cam.fov_y_deg) / 2.0)
+        b = math.radians(bearing_deg)
+        ahead, left = distance * math.cos(b), distance * math.sin(b)
+        u = (cam.width - 1) / 2.0 - f * left / ahead
+        v = (cam.height - 1) / 2.0 - f * (body.head_center_height - cam.lip_height) / ahead
+        return u, v, f * body.face_height / ahead
+
     def image(self) -> np.ndarray:
         """The last shot's image as RGB uint8 (H, W, 3)."""
         port = self.camera.color_image
@@ -153,6 +176,59 @@ def classification_seconds(
             rig.classifier.classifier.detect(gray)
             detect.append(time.perf_counter() - t0)
     return {"shot": float(np.median(shot)), "detect": float(np.median(detect)), "n": len(shot)}
+
+
+def detection_sweep(
+    distances: Sequence[float],
+    facings_deg: Sequence[float],
+    detectors: dict[str, Any],
+    emotions: Iterable[int] = range(NUM_EMOTIONS),
+    params: EmotionEstimateParams | None = None,
+    progress: bool = False,
+) -> list[dict]:
+    """Face detection alone, per detector, on one rendered pedestrian straight ahead.
+
+    For each (emotion, distance [m], facing [deg]: 0 faces the camera, 90 shows its
+    profile) the pedestrian is rendered once and every detector of `detectors` (name →
+    a callable (RGB image, (u, v, face height) [px] where the head projects: what a
+    person tracker would tell) → boxes (F, 4) (x, y, w, h) [px]) runs on the image. A sample
+    per detector: whether a box contains the projected centre of the face
+    (`CameraRig.face_pixel`), the number of boxes, the face's height [px] and the
+    detector's wall time [s]."""
+    import time
+
+    from emonav_drake.progress import progress_bar
+
+    rig = CameraRig(params)
+    grid = [(e, d, f) for e in emotions for d in distances for f in facings_deg]
+    out = []
+    for e, d, f in progress_bar(grid, desc="detection sweep", unit="shot", enabled=progress):
+        rig.place(d, 0.0, f, e)
+        image = rig.image()
+        u, v, face_px = rig.face_pixel(d, 0.0)
+        for name, detect in detectors.items():
+            t0 = time.perf_counter()
+            boxes = np.asarray(detect(image, (u, v, face_px))).reshape(-1, 4)
+            seconds = time.perf_counter() - t0
+            hit = (
+                (boxes[:, 0] <= u)
+                & (u <= boxes[:, 0] + boxes[:, 2])
+                & (boxes[:, 1] <= v)
+                & (v <= boxes[:, 1] + boxes[:, 3])
+            )
+            out.append(
+                {
+                    "detector": name,
+                    "emotion": int(e),
+                    "distance": float(d),
+                    "facing_deg": float(f),
+                    "face_px": round(float(face_px), 1),
+                    "detected": bool(hit.any()),
+                    "boxes": len(boxes),
+                    "seconds": seconds,
+                }
+            )
+    return out
 
 
 def half_fov_x_deg(params: EmotionEstimateParams) -> float:
