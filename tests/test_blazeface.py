@@ -103,3 +103,31 @@ def test_the_head_camera_at_5_m_blazeface_finds_the_face_the_cascade_does_not():
     }
     face = {s["distance"]: s["face_px"] for s in samples}
     assert face[5.0] < 30 < face[1.5]
+
+
+def test_the_classifier_with_blazeface_assigns_a_face_at_5_m_and_reads_it_at_1_m():
+    """`face_detector: blazeface`: the face at the pedestrian's projected head is found
+    at 5 m (the cascade finds none there) and, near, its emotion is read right."""
+    from emonav_drake.evaluation.perception_study import CameraRig
+    from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+
+    params = EmotionEstimateParams(mode="camera")
+    params.camera.face_detector = "blazeface"
+    rig = CameraRig(params.validate())
+    far = rig.shot(5.0, 0.0, 0.0, 2)
+    assert far["detected"]
+    for emotion in (0, 1, 2):
+        near = rig.shot(1.0, 0.0, 0.0, emotion)
+        assert near["detected"] and near["estimate"] == emotion
+    haar = CameraRig(EmotionEstimateParams(mode="camera")).shot(5.0, 0.0, 0.0, 2)
+    assert not haar["detected"]
+
+
+def test_an_unknown_face_detector_names_the_field():
+    from emonav_drake.params import ConfigError
+    from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+
+    params = EmotionEstimateParams(mode="camera")
+    params.camera.face_detector = "yolo"
+    with pytest.raises(ConfigError, match="emotion_estimate.camera.face_detector"):
+        params.validate()

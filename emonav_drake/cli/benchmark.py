@@ -128,6 +128,8 @@ def _emotion_estimate_yaml(args: argparse.Namespace) -> str | None:
         text = text[: text.index("camera:\n")]
     elif params.mode == "camera":
         text = text[: text.index("track_decay:")]
+    if params.mode in CAMERA_MODES and params.camera.face_detector == "haar":
+        text = text.replace("  face_detector: haar\n", "")
     return text
 
 

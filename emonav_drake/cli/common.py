@@ -214,9 +214,10 @@ def add_emotion_flags(p: argparse.ArgumentParser) -> None:
         default="truth",
         help="truth: the simulator's emotions; camera: the robot's head camera renders the "
         "pedestrians' faces and the face cascade + CNN read them at 0.5 Hz, neutral when no "
-        "face is seen; camera_tracks: the same faces, each emotion kept with the LiDAR track "
-        "of its person until 10 s after the last sighting (needs --state-source lidar or "
-        "--deployable; docs/perception.md)",
+        "face is seen (the paper's pipeline: the Haar cascade); camera_tracks: faces found by "
+        "BlazeFace at each pedestrian's head (to 6 m), each emotion kept with the LiDAR "
+        "track of its person until 10 s after the last sighting (needs --state-source lidar "
+        "or --deployable; docs/perception.md)",
     )
     p.add_argument(
         "--emotion-estimate",
@@ -235,7 +236,10 @@ def emotion_estimate_of(args: argparse.Namespace) -> Any:
         if params is None:
             from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 
-            return EmotionEstimateParams(mode=source).validate()
+            params = EmotionEstimateParams(mode=source)
+            if source == "camera_tracks":  # ours: BlazeFace at the tracked heads
+                params.camera.face_detector = "blazeface"
+            return params.validate()
         if params.mode != source:
             raise ConfigError(
                 f"--emotion-source {source} and --emotion-estimate {args.emotion_estimate} "

@@ -156,6 +156,8 @@ def make_classifier(
         period=params.period,
         max_range=cam.max_range,
         keep_image=keep_image,
+        face_detector=cam.face_detector,
+        camera_height=cam.lip_height,
     )
 
 

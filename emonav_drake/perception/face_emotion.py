@@ -261,7 +261,12 @@ class FaceEmotionClassifier:
 
     def classify_gray(self, gray: np.ndarray) -> list[FaceEmotion]:
         """Detected faces and their emotions in a gray uint8 image."""
-        boxes = self.detect(gray)
+        return self.classify_boxes(gray, self.detect(gray))
+
+    def classify_boxes(self, gray: np.ndarray, boxes: np.ndarray) -> list[FaceEmotion]:
+        """The emotions of the faces at `boxes` (F, 4) (x, y, w, h) [px] found by any
+        detector, in a gray uint8 image."""
+        boxes = np.asarray(boxes, dtype=np.int64).reshape(-1, 4)
         probs = self.predict(self.crops(gray, boxes))
         return [FaceEmotion(tuple(int(v) for v in b), p) for b, p in zip(boxes, probs, strict=True)]
 

@@ -29,6 +29,7 @@ from emonav_drake.typed_yaml import validate_fields
 NUM_EMOTIONS = len(EMOTION_NAMES)
 ESTIMATE_MODES = ("ground_truth", "confusion", "classifier", "camera", "camera_tracks")
 CAMERA_MODES = ("camera", "camera_tracks")  # the modes that render faces for the head camera
+FACE_DETECTORS = ("haar", "blazeface")
 
 
 def validate_confusion(matrix: object, name: str = "confusion") -> np.ndarray:
@@ -146,6 +147,12 @@ class HeadCameraParams:
     far: float = setting(15.0, "rendering clipping range: far", "m", (0.01, 1000.0))
     min_face_size: int = setting(24, "smallest face the Haar cascade accepts", "px", (8, 4096))
     max_range: float = setting(6.0, "pedestrians farther than this get no face", "m", (0.1, 100.0))
+    face_detector: str = setting(
+        "haar",
+        "\"haar\" (OpenCV's frontal-face cascade on the whole image: the paper's) or "
+        "\"blazeface\" (MediaPipe's BlazeFace on a region at each pedestrian's head: faces to "
+        "6 m, perception/blazeface.py)",
+    )
 
     @classmethod
     def vga(cls, **overrides: object) -> "HeadCameraParams":
@@ -160,6 +167,10 @@ class HeadCameraParams:
         validate_fields(self, f"{pre}.")
         if not self.near < self.far:
             raise ConfigError(f"{pre}: near {self.near!r}, far {self.far!r}: 0 < near < far")
+        if self.face_detector not in FACE_DETECTORS:
+            raise ConfigError(
+                f"{pre}.face_detector = {self.face_detector!r}: one of {FACE_DETECTORS}"
+            )
         if not self.min_face_size <= min(self.width, self.height):
             raise ConfigError(
                 f"{pre}.min_face_size = {self.min_face_size}: at most the image's "

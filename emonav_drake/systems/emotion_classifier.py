@@ -90,6 +90,12 @@ def image_from_bgr(bgr: np.ndarray) -> ImageRgba8U:
     return image
 
 
+# BlazeFace's boxes (eyes to mouth) widened by this to the cascade-like framing the CNN
+# reads best: 3-way accuracy on rendered faces at 1-6 m, 0-30° of yaw, among the faces
+# found: 1.0 → 0.69, 1.2 → 0.71, 1.4 → 0.57, 1.6 → 0.44 (the cascade's own boxes: 0.69).
+BLAZEFACE_BOX_SCALE = 1.2
+
+
 class EmotionClassifier(LeafSystem):
     """Face emotions at 0.5 Hz, assigned to pedestrians by bearing.
 
@@ -107,6 +113,12 @@ class EmotionClassifier(LeafSystem):
             restarts whenever the pedestrian's face is lost.
         keep_image: keep each classified image in the estimate (`EmotionEstimate.image`,
             for recording what the camera saw).
+        face_detector: "haar" (the classifier's cascade on the whole image) or
+            "blazeface" (`perception/blazeface.py` on a square region at each visible
+            pedestrian's projected head, its boxes widened by `BLAZEFACE_BOX_SCALE` to
+            the framing the CNN was trained on).
+        camera_height: height of the camera above the ground [m], to project a head
+            (`PedestrianBody.head_center_height`) into the image for "blazeface".
     """
 
     def __init__(
@@ -119,8 +131,18 @@ class EmotionClassifier(LeafSystem):
         bearing_tolerance: float = np.deg2rad(3.0),
         smoothing: float = 1.0,
         keep_image: bool = False,
+        face_detector: str = "haar",
+        camera_height: float = 1.45,
     ) -> None:
         super().__init__()
+        if face_detector not in ("haar", "blazeface"):
+            raise ValueError(f"face_detector = {face_detector!r}: 'haar' or 'blazeface'")
+        self.face_detector, self.camera_height = face_detector, float(camera_height)
+        self._blazeface = None
+        if face_detector == "blazeface":
+            from emonav_drake.perception.blazeface import BlazeFaceDetector
+
+            self._blazeface = BlazeFaceDetector()
         if not period > 0:
             raise ValueError(f"period = {period}: must be > 0")
         if not 0.0 < smoothing <= 1.0:
@@ -177,6 +199,41 @@ class EmotionClassifier(LeafSystem):
             self.bearing_tolerance,
         )
 
+    def head_regions(self, bearing: np.ndarray, dist: np.ndarray) -> list[tuple[int, int, int]]:
+        """Square regions (x0, y0, side) [px] centred where each visible pedestrian's head
+        projects (bearing [rad] relative to the heading, NaN: not visible; distance [m]),
+        2.5 face heights wide and at least the detector's 128 px."""
+        from emonav_drake.core.pedestrian_pose import PedestrianBody
+        from emonav_drake.perception.blazeface import INPUT
+
+        body, cam = PedestrianBody(), self.camera
+        regions = []
+        for b, d in zip(bearing, dist, strict=True):
+            if not np.isfinite(b):
+                continue
+            off = b - self.camera_yaw
+            ahead = max(d * np.cos(off), 0.1)
+            u = cam.center_x() - cam.focal_x() * np.tan(off)
+            v = (
+                cam.center_y()
+                - cam.focal_y() * (body.head_center_height - self.camera_height) / ahead
+            )
+            side = int(max(INPUT, 2.5 * cam.focal_y() * body.face_height / ahead))
+            regions.append((int(round(u - side / 2)), int(round(v - side / 2)), side))
+        return regions
+
+    def _blazeface_faces(self, rgba: np.ndarray, bearing: np.ndarray, dist: np.ndarray) -> list:
+        """BlazeFace on the head regions, then the CNN on its widened boxes."""
+        from emonav_drake.perception.image_io import to_gray
+
+        rgb = rgba[:, :, :3]
+        boxes, _ = self._blazeface.detect_regions(rgb, self.head_regions(bearing, dist), rgb=True)
+        if len(boxes):
+            centre = boxes[:, :2] + boxes[:, 2:] / 2.0
+            size = boxes[:, 2:] * BLAZEFACE_BOX_SCALE
+            boxes = np.round(np.hstack([centre - size / 2.0, size])).astype(np.int64)
+        return self.classifier.classify_boxes(to_gray(rgb, "rgb"), boxes)
+
     def estimate(
         self, context: Context, previous: EmotionEstimate | None = None
     ) -> EmotionEstimate:
@@ -188,7 +245,10 @@ class EmotionClassifier(LeafSystem):
         image = self._image_in.Eval(context)
         if image.width() == 0 or image.height() == 0:
             return EmotionEstimate.empty(num_peds, context.get_time())
-        faces = self.classifier.classify(image.data, channel_order="rgb")
+        if self._blazeface is None:
+            faces = self.classifier.classify(image.data, channel_order="rgb")
+        else:
+            faces = self._blazeface_faces(np.asarray(image.data), bearing, dist)
         boxes = np.array([f.box for f in faces], dtype=np.int64).reshape(-1, 4)
         probs = np.array([f.probabilities for f in faces]).reshape(-1, len(CLASS_NAMES))
         cam = self.camera
