@@ -49,6 +49,10 @@ class EpisodeTrace:
             2 negative).
         rewards: per row, the reward of the step ending at t_k (Eq. 6–9, the episode
             monitor's); NaN at k = 0 and where the monitor gives none.
+        perceived: (P,) per row: the emotion code each true pedestrian has in the crowd
+            the planner reads (`perceived_emotions`): −1 where the robot does not
+            perceive that pedestrian (not tracked). Empty arrays when not recorded (the
+            calibration files do not hold it).
     """
 
     k: list[int] = dc.field(default_factory=list)
@@ -58,6 +62,7 @@ class EpisodeTrace:
     pedestrians: list[np.ndarray] = dc.field(default_factory=list)
     emotions: list[np.ndarray] = dc.field(default_factory=list)
     rewards: list[float] = dc.field(default_factory=list)
+    perceived: list[np.ndarray] = dc.field(default_factory=list)
 
     def append(
         self,
@@ -68,6 +73,7 @@ class EpisodeTrace:
         pedestrians: np.ndarray,
         emotions: np.ndarray,
         reward: float = math.nan,
+        perceived: np.ndarray | None = None,
     ) -> None:
         """Add the row of instant k (copies of the arrays)."""
         self.k.append(int(k))
@@ -77,6 +83,9 @@ class EpisodeTrace:
         self.pedestrians.append(np.array(pedestrians, dtype=float).reshape(-1, 2))
         self.emotions.append(np.array(emotions, dtype=np.int64).reshape(-1))
         self.rewards.append(float(reward))
+        self.perceived.append(
+            np.zeros(0, np.int64) if perceived is None else np.array(perceived, np.int64)
+        )
 
     def __len__(self) -> int:
         return len(self.t)
@@ -126,6 +135,36 @@ class EpisodeTrace:
                 row.get("reward", math.nan),
             )
         return trace
+
+
+# A pedestrian of the planner's crowd is the true pedestrian i when its centre lies
+# within this of i's [m] (the tracker's estimates are centimetres off; a pass-through crowd
+# is exact).
+PERCEIVED_MATCH = 0.5
+
+
+def perceived_emotions(
+    true_positions: np.ndarray, perceived_positions: np.ndarray, perceived_codes: np.ndarray
+) -> np.ndarray:
+    """(P,) the emotion code each true pedestrian (P, 2) [m] has in a perceived crowd
+    (positions (Q, 2) [m], codes (Q,)): the code of the perceived pedestrian nearest it
+    within `PERCEIVED_MATCH`, each perceived one taken once, nearest pairs first; −1 for
+    a true pedestrian the crowd does not hold."""
+    truth = np.asarray(true_positions, dtype=float).reshape(-1, 2)
+    seen = np.asarray(perceived_positions, dtype=float).reshape(-1, 2)
+    codes = np.asarray(perceived_codes, dtype=np.int64).reshape(-1)
+    out = np.full(len(truth), -1, dtype=np.int64)
+    if len(truth) == 0 or len(seen) == 0:
+        return out
+    gap = np.hypot(truth[:, None, 0] - seen[None, :, 0], truth[:, None, 1] - seen[None, :, 1])
+    taken = np.zeros(len(seen), dtype=bool)
+    for flat in np.argsort(gap, axis=None, kind="stable"):
+        i, j = divmod(int(flat), len(seen))
+        if gap[i, j] > PERCEIVED_MATCH:
+            break
+        if out[i] < 0 and not taken[j]:
+            out[i], taken[j] = codes[j], True
+    return out
 
 
 def trace_columns(trace: EpisodeTrace | Sequence[Mapping], *names: str) -> list[np.ndarray]:

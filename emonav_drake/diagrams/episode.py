@@ -34,7 +34,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from emonav_drake.core.episode_trace import EpisodeTrace
+from emonav_drake.core.episode_trace import EpisodeTrace, perceived_emotions
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.params import EmoNavConfig
@@ -271,6 +271,7 @@ def _log_instant(
     robot = systems.robot.GetOutputPort("robot_state")
     crowd_sys, planner = systems.crowd, systems.planner
     crowd = crowd_sys.GetOutputPort("crowd").Eval(crowd_sys.GetMyContextFromRoot(ctx))
+    seen = planner.GetInputPort("crowd").Eval(planner.GetMyContextFromRoot(ctx))
     last = status.last_step
     log.append(
         k,
@@ -280,4 +281,5 @@ def _log_instant(
         crowd.positions,
         crowd.emotions,
         math.nan if last is None else last.reward,
+        perceived_emotions(crowd.positions, seen.positions, seen.emotions),
     )
