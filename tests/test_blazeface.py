@@ -68,7 +68,8 @@ def test_the_tiles_cover_the_frame_and_regions_may_leave_it(detector):
         covered[y : y + side, x : x + side] = True
     assert covered.all() and tiles[-1] == (0, 0, 1280)
     frame = np.zeros((720, 1280, 3), np.uint8)
-    boxes, scores = detector.detect_regions(frame, [(-64, -64, 128), (1200, 680, 128)])
+    regions = [(-64, -64, 128), (1200, 680, 128), (-1400, 10, 380), (1300, 800, 128)]
+    boxes, scores = detector.detect_regions(frame, regions)
     assert boxes.shape == (0, 4) and scores.shape == (0,)
 
 

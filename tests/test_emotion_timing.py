@@ -85,3 +85,22 @@ def test_a_lip_episode_records_what_the_planner_perceived():
     assert len(trace.perceived) == len(trace.t) > 5
     for seen, truth in zip(trace.perceived, trace.emotions, strict=True):
         assert np.array_equal(seen, truth)
+
+
+def test_the_study_on_ray_equals_the_serial_run_and_the_script_writes_its_table(tmp_path, capsys):
+    from emonav_drake.evaluation.emotion_timing_study import study
+    from scripts.emotion_timing_study import main
+
+    args = ([800_001], ["paper"], ["truth", "camera_tracks_blazeface"])
+    serial = study(*args, workers=1)
+    assert study(*args, workers=2) == serial
+    assert [r["variant"] for r in serial] == ["truth", "camera_tracks_blazeface"]
+    assert all(r["samples"] for r in serial)
+    out = tmp_path / "timing"
+    argv = ["--episodes", "1", "--first-seed", "800001", "--families", "paper"]
+    assert main([*argv, "--variants", "truth", "--out", str(out)]) == 0
+    assert "| paper | truth |" in (out / "table.md").read_text()
+    assert (out / "episodes.jsonl").read_text().count("\n") == 1
+    capsys.readouterr()
+    assert main(["--episodes", "3", "--first-seed", "498", "--out", str(tmp_path / "x")]) == 2
+    assert "0-499" in capsys.readouterr().err and not (tmp_path / "x").exists()

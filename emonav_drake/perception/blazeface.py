@@ -120,8 +120,9 @@ class BlazeFaceDetector:
         for x0, y0, side in frames:
             crop = np.zeros((side, side, 3), np.uint8)
             xa, ya = max(x0, 0), max(y0, 0)
-            piece = img[ya : min(y0 + side, h), xa : min(x0 + side, w)]
-            crop[ya - y0 : ya - y0 + piece.shape[0], xa - x0 : xa - x0 + piece.shape[1]] = piece
+            xb, yb = min(x0 + side, w), min(y0 + side, h)
+            if xb > xa and yb > ya:  # else the region lies outside the frame: all black
+                crop[ya - y0 : yb - y0, xa - x0 : xb - x0] = img[ya:yb, xa:xb]
             crops.append(cv2.resize(crop, (INPUT, INPUT), interpolation=cv2.INTER_AREA))
         # one forward pass per tile: OpenCV's TFLite import does not batch this network
         scores = np.empty((len(crops), len(self._anchors)), np.float32)
