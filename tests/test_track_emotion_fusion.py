@@ -130,3 +130,71 @@ def test_a_benchmark_with_kept_emotions_on_ray_equals_the_serial_run(tmp_path):
     serial = sorted(records(tmp_path / "serial"), key=lambda t: t["seed"])
     assert serial == sorted(records(tmp_path / "ray"), key=lambda t: t["seed"])
     assert len(serial) == 2
+
+
+def test_the_maps_ring_the_perceived_pedestrians_and_scan_the_true_ones():
+    """`observation_frame(..., inflation=)`: the real scan (the maps' 255 cells) is the
+    true crowd's, the discomfort rings (127 cells) are the perceived crowd's."""
+    import dataclasses as dc
+
+    from emonav_drake.core.crowd import CrowdSnapshot
+    from emonav_drake.core.lip import LipState
+    from emonav_drake.core.observations import observation_frame
+    from emonav_drake.params import apply_sensor_preset
+
+    cfg = EmoNavConfig()
+    apply_sensor_preset(cfg, "vlp16")
+    truth = CrowdSnapshot(
+        positions=np.array([[2.5, 0.0]]),
+        velocities=np.zeros((1, 2)),
+        radius=0.3,
+        emotions=np.array([1]),
+        discomfort=np.array([0.35]),
+        static_centers=np.zeros((0, 2)),
+        static_radii=np.zeros(0),
+        static_discomfort=0.2,
+    )
+    robot = LipState(0.0, 0.0, 0.0, 0.0)
+    plain = observation_frame(robot, truth, cfg, "lgm")
+    same = observation_frame(robot, truth, cfg, "lgm", inflation=truth)
+    assert np.array_equal(plain, same)
+    negative = dc.replace(truth, emotions=np.array([2]), discomfort=np.array([0.5]))
+    wider = observation_frame(robot, truth, cfg, "lgm", inflation=negative)
+    assert np.array_equal(wider == 255, plain == 255)  # the same real scan
+    assert (wider == 127).sum() > (plain == 127).sum()  # a wider ring
+    gone = dc.replace(
+        truth,
+        positions=np.zeros((0, 2)),
+        velocities=np.zeros((0, 2)),
+        emotions=np.zeros(0, np.int64),
+        discomfort=np.zeros(0),
+    )
+    unseen = observation_frame(robot, truth, cfg, "lgm", inflation=gone)
+    assert (
+        np.array_equal(unseen == 255, plain == 255) and (unseen == 127).sum() < (plain == 127).sum()
+    )
+    with pytest.raises(ValueError, match="drlvo"):
+        observation_frame(robot, truth, cfg, "drlvo", inflation=truth)
+
+
+def test_a_policy_runs_deployable_with_kept_emotions_in_its_maps():
+    """The learned policy in the deployable setting with camera_tracks: its maps' rings
+    come from the tracker's crowd (the maps' perceived_crowd input is connected)."""
+    from emonav_drake.params import apply_deployable
+
+    cfg = EmoNavConfig()
+    apply_deployable(cfg)
+    cfg.episode.max_steps = 15
+    nav = build_navigation_diagram(
+        sample_scenario(SEED, cfg),
+        cfg,
+        make_planner("policy", cfg),
+        emotion_estimate=EmotionEstimateParams(mode="camera_tracks"),
+    )
+    maps = nav.diagram.GetSubsystemByName("grid_maps")
+    ctx = nav.diagram.CreateDefaultContext()
+    assert maps.GetInputPort("perceived_crowd").HasValue(maps.GetMyContextFromRoot(ctx))
+    sim = Simulator(nav.diagram)
+    sim.AdvanceTo(3.0)
+    stack = maps.GetOutputPort("lgm_stack").Eval(maps.GetMyContextFromRoot(sim.get_context()))
+    assert stack.shape[0] == cfg.lidar.num_frames and (stack == 255).any()

@@ -168,12 +168,40 @@ def observation_dtype(kind: str) -> np.dtype:
 
 
 def observation_frame(
-    robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig, kind: str = "lgm"
+    robot: LipState,
+    crowd: CrowdSnapshot,
+    config: EmoNavConfig,
+    kind: str = "lgm",
+    inflation: CrowdSnapshot | None = None,
 ) -> np.ndarray:
     """One observation frame of `kind` seen from the robot's CoM and heading (module
     docstring). The environment (`NavigationWorld`) and the diagram
-    (`LidarGridMapBuilder`) both build their observations from this function."""
-    return observation_kind(kind).frame(robot, crowd, config)
+    (`LidarGridMapBuilder`) both build their observations from this function.
+
+    `inflation`: the crowd whose discs (grown by their discomfort margins) make the grid
+    maps' inflated layer instead of `crowd`'s — e.g. the pedestrians as the robot tracks
+    them, with the emotions it keeps for them — while the real scan stays `crowd`'s (the
+    world the LiDAR sees). Grid kinds ("lgm", "ogm") only; kinds without an inflated
+    layer ignore it; "drlvo" refuses it."""
+    k = observation_kind(kind)
+    if inflation is None or kind not in ("lgm", "ogm", "drlvo"):
+        return k.frame(robot, crowd, config)
+    if kind == "drlvo":
+        raise ValueError("the drlvo kind's maps cannot take a perceived crowd's inflation")
+    return _grid_from_ranges(kind, robot, crowd, inflation, config)
+
+
+def _grid_from_ranges(
+    kind: str, robot: LipState, crowd: CrowdSnapshot, inflation: CrowdSnapshot, config: EmoNavConfig
+) -> np.ndarray:
+    """A grid frame from the sensor's scan of `crowd` and the inflated scan of
+    `inflation` (`lgm_from_ranges` / `ogm_from_ranges`)."""
+    li = config.lidar
+    xy = np.array([robot.x, robot.y])
+    hit = sensed_ranges(xy, robot.heading, crowd, config)
+    inflated = inflated_ranges(xy, robot.heading, inflation, config)
+    to_grid = lgm_from_ranges if kind == "lgm" else ogm_from_ranges
+    return to_grid(hit, inflated, li.grid_size, li.max_range)
 
 
 def mirror_observation(stacks: np.ndarray, kind: str) -> np.ndarray:
@@ -187,11 +215,7 @@ def _grid_frame(kind: str) -> Callable[[LipState, CrowdSnapshot, EmoNavConfig], 
     def frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
         li = config.lidar
         if not config.sensor.is_exact():
-            xy = np.array([robot.x, robot.y])
-            hit = sensed_ranges(xy, robot.heading, crowd, config)
-            inflated = inflated_ranges(xy, robot.heading, crowd, config)
-            to_grid = lgm_from_ranges if kind == "lgm" else ogm_from_ranges
-            return to_grid(hit, inflated, li.grid_size, li.max_range)
+            return _grid_from_ranges(kind, robot, crowd, crowd, config)
         centers, radii, margins = obstacle_discs(crowd)
         return lgm_frame(
             np.array([robot.x, robot.y]),

@@ -55,7 +55,7 @@ from emonav_drake.diagrams.episode import (
     run_navigation_episode,
     training_request,
 )
-from emonav_drake.params import EmoNavConfig
+from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.perception.noisy_emotions import CAMERA_MODES, EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
 from emonav_drake.systems.crowd_system import CrowdSystem
@@ -167,6 +167,14 @@ def AddNavigationStack(
             camera_frames,
             tracker,
         )
+        if tracker is not None and emotion_estimate.mode == "camera_tracks":
+            if grid_kind == "drlvo":
+                raise ConfigError(
+                    "emotion source camera_tracks rings the tracked pedestrians in the grid "
+                    "maps; the drlvo observation cannot take them"
+                )
+            # the maps' discomfort rings: around the tracked people, their kept emotions
+            b.Connect(tracker.GetOutputPort("crowd"), maps.GetInputPort("perceived_crowd"))
     elif emotion_estimate is not None and emotion_estimate.mode != "ground_truth":
         AddEmotionEstimateSource(
             b, crowd.GetOutputPort("crowd"), perceivers, config, emotion_estimate

@@ -11,6 +11,11 @@ Input ports:
         with their discomfort margins, and walls (`wall_segments`, with the static
         discomfort margin in the maps' inflated scan); for "drlvo" also the pedestrians'
         velocities.
+    perceived_crowd (abstract `CrowdSnapshot`, optional): the pedestrians as the robot
+        perceives them (the LiDAR tracker's crowd, with the emotions it keeps per track):
+        when connected, the grid maps' inflated layer rings these pedestrians with their
+        perceived discomfort distances (the static discs and walls stay `crowd`'s), while
+        the real scan stays `crowd`'s. Grid kinds ("lgm", "ogm") only.
 Output ports:
     lgm_stack (abstract numpy array): the map observation, robot frame, oldest first —
         the N − 1 frames stored at the previous walking steps followed by the frame seen
@@ -32,6 +37,8 @@ Abstract state: the stored frames, pushed at every walking step t_k = kT.
 """
 
 from __future__ import annotations
+
+import dataclasses as dc
 
 import numpy as np
 from pydrake.common.value import AbstractValue
@@ -69,6 +76,9 @@ class LidarGridMapBuilder(LeafSystem):
         )
         self._robot_in = self.DeclareVectorInputPort("robot_state", 4)
         self._crowd_in = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
+        self._perceived_in = self.DeclareAbstractInputPort(
+            "perceived_crowd", AbstractValue.Make(object())
+        )
         self._frame_cache = self.DeclareCacheEntry(
             "frame",
             ValueProducer(
@@ -83,9 +93,11 @@ class LidarGridMapBuilder(LeafSystem):
             {self.all_input_ports_ticket(), self.all_state_ticket()},
         )
         li = config.lidar
-        self.DeclareVectorOutputPort(
-            "scan", li.num_beams, self._calc_scan, {self.all_input_ports_ticket()}
-        )
+        scan_inputs = {
+            self.input_port_ticket(self._robot_in.get_index()),
+            self.input_port_ticket(self._crowd_in.get_index()),
+        }  # not perceived_crowd: the tracker reads the scan and writes that crowd
+        self.DeclareVectorOutputPort("scan", li.num_beams, self._calc_scan, scan_inputs)
         self.DeclarePeriodicUnrestrictedUpdateEvent(config.robot.step_time, 0.0, self._push)
 
     @property
@@ -95,7 +107,17 @@ class LidarGridMapBuilder(LeafSystem):
     def _calc_frame(self, context: Context, value: AbstractValue) -> None:
         robot = lip_state_from_vector(self._robot_in.Eval(context))
         crowd = self._crowd_in.Eval(context)
-        value.set_value(observation_frame(robot, crowd, self._config, self._kind))
+        inflation = None
+        if self._perceived_in.HasValue(context):
+            seen = self._perceived_in.Eval(context)
+            inflation = dc.replace(
+                crowd,
+                positions=seen.positions,
+                velocities=seen.velocities,
+                emotions=seen.emotions,
+                discomfort=seen.discomfort,
+            )
+        value.set_value(observation_frame(robot, crowd, self._config, self._kind, inflation))
 
     def _stack(self, context: Context) -> np.ndarray:
         frame = self._frame_cache.Eval(context)
