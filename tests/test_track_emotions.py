@@ -128,3 +128,41 @@ def test_mismatched_inputs_are_refused():
         mem.update(0.0, np.array([1, 2]), [0.0], [2.0], [], np.zeros((0, 3)))
     with pytest.raises(ValueError, match="face probabilities"):
         mem.update(0.0, np.array([1]), [0.0], [2.0], [0.0, 0.1], [HAPPY_FACE])
+
+
+def test_the_fusion_system_gates_a_face_by_the_range_its_box_gives():
+    """`TrackEmotionFusion`: two people on one bearing, 2 m and 4 m away; a face box 23 px
+    tall says ≈ 4 m (focal 514 px × 0.18 m / 23 px): the far track takes it. Without the
+    focal length the bearing decides (the near one is dead ahead)."""
+    from pydrake.systems.analysis import Simulator
+
+    from emonav_drake.systems.crowd_tracker_system import TrackedPeople
+    from emonav_drake.systems.emotion_classifier import EmotionEstimate
+    from emonav_drake.systems.track_emotion_fusion import FACE_BOX_HEIGHT, TrackEmotionFusion
+
+    probs7 = np.zeros((1, 7))
+    probs7[0, 0] = 1.0  # angry: negative
+    estimate = EmotionEstimate(
+        time=0.5,
+        boxes=np.array([[600, 300, 23, 23]]),
+        probabilities=probs7,
+        labels=np.array([2]),
+        bearings=np.array([0.0]),
+        face_pedestrian=np.array([-1]),
+        pedestrian_emotions=np.zeros(0, np.int64),
+        pedestrian_probabilities=np.zeros((0, 7)),
+    )
+    tracks = TrackedPeople(
+        np.array([7, 8]), np.array([[2.0, 0.0], [4.0, 0.1]]), np.zeros(2, bool), 0.5
+    )
+    assert 514 * FACE_BOX_HEIGHT / 23 == pytest.approx(4.0, abs=0.05)
+    for focal, owner in ((514.0, 8), (None, 7)):
+        fusion = TrackEmotionFusion(0.1, math.radians(51), 6.0, focal_y=focal)
+        ctx = fusion.CreateDefaultContext()
+        fusion.GetInputPort("detections").FixValue(ctx, estimate)
+        fusion.GetInputPort("robot_state").FixValue(ctx, np.zeros(4))
+        fusion.GetInputPort("tracks").FixValue(ctx, tracks)
+        sim = Simulator(fusion, ctx)
+        sim.AdvanceTo(0.15)  # the periodic updates at 0 and 0.1 s fold the estimate in
+        codes = fusion.GetOutputPort("track_emotions").Eval(sim.get_context()).codes
+        assert codes == {owner: NEGATIVE}, (focal, codes)

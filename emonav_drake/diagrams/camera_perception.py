@@ -218,6 +218,7 @@ def AddCameraPerception(
                     decay_time=params.track_decay,
                     pedestrian_radius=config.crowd.pedestrian_radius,
                 ),
+                focal_y=classifier.camera.focal_y(),
             ),
         )
         builder.Connect(classifier.GetOutputPort("detections"), fusion.GetInputPort("detections"))

@@ -36,7 +36,7 @@ class TrackEmotionParams:
     )
     window: int = 5  # the running average weighs the last `window` sightings (a mean until then)
     bearing_tolerance: float = math.radians(3.0)  # added to a track's angular radius [rad]
-    range_tolerance: float = 0.35  # |face range − track range| ≤ this × track range
+    range_tolerance: float = 0.4  # |face range − track range| ≤ this × track range
     pedestrian_radius: float = 0.3  # a track's radius for its angular size [m]
 
     def validate(self) -> TrackEmotionParams:
