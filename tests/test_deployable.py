@@ -144,7 +144,31 @@ def test_eval_says_what_the_robot_sensed(tmp_path, capsys):
     assert main([*argv, "--config", str(config), "--deployable", "--json", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "sensed: short [0.2, 0.35, 0.5] m, deployable (lidar state, sensor vlp16)" in printed
-    assert "emotions: ground truth" in printed
+    assert "emotions: camera_tracks" in printed  # a robot's own camera, kept per track
     result = json.loads(out.read_text())
     assert result["deployable"] is True and result["sensor"] == "vlp16"
-    assert result["state_source"] == "lidar" and result["emotion_source"] == "ground truth"
+    assert result["state_source"] == "lidar" and result["emotion_source"] == "camera_tracks"
+    argv += ["--config", str(config), "--deployable", "--emotion-source", "truth"]
+    assert main([*argv, "--json", str(out)]) == 0
+    assert "emotions: ground truth" in capsys.readouterr().out
+
+
+def test_deployable_sees_emotions_with_its_camera_unless_told_otherwise():
+    from emonav_drake.cli.common import emotion_estimate_of
+    from emonav_drake.evaluation.failures import rerun_command
+
+    def estimate(**flags):
+        base = dict(emotion_source=None, emotion_estimate=None, deployable=False)
+        return emotion_estimate_of(argparse.Namespace(**{**base, **flags}))
+
+    assert estimate() is None
+    kept = estimate(deployable=True)
+    assert kept.mode == "camera_tracks" and kept.camera.face_detector == "blazeface"
+    assert estimate(deployable=True, emotion_source="truth") is None
+    assert estimate(deployable=True, emotion_source="camera").mode == "camera"
+    # a deployable run made with the simulator's emotions replays with them
+    r = resolved(setting="var_dd", deployable=True)
+    methods = [MethodSpec("mpc", "mpc", None, None, "state")]
+    settings = make_settings(methods, "digit", 3, 0, r.config, r.setting, r.source)
+    command = rerun_command(settings, "mpc", 2)
+    assert command.endswith("--setting var_dd --deployable --emotion-source truth")

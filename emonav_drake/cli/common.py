@@ -211,13 +211,14 @@ def add_emotion_flags(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--emotion-source",
         choices=EMOTION_SOURCES,
-        default="truth",
+        default=None,
         help="truth: the simulator's emotions; camera: the robot's head camera renders the "
         "pedestrians' faces and the face cascade + CNN read them at 0.5 Hz, neutral when no "
         "face is seen (the paper's pipeline: the Haar cascade); camera_tracks: faces found by "
         "BlazeFace at each pedestrian's head (to 6 m), each emotion kept with the LiDAR "
         "track of its person until 10 s after the last sighting (needs --state-source lidar "
-        "or --deployable; docs/perception.md)",
+        "or --deployable; docs/perception.md); default: truth, with --deployable "
+        "camera_tracks",
     )
     p.add_argument(
         "--emotion-estimate",
@@ -230,7 +231,10 @@ def add_emotion_flags(p: argparse.ArgumentParser) -> None:
 def emotion_estimate_of(args: argparse.Namespace) -> Any:
     """The `EmotionEstimateParams` of --emotion-source / --emotion-estimate, or None for
     the ground truth; `ConfigError` when the two disagree."""
-    source = getattr(args, "emotion_source", "truth")
+    source = getattr(args, "emotion_source", None)
+    if source is None:  # what a robot could run also sees emotions with its own camera
+        deployable = bool(getattr(args, "deployable", False))
+        source = "camera_tracks" if deployable and not args.emotion_estimate else "truth"
     params = load_emotion_estimate(args.emotion_estimate)
     if source in ("camera", "camera_tracks"):
         if params is None:

@@ -199,8 +199,9 @@ DEPLOYABLE_HELP = (
     "what a robot could run: the state-based planners read the crowd tracked in the LiDAR "
     "scan (--state-source lidar) and the scan is a real sensor's, with its faults "
     f"(--sensor {DEPLOYABLE_SENSOR}, Digit's head LiDAR, unless --sensor names another real "
-    "one); the learned policies read their grid maps of that scan. Emotions still come from "
-    "--emotion-source (default: the simulator's)"
+    "one); the learned policies read their grid maps of that scan; the emotions are the "
+    "head camera's, kept per track (--emotion-source camera_tracks) unless "
+    "--emotion-source or --emotion-estimate says otherwise"
 )
 
 

@@ -163,6 +163,8 @@ def rerun_command(
     argv += flags
     if settings.get("emotion_estimate_yaml") is not None:
         argv += ["--emotion-estimate", files.get("estimate", RUN_ESTIMATE_FILE)]
+    elif "--deployable" in flags:  # its emotions were the simulator's, not the default
+        argv += ["--emotion-source", "truth"]
     return shlex.join(argv)
 
 
