@@ -62,18 +62,7 @@ def ideal_records(setting: dict, method: str) -> dict[int, dict]:
     if not recs or sst.commit(run) == sst.commit(setting["deployable"]):
         return recs
     check = sst.records(setting["ideal_check"], method)
-    same = sorted(set(recs) & set(check))
-    if not same:
-        raise SystemExit(
-            f"{run}:{name} has no seed in common with {setting['ideal_check']}: unchecked "
-            f"(run emonav benchmark ... --out benchmarks/results/{setting['ideal_check']})"
-        )
-    diff = [s for s in same if recs[s] != check[s]]
-    if diff:
-        raise SystemExit(
-            f"{run}:{name} differs from {setting['ideal_check']} at seeds {diff[:5]}: not the "
-            "same trials (the exact scan changed)"
-        )
+    sst.check_same_trials(f"{run}:{name}", recs, setting["ideal_check"], check)
     return recs
 
 

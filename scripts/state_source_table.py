@@ -76,6 +76,22 @@ def commit(run: str) -> str:
     return json.loads((RESULTS / run / "settings.json").read_text())["package"]["commit"]
 
 
+def check_same_trials(name: str, recs: dict[int, dict], check_run: str, check: dict) -> None:
+    """`SystemExit` unless the trials `recs` of `name` (run:method) equal those of the
+    check run on every seed both ran, and they share at least one."""
+    same = sorted(set(recs) & set(check))
+    if not same:
+        raise SystemExit(
+            f"{name} has no seed in common with {check_run}: unchecked (run the check: "
+            f"emonav benchmark ... --out benchmarks/results/{check_run})"
+        )
+    diff = [s for s in same if recs[s] != check[s]]
+    if diff:
+        raise SystemExit(
+            f"{name} differs from {check_run} at seeds {diff[:5]}: not the same trials"
+        )
+
+
 def truth_records(setting: dict, method: str) -> dict[int, dict]:
     """The method's truth trials of `setting`, each run made at another commit than the
     lidar run checked against the check run."""
@@ -85,17 +101,7 @@ def truth_records(setting: dict, method: str) -> dict[int, dict]:
     for run in setting["truth"][method]:
         recs = records(run, method)
         if recs and commit(run) != commit(setting["lidar"]):
-            same = sorted(set(recs) & set(check))
-            if not same:
-                raise SystemExit(
-                    f"{run}:{method} has no seed in common with {check_run}: unchecked"
-                )
-            diff = [s for s in same if recs[s] != check[s]]
-            if diff:
-                raise SystemExit(
-                    f"{run}:{method} differs from {check_run} at seeds {diff[:5]}: not the same "
-                    "trials"
-                )
+            check_same_trials(f"{run}:{method}", recs, check_run, check)
         for seed, rec in recs.items():
             out.setdefault(seed, rec)
     return out
