@@ -1,0 +1,124 @@
+"""The route on the known static map (`core/global_route.py`): checked against the geometry."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from emonav_drake.core.global_route import (
+    NoRouteError,
+    StaticMap,
+    _segment_distances,
+    lookahead_point,
+    plan_route,
+    route_length,
+)
+from emonav_drake.core.walls import point_segment_distances
+
+CLEARANCE = 0.35
+
+
+def min_clearance(route: np.ndarray, static_map: StaticMap, step: float = 0.005) -> float:
+    """The smallest distance from any point of the route (sampled every `step`) to any
+    obstacle's surface (wall segment or disc)."""
+    pts = []
+    for a, b in zip(route[:-1], route[1:], strict=True):
+        n = max(2, int(np.hypot(*(b - a)) / step) + 1)
+        pts.append(a + np.linspace(0, 1, n)[:, None] * (b - a))
+    pts = np.concatenate(pts)
+    best = math.inf
+    if len(static_map.walls):
+        best = min(best, min(point_segment_distances(p, static_map.walls).min() for p in pts))
+    if len(static_map.radii):
+        d = (
+            np.hypot(
+                pts[:, None, 0] - static_map.centers[None, :, 0],
+                pts[:, None, 1] - static_map.centers[None, :, 1],
+            )
+            - static_map.radii
+        )
+        best = min(best, float(d.min()))
+    return best
+
+
+def office() -> StaticMap:
+    """Three rooms (4 × 4 m) side by side along x from 0 to 12, each wall between rooms with
+    a 1.2 m door; the outer walls closed."""
+    walls = [
+        [[0, 0], [12, 0]],
+        [[12, 0], [12, 4]],
+        [[12, 4], [0, 4]],
+        [[0, 4], [0, 0]],  # outside
+        [[4, 0], [4, 1.4]],
+        [[4, 2.6], [4, 4]],  # door at y 1.4-2.6
+        [[8, 0], [8, 2.6]],
+        [[8, 3.8], [8, 4]],  # door at y 2.6-3.8
+    ]
+    return StaticMap.of(walls, [[6.0, 1.5]], [0.4])
+
+
+def test_an_empty_world_gives_the_straight_line():
+    route = plan_route([-4, 0], [4, 0], StaticMap.of(), CLEARANCE)
+    assert np.array_equal(route, [[-4, 0], [4, 0]])
+    assert lookahead_point(route, [-4, 0.5], 2.0).tolist() == [-2.0, 0.0]
+
+
+def test_a_wall_between_start_and_goal_is_walked_around_at_the_clearance():
+    m = StaticMap.of([[[0, -1], [0, 1]]])
+    route = plan_route([-2, 0], [2, 0], m, CLEARANCE)
+    assert len(route) > 2 and min_clearance(route, m) >= CLEARANCE - 1e-6
+    corner = math.hypot(2, 1)  # to the wall's end and on: a lower bound
+    assert 2 * corner < route_length(route) < 2 * corner + CLEARANCE * math.pi / 2
+    # same map, same route (bit for bit)
+    assert np.array_equal(plan_route([-2, 0], [2, 0], m, CLEARANCE), route)
+
+
+def test_the_route_crosses_an_office_floor_through_its_doors():
+    m = office()
+    route = plan_route([1, 1], [11, 1], m, CLEARANCE)
+    assert min_clearance(route, m) >= CLEARANCE - 1e-6
+    xs = np.linspace(0, 1, 2000)[:, None]
+    dense = np.concatenate([a + xs * (b - a) for a, b in zip(route[:-1], route[1:], strict=True)])
+    # where it crosses x = 4 and x = 8: inside the doors
+    for x, (lo, hi) in ((4.0, (1.4, 2.6)), (8.0, (2.6, 3.8))):
+        at = dense[np.argmin(np.abs(dense[:, 0] - x))]
+        assert lo + CLEARANCE - 1e-3 <= at[1] <= hi - CLEARANCE + 1e-3, (x, at)
+
+
+def test_no_route_is_an_error_that_says_why():
+    m = office()
+    with pytest.raises(NoRouteError, match=r"start .* within 0.35 m of wall 0"):
+        plan_route([1, 0.1], [11, 1], m, CLEARANCE)
+    with pytest.raises(NoRouteError, match="goal .* disc 0"):
+        plan_route([1, 1], [6.0, 1.7], m, CLEARANCE)
+    closed = StaticMap.of([*m.walls.tolist(), [[8, 2.6], [8, 3.8]]], m.centers, m.radii)
+    with pytest.raises(NoRouteError, match="close it off"):
+        plan_route([1, 1], [11, 1], closed, CLEARANCE)
+    # a door narrower than the robot: closed too
+    with pytest.raises(NoRouteError, match="close it off"):
+        plan_route([1, 1], [11, 1], m, 0.65)
+
+
+def test_segment_distances_match_a_brute_force():
+    rng = np.random.default_rng(5)
+    p0, p1 = rng.uniform(-2, 2, (40, 2)), rng.uniform(-2, 2, (40, 2))
+    q0, q1 = rng.uniform(-2, 2, (7, 2)), rng.uniform(-2, 2, (7, 2))
+    p1[0] = p0[0]  # a point
+    q1[1] = q0[1] + (q1[0] - q0[0])  # parallel to q[0]
+    got = _segment_distances(p0, p1, q0, q1)
+    u = np.linspace(0, 1, 801)[:, None]
+    for e in range(len(p0)):
+        a = p0[e] + u * (p1[e] - p0[e])
+        for w in range(len(q0)):
+            b = q0[w] + u * (q1[w] - q0[w])
+            brute = np.hypot(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1]).min()
+            assert got[e, w] <= brute + 1e-12 and got[e, w] >= brute - 5e-3
+
+
+def test_the_lookahead_walks_along_the_route_and_stops_at_its_end():
+    route = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0]])
+    assert np.allclose(lookahead_point(route, [0.5, 0.3], 1.0), [1.5, 0.0])
+    assert np.allclose(lookahead_point(route, [1.5, 0.0], 1.0), [2.0, 0.5])
+    assert np.allclose(lookahead_point(route, [2.1, 1.9], 5.0), [2.0, 2.0])
