@@ -122,3 +122,31 @@ def test_the_lookahead_walks_along_the_route_and_stops_at_its_end():
     assert np.allclose(lookahead_point(route, [0.5, 0.3], 1.0), [1.5, 0.0])
     assert np.allclose(lookahead_point(route, [1.5, 0.0], 1.0), [2.0, 0.5])
     assert np.allclose(lookahead_point(route, [2.1, 1.9], 5.0), [2.0, 2.0])
+
+
+def test_the_route_planner_system_plans_gives_the_subgoal_and_replans_when_strayed():
+    from pydrake.systems.analysis import Simulator
+
+    from emonav_drake.systems.global_route_planner import GlobalRoutePlanner
+
+    m = office()
+    planner = GlobalRoutePlanner(m, [11.0, 1.0], CLEARANCE, 0.3, period=0.4, lookahead=2.0)
+    ctx = planner.CreateDefaultContext()
+    port = planner.GetInputPort("robot_state")
+    port.FixValue(ctx, np.array([1.0, 1.0, 0.0, 0.0]))
+    sim = Simulator(planner, ctx)
+    sim.Initialize()
+    route = planner.GetOutputPort("route").Eval(ctx)
+    assert np.allclose(route[0], [1, 1]) and np.allclose(route[-1], [11, 1])
+    sub = planner.GetOutputPort("subgoal").Eval(ctx)
+    assert np.allclose(sub, lookahead_point(route, [1, 1], 2.0))
+    # a few metres on, on the route: the same route, the sub-goal moves along
+    port.FixValue(ctx, np.array([*lookahead_point(route, [1, 1], 1.0), 0.0, 0.0]))
+    sim.AdvanceTo(0.5)
+    assert np.array_equal(planner.GetOutputPort("route").Eval(ctx), route)
+    # pushed 1.5 m off it, closer to a wall than the clearance: replanned from there
+    port.FixValue(ctx, np.array([2.0, 3.68, 0.0, 0.0]))
+    sim.AdvanceTo(0.9)
+    new = planner.GetOutputPort("route").Eval(ctx)
+    assert np.allclose(new[0], [2.0, 3.68]) and np.allclose(new[-1], [11, 1])
+    assert min_clearance(new, m) >= 0.3 - 1e-6  # planned with the reduced clearance
