@@ -150,3 +150,47 @@ def test_the_route_planner_system_plans_gives_the_subgoal_and_replans_when_stray
     new = planner.GetOutputPort("route").Eval(ctx)
     assert np.allclose(new[0], [2.0, 3.68]) and np.allclose(new[-1], [11, 1])
     assert min_clearance(new, m) >= 0.3 - 1e-6  # planned with the reduced clearance
+
+
+def test_with_a_global_route_the_planner_steers_to_the_subgoal_and_without_to_the_goal():
+    from pydrake.systems.framework import DiagramBuilder
+
+    from emonav_drake.core.scenario import sample_scenario
+    from emonav_drake.diagrams.navigation import AddNavigationStack, build_navigation_diagram
+    from emonav_drake.params import EmoNavConfig
+    from emonav_drake.planners import make_planner
+    from emonav_drake.systems.lip_robot_plant import LipRobotPlant
+
+    cfg = EmoNavConfig()
+    cfg.crowd.family = "corner_traffic"
+    scenario = sample_scenario(6001, cfg)
+    assert scenario.walls
+    b = DiagramBuilder()
+    robot = b.AddNamedSystem("robot", LipRobotPlant(scenario, cfg))
+    stack = AddNavigationStack(
+        b,
+        scenario,
+        cfg,
+        make_planner("dwa", cfg),
+        robot.GetOutputPort("robot_state"),
+        global_route=True,
+    )
+    b.Connect(stack.planner.GetOutputPort("command"), robot.GetInputPort("command"))
+    diagram = b.Build()
+    ctx = diagram.CreateDefaultContext()
+    diagram.ExecuteInitializationEvents(ctx)
+    route_sys = diagram.GetSubsystemByName("global_route")
+    route = route_sys.GetOutputPort("route").Eval(route_sys.GetMyContextFromRoot(ctx))
+    goal = stack.planner.planner_input(stack.planner.GetMyContextFromRoot(ctx)).goal_xy
+    assert len(route) > 2  # around the corner
+    assert np.allclose(
+        goal, route_sys.GetOutputPort("subgoal").Eval(route_sys.GetMyContextFromRoot(ctx))
+    )
+    assert not np.allclose(goal, scenario.robot_goal)
+    plain = build_navigation_diagram(scenario, cfg, make_planner("dwa", cfg))
+    assert not plain.diagram.HasSubsystemNamed("global_route")
+    pctx = plain.diagram.CreateDefaultContext()
+    assert np.allclose(
+        plain.planner.planner_input(plain.planner.GetMyContextFromRoot(pctx)).goal_xy,
+        scenario.robot_goal,
+    )

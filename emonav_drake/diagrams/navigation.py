@@ -43,10 +43,12 @@ import dataclasses as dc
 import logging
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
 from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 
 from emonav_drake.core.episode_trace import EpisodeTrace
+from emonav_drake.core.global_route import StaticMap
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.episode import (
@@ -62,6 +64,7 @@ from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.crowd_tracker_system import CrowdTrackerSystem
 from emonav_drake.systems.emotion_estimate_source import AddEmotionEstimateSource
 from emonav_drake.systems.episode_monitor import EpisodeMonitor
+from emonav_drake.systems.global_route_planner import GlobalRoutePlanner
 from emonav_drake.systems.head_camera import CameraMount, lip_camera_mount
 from emonav_drake.systems.lidar_grid_map_builder import LidarGridMapBuilder
 from emonav_drake.systems.lip_robot_plant import LipRobotPlant
@@ -107,6 +110,29 @@ class NavigationStack:
     tracker: CrowdTrackerSystem | None = None  # perception.state_source "lidar"
 
 
+# The route keeps this much beyond the robot's radius from walls and static discs [m].
+ROUTE_MARGIN = 0.1
+
+
+def make_route_planner(scenario: Scenario, config: EmoNavConfig) -> GlobalRoutePlanner:
+    """The `GlobalRoutePlanner` of a scene: its walls and static discs, its goal, a
+    clearance of the robot's radius + `ROUTE_MARGIN` (the robot's radius when it stands
+    closer), checked every walking step."""
+    static_map = StaticMap.of(
+        [[w.start, w.end] for w in scenario.walls],
+        [o.center for o in scenario.obstacles],
+        [o.radius for o in scenario.obstacles],
+    )
+    r = config.robot.radius
+    return GlobalRoutePlanner(
+        static_map,
+        np.asarray(scenario.robot_goal, float),
+        r + ROUTE_MARGIN,
+        r,
+        period=config.robot.step_time,
+    )
+
+
 def AddNavigationStack(
     builder: DiagramBuilder,
     scenario: Scenario,
@@ -118,6 +144,7 @@ def AddNavigationStack(
     emotion_estimate: EmotionEstimateParams | None = None,
     camera_mount: CameraMount | None = None,
     camera_frames: list | None = None,
+    global_route: bool = False,
 ) -> NavigationStack:
     """Add crowd, grid maps, planner and episode monitor, wired to a robot.
 
@@ -129,6 +156,10 @@ def AddNavigationStack(
             estimate's mode "camera": `diagrams/camera_perception.py`).
         camera_frames: mode "camera" only: every classified image, annotated, is
             appended to this list as (time [s], BGR image) (`write_camera_gif`).
+        global_route: in a scene with walls, a `GlobalRoutePlanner` gives the planner its
+            goal, a sub-goal along the route around the walls (off by default: on
+            `corner_traffic` it does not help the local planners yet — LIP, LiDAR state,
+            seeds 6000-6039: DWA 10/40 either way, the MPC 1/40 against 8/40).
         Others: as `build_navigation_diagram`.
     The caller connects the planner's `command` output to its robot: (u_v [m/s], u_Δθ
     [rad]), held for the whole walking step (u_k during step k, planned at t_k).
@@ -140,6 +171,10 @@ def AddNavigationStack(
     monitor = b.AddNamedSystem("monitor", EpisodeMonitor(scenario, config, goal_radius))
     for sys in (crowd, maps, plan, monitor):
         b.Connect(robot_state, sys.GetInputPort("robot_state"))
+    if global_route and scenario.walls:  # the planner steers to a sub-goal along the route
+        route = b.AddNamedSystem("global_route", make_route_planner(scenario, config))
+        b.Connect(robot_state, route.GetInputPort("robot_state"))
+        b.Connect(route.GetOutputPort("subgoal"), plan.GetInputPort("goal"))
     planner_crowd = plan.GetInputPort("crowd")
     tracker = None
     if config.perception.state_source == "lidar":  # the planner reads the tracked crowd

@@ -124,7 +124,9 @@ class NavigationPlanner(LeafSystem):
             its Context, so one planner object may serve several contexts. None: the
             system has an `action` input port (2) instead, whose value at t_k becomes u_k
             (the Gymnasium env `EmoNavDigit-v0`).
-        goal_xy: the robot's goal in the world frame [m].
+        goal_xy: the robot's goal in the world frame [m]. The optional `goal` input (2)
+            [m, world], when connected, replaces it at every decision: the sub-goal of a
+            global route (`GlobalRoutePlanner`).
         config: the step time T and the command bounds.
     """
 
@@ -138,6 +140,7 @@ class NavigationPlanner(LeafSystem):
         self._robot = self.DeclareVectorInputPort("robot_state", 4)
         self._crowd = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
         self._lgm = self.DeclareAbstractInputPort("lgm_stack", AbstractValue.Make(object()))
+        self._goal_in = self.DeclareVectorInputPort("goal", 2)
         self._command = self.DeclareDiscreteState(np.zeros(2))
         self._plan_log = self.DeclareDiscreteState(np.array([np.nan, 0.0, 0.0]))
         memory = None if planner is None else planner.initial_memory()
@@ -152,9 +155,10 @@ class NavigationPlanner(LeafSystem):
         """The `PlannerInput` the planner sees in `context` (its `last_command` is the
         stored command, i.e. the previous step's at a foot switch before the update)."""
         lgm = self._lgm.Eval(context) if self._lgm.HasValue(context) else None
+        goal = self._goal_in.Eval(context) if self._goal_in.HasValue(context) else self._goal
         return PlannerInput(
             robot=lip_state_from_vector(self._robot.Eval(context)),
-            goal_xy=self._goal,
+            goal_xy=np.asarray(goal, dtype=float),
             last_command=context.get_discrete_state(self._command).get_value().copy(),
             crowd=with_wall_discs(self._crowd.Eval(context)),
             lgm_stack=lgm,
