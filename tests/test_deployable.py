@@ -132,6 +132,7 @@ def test_an_episode_runs_on_the_noisy_scan(tmp_path, capsys, planner):
     exact, deployable = results["exact"], results["deployable"]
     assert exact["sensor"] == "ideal" and not exact["deployable"]
     assert deployable["sensor"] == "vlp16" and deployable["deployable"]
+    assert exact["emotion_source"] == "truth" and deployable["emotion_source"] == "camera_tracks"
     assert deployable["state_source"] == "lidar"
     assert deployable["path_length"] != exact["path_length"]
 

@@ -150,6 +150,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     out["state_source"] = cfg.perception.state_source  # what the planner read of the crowd
     out["sensor"] = cfg.sensor.preset  # the LiDAR the scan came from (ideal: exact)
     out["deployable"] = is_deployable(cfg)
+    out["emotion_source"] = "truth" if estimate is None else estimate.mode
     if rates is not None and rates.report is not None:
         out.update(rates.report.to_json())
         print(_format_rates(rates.report))
