@@ -78,14 +78,19 @@ def commit(run: str) -> str:
 
 def check_same_trials(name: str, recs: dict[int, dict], check_run: str, check: dict) -> None:
     """`SystemExit` unless the trials `recs` of `name` (run:method) equal those of the
-    check run on every seed both ran, and they share at least one."""
+    check run on every seed both ran, in every field both records hold (a run made
+    before a metric was added lacks its field), and they share at least one seed."""
     same = sorted(set(recs) & set(check))
     if not same:
         raise SystemExit(
             f"{name} has no seed in common with {check_run}: unchecked (run the check: "
             f"emonav benchmark ... --out benchmarks/results/{check_run})"
         )
-    diff = [s for s in same if recs[s] != check[s]]
+
+    def differ(a: dict, b: dict) -> bool:
+        return any(a[k] != b[k] for k in set(a) & set(b))
+
+    diff = [s for s in same if differ(recs[s], check[s])]
     if diff:
         raise SystemExit(
             f"{name} differs from {check_run} at seeds {diff[:5]}: not the same trials"
