@@ -97,11 +97,14 @@ def plot(summary: dict, png: Any, title: str | None = None) -> None:
         )
     ax.set_title(f"Occluded pedestrians that were tracked (coast limit {coast:g} s)")
     m = summary["clear_mot"]
+    sensor = (summary.get("sensor") or {}).get("preset")
+    where = f", sensor {sensor}" if sensor else ""
+    where += f", family {summary['family']}" if summary.get("family") else ""
     fig.suptitle(
         title
         or (
-            f"LiDAR tracker on {summary['episodes']} LIP episodes (MPC), {summary['scans']} "
-            f"scans: MOTA {m['mota']:.3f}, MOTP {100 * m['motp']:.1f} cm, "
+            f"LiDAR tracker on {summary['episodes']} LIP episodes (MPC{where}), "
+            f"{summary['scans']} scans: MOTA {m['mota']:.3f}, MOTP {100 * m['motp']:.1f} cm, "
             f"{m['num_switches']} ID switches"
         )
     )
