@@ -9,7 +9,8 @@ LiDAR track with the cascade and with BlazeFace), --episodes LIP episodes of the
 the LiDAR tracks (`evaluation/emotion_timing_study.py`). Per pedestrian the robot comes
 close to: was the emotion the planner read the true one when the robot first came within
 the pedestrian's discomfort distance + 1 m, and could its face have been seen before?
-Writes `episodes.jsonl` (every episode and its samples), `summary.json` and `table.md`
+Writes `episodes.jsonl` (every episode and its samples, appended as each finishes, so the
+same command continues an interrupted run), `summary.json` and `table.md`
 (shares with their counts and 95 % Wilson intervals; negative-zone steps per episode).
 Evaluation seeds 0-499 are refused.
 """
@@ -54,14 +55,29 @@ def main(argv: list[str] | None = None) -> int:
     variants = [v for v in args.variants.split(",") if v]
     from emonav_drake.progress import progress_bar
 
-    total = len(seeds) * len(families) * len(variants)
-    with progress_bar(total=total, desc="emotion timing", unit="episode") as bar:
-        results = study(seeds, families, variants, args.workers, on_result=lambda r: bar.update(1))
     args.out.mkdir(parents=True, exist_ok=True)
+    log = args.out / "episodes.jsonl"  # appended as episodes finish: a rerun continues
+    done = (
+        [json.loads(line) for line in log.read_text().splitlines() if line.strip()]
+        if log.is_file()
+        else []
+    )
+    total = len(seeds) * len(families) * len(variants)
+
+    with (
+        progress_bar(total=total, desc="emotion timing", unit="episode") as bar,
+        log.open("a") as f,
+    ):
+        bar.update(min(len(done), total))
+
+        def keep(result: dict) -> None:
+            f.write(json.dumps(result, sort_keys=True) + "\n")
+            f.flush()
+            bar.update(1)
+
+        results = study(seeds, families, variants, args.workers, on_result=keep, done=done)
     given = sys.argv[1:] if argv is None else argv
     command = shlex.join(["python", "scripts/emotion_timing_study.py", *given])
-    lines = [json.dumps(r, sort_keys=True) for r in results]
-    write_text_atomic(args.out / "episodes.jsonl", "\n".join(lines) + "\n")
     summary = summarise(results, families, variants)
     summary["command"] = command
     write_json(args.out / "summary.json", summary)

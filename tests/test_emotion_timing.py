@@ -100,7 +100,16 @@ def test_the_study_on_ray_equals_the_serial_run_and_the_script_writes_its_table(
     argv = ["--episodes", "1", "--first-seed", "800001", "--families", "paper"]
     assert main([*argv, "--variants", "truth", "--out", str(out)]) == 0
     assert "| paper | truth |" in (out / "table.md").read_text()
-    assert (out / "episodes.jsonl").read_text().count("\n") == 1
+    first = (out / "episodes.jsonl").read_text()
+    assert first.count("\n") == 1
+    argv[1] = "2"  # the same command with one more seed: continues, the first episode kept
+    assert main([*argv, "--variants", "truth", "--out", str(out)]) == 0
+    both = (out / "episodes.jsonl").read_text()
+    assert both.startswith(first) and both.count("\n") == 2
+    assert (
+        "(2/" in (out / "table.md").read_text()
+        or "| paper | truth |" in (out / "table.md").read_text()
+    )
     capsys.readouterr()
     assert main(["--episodes", "3", "--first-seed", "498", "--out", str(tmp_path / "x")]) == 2
     assert "0-499" in capsys.readouterr().err and not (tmp_path / "x").exists()

@@ -100,20 +100,26 @@ def study(
     workers: int = 1,
     ray_address: str | None = None,
     on_result: Callable[[dict], None] | None = None,
+    done: Sequence[dict] = (),
 ) -> list[dict]:
     """Every (family, variant, seed) episode; the results sorted by family, variant and
-    seed (the order does not depend on the workers)."""
+    seed (the order does not depend on the workers). `done`: results of an earlier,
+    interrupted run, kept and not run again."""
     for v in variants:
         variant_estimate(v)  # an unknown variant fails before anything runs
-    tasks = [(s, f, v) for f in families for v in variants for s in seeds]
-    results: list[dict] = []
+    have = {(r["seed"], r["family"], r["variant"]) for r in done}
+    tasks = [(s, f, v) for f in families for v in variants for s in seeds if (s, f, v) not in have]
+    wanted = {(s, f, v) for f in families for v in variants for s in seeds}
+    results: list[dict] = [r for r in done if (r["seed"], r["family"], r["variant"]) in wanted]
 
     def take(result: dict) -> None:
         results.append(result)
         if on_result is not None:
             on_result(result)
 
-    if workers == 1 and ray_address is None:
+    if not tasks:
+        pass
+    elif workers == 1 and ray_address is None:
         for task in tasks:
             take(episode(*task))
     else:
