@@ -312,9 +312,15 @@ def run_tasks(
     workers: int | None,
     address: str | None,
     args: Callable[[bool], Sequence[Any]],
+    recycle_after: int | None = None,
 ) -> None:
     """Run `actor.run(*task)` for every task on a pool of `worker_cls` actors; `on_result`
     gets the results in the order they finish. Ray is shut down at the end.
+
+    `recycle_after`: an actor that has finished this many tasks is replaced by a fresh
+    process (pydrake keeps every diagram with Python systems alive, Drake issue #22515: a
+    worker that builds a camera diagram per task grows by tens of MB per task). Results do
+    not depend on it: tasks are deterministic.
 
     Args:
         workers: actors of a local Ray (no `address`); None with `address`: one per CPU
@@ -338,7 +344,11 @@ def run_tasks(
         if remote:  # through the object store once, not once per actor
             given = [ray.put(a) for a in given]
         actors = start_actors(ray, worker_cls, n, given, restartable=not remote)
-        _pool(ray, actors, tasks, on_result)
+
+        def spawn() -> Any:
+            return start_actors(ray, worker_cls, 1, given, restartable=not remote)[0]
+
+        _pool(ray, actors, tasks, on_result, recycle_after, spawn)
     finally:
         with contextlib.suppress(Exception):
             ray.shutdown()
@@ -352,21 +362,50 @@ class WorkersLost(RuntimeError):
     """Every Ray worker of a run was lost, or one task lost `MAX_TASK_LOSSES` of them."""
 
 
-def _pool(ray: Any, actors: list[Any], tasks: Sequence[tuple], on_result: Callable) -> None:
+def _pool(
+    ray: Any,
+    actors: list[Any],
+    tasks: Sequence[tuple],
+    on_result: Callable,
+    recycle_after: int | None = None,
+    spawn: Callable[[], Any] | None = None,
+) -> None:
     """`run_tasks`' loop: every live actor keeps `IN_FLIGHT_PER_WORKER` tasks; a lost
-    actor's tasks go back to the queue for the others."""
+    actor's tasks go back to the queue for the others; with `recycle_after`, an actor that
+    has been given that many tasks takes no more and, once idle (and while tasks are
+    left), is replaced by `spawn()`."""
     queue = [(task, 0) for task in reversed(tasks)]  # (task, actors it has lost)
     pending: dict[Any, tuple[int, tuple, int]] = {}
     alive = list(range(len(actors)))
+    assigned = [0] * len(actors)  # tasks given to the actor now in slot i
+
+    def recycle() -> None:
+        """Replace every actor that has had its `recycle_after` tasks and finished them."""
+        if recycle_after is None:
+            return
+        for i in list(alive):
+            busy = any(j == i for j, _, _ in pending.values())
+            if assigned[i] < recycle_after or busy or not queue:
+                continue
+            ray.kill(actors[i])
+            if spawn is None:
+                alive.remove(i)
+            else:
+                actors[i], assigned[i] = spawn(), 0
 
     def top_up() -> None:
         for i in alive:
+            if recycle_after is not None and assigned[i] >= recycle_after:
+                continue
             load = sum(1 for j, _, _ in pending.values() if j == i)
             for _ in range(IN_FLIGHT_PER_WORKER - load):
                 if not queue:
                     return
+                if recycle_after is not None and assigned[i] >= recycle_after:
+                    break
                 task, losses = queue.pop()
                 pending[actors[i].run.remote(*task)] = (i, task, losses)
+                assigned[i] += 1
 
     top_up()
     while pending:
@@ -396,4 +435,5 @@ def _pool(ray: Any, actors: list[Any], tasks: Sequence[tuple], on_result: Callab
                 queue.append((task, losses + 1))
                 continue
             on_result(result)
+        recycle()
         top_up()

@@ -22,6 +22,7 @@ from emonav_drake.params import EmoNavConfig
 # (the Haar cascade); emotions kept per track with the cascade and with BlazeFace.
 VARIANTS = ("truth", "camera", "camera_tracks_haar", "camera_tracks_blazeface")
 FAMILIES = ("paper", "dense_12", "group_approach", "robot_crowding")
+RECYCLE_AFTER = 20  # episodes per Ray worker process (≈ 1.5 GB of leaked camera diagrams)
 
 
 def variant_estimate(variant: str) -> Any:
@@ -125,6 +126,15 @@ def study(
     else:
         from emonav_drake.parallel import run_tasks
 
-        run_tasks(EmotionTimingWorker, tasks, take, workers, ray_address, lambda remote: ())
+        # camera diagrams leak (pydrake keeps them alive): a fresh worker every 20 episodes
+        run_tasks(
+            EmotionTimingWorker,
+            tasks,
+            take,
+            workers,
+            ray_address,
+            lambda remote: (),
+            recycle_after=RECYCLE_AFTER,
+        )
     rank = {(f, v): i for i, (f, v) in enumerate((f, v) for f in families for v in variants)}
     return sorted(results, key=lambda r: (rank[(r["family"], r["variant"])], r["seed"]))

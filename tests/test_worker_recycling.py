@@ -1,0 +1,26 @@
+"""Ray workers replaced after a number of tasks (`parallel.run_tasks(recycle_after=)`):
+the results are those of the serial run, every task once, and fresh worker processes
+are really started (pydrake keeps every diagram alive, so long camera runs need them)."""
+
+from __future__ import annotations
+
+import emonav_drake.evaluation.emotion_timing_study as ets
+import emonav_drake.parallel as parallel
+
+
+def test_recycled_workers_give_the_serial_results(monkeypatch):
+    started = []
+    real = parallel.start_actors
+
+    def counting(ray, worker_cls, n, args, restartable=False):
+        started.append(n)
+        return real(ray, worker_cls, n, args, restartable)
+
+    monkeypatch.setattr(parallel, "start_actors", counting)
+    monkeypatch.setattr(ets, "RECYCLE_AFTER", 2)
+    seeds = range(800_010, 800_015)
+    serial = ets.study(seeds, ["paper"], ["truth"], workers=1)
+    recycled = ets.study(seeds, ["paper"], ["truth"], workers=2)
+    assert recycled == serial and len(serial) == 5
+    # 2 actors at the start, then one for each that finished 2 tasks while work was left
+    assert started[0] == 2 and sum(started) >= 3
