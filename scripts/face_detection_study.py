@@ -142,7 +142,12 @@ def plot(summary: dict, png) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.colors import LinearSegmentedColormap
 
+    from emonav_drake.core import palette
+
+    # the share found, from paper (none) to the data colour (all)
+    cmap = LinearSegmentedColormap.from_list("found", [palette.PAPER_RGB, palette.DATA_RGB])
     names = summary["detectors"]
     fig, axes = plt.subplots(1, len(names), figsize=(4.6 * len(names), 3.4), sharey=True)
     for ax, n in zip(np.atleast_1d(axes), names, strict=True):
@@ -152,7 +157,7 @@ def plot(summary: dict, png) -> None:
         grid = np.zeros((len(fs), len(ds)))
         for r in rows:
             grid[fs.index(r["facing_deg"]), ds.index(r["distance"])] = r["rate"]
-        im = ax.imshow(grid, origin="lower", cmap="viridis", vmin=0, vmax=1, aspect="auto")
+        im = ax.imshow(grid, origin="lower", cmap=cmap, vmin=0, vmax=1, aspect="auto")
         for (i, k), v in np.ndenumerate(grid):
             ax.text(
                 k,
@@ -161,7 +166,7 @@ def plot(summary: dict, png) -> None:
                 ha="center",
                 va="center",
                 fontsize=6,
-                color="black" if v > 0.5 else "white",
+                color=palette.PAPER_RGB if v > 0.5 else palette.INK_RGB,
             )
         ax.set_xticks(range(len(ds)), [f"{d:g}" for d in ds], fontsize=7)
         ax.set_yticks(range(len(fs)), [f"{f:g}°" for f in fs], fontsize=7)

@@ -94,7 +94,12 @@ def test_sim_with_misclassified_emotions(tmp_path):
     assert (
         main(["sim", "--seed", "4", "--emotion-estimate", str(est_id), "--json", str(ident)]) == 0
     )
-    assert json.loads(truth.read_text()) == json.loads(ident.read_text())
+    truth_run, ident_run = json.loads(truth.read_text()), json.loads(ident.read_text())
+    assert (
+        truth_run.pop("emotion_source") == "truth"
+        and ident_run.pop("emotion_source") == "confusion"
+    )
+    assert truth_run == ident_run
     est.write_text("mode: confusion\nconfusion: [[2.0, 0.0, 0.0], [0, 1, 0], [0, 0, 1]]\n")
     assert main(["sim", "--seed", "4", "--emotion-estimate", str(est)]) == 2
 

@@ -117,7 +117,8 @@ def _mpc_memory_bits(memory: MpcMemory) -> tuple:
 def test_the_command_is_a_state_output_and_the_plant_reads_it():
     nav = _build("dwa", _config())
     plan = nav.planner
-    assert plan.num_input_ports() == 3  # robot_state, crowd, lgm_stack: no last_command
+    # robot_state, crowd, lgm_stack, goal (a route's sub-goal, unconnected): no last_command
+    assert plan.num_input_ports() == 4
     assert not plan.HasAnyDirectFeedthrough()
     for i in range(plan.num_input_ports()):
         assert not plan.HasDirectFeedthrough(i, plan.GetOutputPort("command").get_index())
