@@ -71,8 +71,9 @@ def main(argv: list[str] | None = None) -> int:
     params.camera.fov_y_deg = args.fov_y
     params.validate()
     t0 = time.perf_counter()
+    rig = CameraRig(params)  # renders, and its classifier's cascade is the `haar` detector
     samples = detection_sweep(
-        DISTANCES, FACINGS, detectors(CameraRig(params)), params=params, progress=True
+        DISTANCES, FACINGS, detectors(rig), params=params, progress=True, rig=rig
     )
     wall = time.perf_counter() - t0
     summary = summarise(samples)

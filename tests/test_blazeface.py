@@ -88,13 +88,14 @@ def test_the_head_camera_at_5_m_blazeface_finds_the_face_the_cascade_does_not():
     from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 
     params = EmotionEstimateParams(mode="camera")
-    haar = CameraRig(params).classifier.classifier
+    rig = CameraRig(params)
+    haar = rig.classifier.classifier
     blaze = BlazeFaceDetector()
     detectors = {
         "haar": lambda image, hint: haar.detect(to_gray(image, "rgb")),
         "blazeface": lambda image, hint: blaze.detect(image)[0],
     }
-    samples = detection_sweep([1.5, 5.0], [0.0], detectors, emotions=[0], params=params)
+    samples = detection_sweep([1.5, 5.0], [0.0], detectors, emotions=[0], params=params, rig=rig)
     found = {(s["detector"], s["distance"]): s["detected"] for s in samples}
     assert found == {
         ("haar", 1.5): True,

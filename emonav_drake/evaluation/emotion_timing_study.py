@@ -55,11 +55,11 @@ def episode(seed: int, family: str, variant: str) -> dict:
     cfg.crowd.family = family
     cfg.perception.state_source = "lidar"
     estimate = variant_estimate(variant)
-    camera = (estimate or EmotionEstimateParams(mode="camera")).camera
+    seen_by = estimate or EmotionEstimateParams(mode="camera")  # truth: the default camera
     view = CameraView(
-        half_fov=math.radians(half_fov_x_deg(estimate or EmotionEstimateParams(mode="camera"))),
-        max_range=camera.max_range,
-        period=(estimate.period if estimate is not None else 2.0),
+        half_fov=math.radians(half_fov_x_deg(seen_by)),
+        max_range=seen_by.camera.max_range,
+        period=seen_by.period,
     )
     request = EpisodeRequest(
         sample_scenario(seed, cfg),
@@ -118,12 +118,10 @@ def study(
         if on_result is not None:
             on_result(result)
 
-    if not tasks:
-        pass
-    elif workers == 1 and ray_address is None:
+    if tasks and workers == 1 and ray_address is None:
         for task in tasks:
             take(episode(*task))
-    else:
+    elif tasks:
         from emonav_drake.parallel import run_tasks
 
         # camera diagrams leak (pydrake keeps them alive): a fresh worker every 20 episodes

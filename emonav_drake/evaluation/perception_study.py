@@ -102,13 +102,7 @@ class CameraRig:
 
     def shot(self, distance: float, bearing_deg: float, facing_deg: float, emotion: int) -> dict:
         """Place the pedestrian, render, classify: one sample (module docstring)."""
-        b = math.radians(bearing_deg)
-        x, y = distance * math.cos(b), distance * math.sin(b)
-        to_camera = math.atan2(-y, -x)
-        heading = to_camera - math.radians(facing_deg)
-        self.diagram.get_input_port(0).FixValue(
-            self.context, AbstractValue.Make(self._snapshot(x, y, heading, emotion))
-        )
+        self.place(distance, bearing_deg, facing_deg, emotion)
         est = self.classifier.estimate(self.classifier.GetMyContextFromRoot(self.context))
         return {
             "distance": float(distance),
@@ -185,6 +179,7 @@ def detection_sweep(
     emotions: Iterable[int] = range(NUM_EMOTIONS),
     params: EmotionEstimateParams | None = None,
     progress: bool = False,
+    rig: CameraRig | None = None,
 ) -> list[dict]:
     """Face detection alone, per detector, on one rendered pedestrian straight ahead.
 
@@ -194,12 +189,13 @@ def detection_sweep(
     person tracker would tell) → boxes (F, 4) (x, y, w, h) [px]) runs on the image. A sample
     per detector: whether a box contains the projected centre of the face
     (`CameraRig.face_pixel`), the number of boxes, the face's height [px] and the
-    detector's wall time [s]."""
+    detector's wall time [s]. `rig`: the camera rig to render with (default: a new one
+    of `params`; a detector built on a rig's classifier can share it)."""
     import time
 
     from emonav_drake.progress import progress_bar
 
-    rig = CameraRig(params)
+    rig = rig or CameraRig(params)
     grid = [(e, d, f) for e in emotions for d in distances for f in facings_deg]
     out = []
     for e, d, f in progress_bar(grid, desc="detection sweep", unit="shot", enabled=progress):

@@ -69,6 +69,10 @@ class TrackEmotionMemory:
         self.params = params.validate()
         self._memory: dict[int, TrackEmotion] = {}
 
+    def track_ids(self) -> np.ndarray:
+        """The ids of the tracks with a memory, ascending."""
+        return np.array(sorted(self._memory), dtype=np.int64)
+
     def memory(self, track_id: int) -> TrackEmotion | None:
         """The track's memory (None: no face of it seen, or forgotten with its track)."""
         return self._memory.get(int(track_id))

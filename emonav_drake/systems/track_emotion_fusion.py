@@ -137,6 +137,6 @@ class TrackEmotionFusion(LeafSystem):
 
     def _calc_emotions(self, context: Context, output: AbstractValue) -> None:
         memory = self.memory(context)
-        ids = np.array(sorted(int(k) for k in memory.state_dict()), dtype=np.int64)
+        ids = memory.track_ids()
         codes, _ = memory.emotions(context.get_time(), ids)
         output.set_value(TrackEmotions(dict(zip(ids.tolist(), codes.tolist(), strict=True))))
