@@ -99,6 +99,41 @@ def test_fusion_is_a_running_average_over_the_window_and_deterministic():
     assert again.state_dict() == mem.state_dict() == resumed.state_dict()
 
 
+def test_a_small_faces_reading_weighs_little_and_a_tiny_ones_nothing():
+    """A negative face read up close (60 px) is kept when the same person, farther away,
+    is read neutral on small faces: the 22-px readings add nothing (not even a sighting),
+    the 40-px one half a reading."""
+    params = TrackEmotionParams(window=5)
+    assert params.reading_weight(np.array([20.0, 32.0, 40.0, 48.0, 90.0, np.nan])).tolist() == [
+        0.0,
+        0.0,
+        0.5,
+        1.0,
+        1.0,
+        1.0,
+    ]
+    mem = TrackEmotionMemory(params)
+    ids = np.array([3])
+    mem.update(0.0, ids, [0.0], [1.5], [0.0], [NEGATIVE_FACE], face_heights=[60.0])
+    for k in range(1, 4):
+        mem.update(2.0 * k, ids, [0.0], [5.0], [0.0], [NEUTRAL_FACE], face_heights=[22.0])
+    m = mem.memory(3)
+    assert m.sightings == 1 and m.last_seen == 0.0
+    assert np.array_equal(m.probabilities, NEGATIVE_FACE)
+    mem.update(8.0, ids, [0.0], [3.0], [0.0], [NEUTRAL_FACE], face_heights=[40.0])
+    m = mem.memory(3)
+    expected = NEGATIVE_FACE + (0.5 / 1.5) * (NEUTRAL_FACE - NEGATIVE_FACE)
+    assert m.sightings == 2 and m.last_seen == 8.0 and m.weight == 1.5
+    assert np.allclose(m.probabilities, expected, atol=1e-15)
+    assert mem.emotions(8.0, ids)[0].tolist() == [NEGATIVE]
+    # unweighted, the same readings would have made the person neutral
+    plain = TrackEmotionMemory(params)
+    plain.update(0.0, ids, [0.0], [1.5], [0.0], [NEGATIVE_FACE])
+    for k in range(1, 5):
+        plain.update(2.0 * k, ids, [0.0], [5.0], [0.0], [NEUTRAL_FACE])
+    assert plain.emotions(8.0, ids)[0].tolist() == [NEUTRAL]
+
+
 def test_a_deleted_track_is_forgotten_and_a_new_track_is_neutral():
     mem = TrackEmotionMemory()
     mem.update(0.0, np.array([1]), [0.0], [2.0], [0.0], [NEGATIVE_FACE])
@@ -115,6 +150,8 @@ def test_a_deleted_track_is_forgotten_and_a_new_track_is_neutral():
         ("window", 0),
         ("range_tolerance", -0.1),
         ("bearing_tolerance", math.nan),
+        ("zero_weight_face_px", -1.0),
+        ("full_weight_face_px", 10.0),
     ],
 )
 def test_bad_parameters_name_the_field(field, value):
@@ -131,8 +168,8 @@ def test_mismatched_inputs_are_refused():
 
 
 def test_the_fusion_system_gates_a_face_by_the_range_its_box_gives():
-    """`TrackEmotionFusion`: two people on one bearing, 2 m and 4 m away; a face box 23 px
-    tall says ≈ 4 m (focal 514 px × 0.18 m / 23 px): the far track takes it. Without the
+    """`TrackEmotionFusion`: two people on one bearing, 1.2 m and 2.3 m away; a face box
+    40 px tall says ≈ 2.3 m (focal 514 px × 0.18 m / 40 px): the far track takes it. Without the
     focal length the bearing decides (the near one is dead ahead)."""
     from pydrake.systems.analysis import Simulator
 
@@ -144,7 +181,7 @@ def test_the_fusion_system_gates_a_face_by_the_range_its_box_gives():
     probs7[0, 0] = 1.0  # angry: negative
     estimate = EmotionEstimate(
         time=0.5,
-        boxes=np.array([[600, 300, 23, 23]]),
+        boxes=np.array([[600, 300, 40, 40]]),
         probabilities=probs7,
         labels=np.array([2]),
         bearings=np.array([0.0]),
@@ -153,9 +190,9 @@ def test_the_fusion_system_gates_a_face_by_the_range_its_box_gives():
         pedestrian_probabilities=np.zeros((0, 7)),
     )
     tracks = TrackedPeople(
-        np.array([7, 8]), np.array([[2.0, 0.0], [4.0, 0.1]]), np.zeros(2, bool), 0.5
+        np.array([7, 8]), np.array([[1.2, 0.0], [2.3, 0.05]]), np.zeros(2, bool), 0.5
     )
-    assert 514 * FACE_BOX_HEIGHT / 23 == pytest.approx(4.0, abs=0.05)
+    assert 514 * FACE_BOX_HEIGHT / 40 == pytest.approx(2.3, abs=0.02)
     for focal, owner in ((514.0, 8), (None, 7)):
         fusion = TrackEmotionFusion(0.1, math.radians(51), 6.0, focal_y=focal)
         ctx = fusion.CreateDefaultContext()

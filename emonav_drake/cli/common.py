@@ -240,10 +240,9 @@ def emotion_estimate_of(args: argparse.Namespace) -> Any:
         if params is None:
             from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 
-            params = EmotionEstimateParams(mode=source)
-            if source == "camera_tracks":  # ours: BlazeFace at the tracked heads
-                params.camera.face_detector = "blazeface"
-            return params.validate()
+            if source == "camera_tracks":  # ours: BlazeFace at the tracked heads, 2.5 Hz
+                return EmotionEstimateParams.tracked_faces()
+            return EmotionEstimateParams(mode=source).validate()
         if params.mode != source:
             raise ConfigError(
                 f"--emotion-source {source} and --emotion-estimate {args.emotion_estimate} "

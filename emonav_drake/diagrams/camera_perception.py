@@ -32,7 +32,6 @@ from pydrake.systems.framework import Context, DiagramBuilder, InputPort, LeafSy
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.perception.noisy_emotions import CAMERA_MODES, EmotionEstimateParams
-from emonav_drake.perception.track_emotions import TrackEmotionParams
 from emonav_drake.systems.emotion_classifier import EmotionClassifier, EmotionEstimate
 from emonav_drake.systems.emotion_estimate_source import (
     AddEmotionEstimateSource,
@@ -214,16 +213,15 @@ def AddCameraPerception(
                 classifier.camera.fov_x() / 2.0,
                 classifier.max_range,
                 classifier.camera_yaw,
-                TrackEmotionParams(
-                    decay_time=params.track_decay,
-                    pedestrian_radius=config.crowd.pedestrian_radius,
-                ),
+                params.track_params(config.crowd.pedestrian_radius),
                 focal_y=classifier.camera.focal_y(),
             ),
         )
         builder.Connect(classifier.GetOutputPort("detections"), fusion.GetInputPort("detections"))
         builder.Connect(robot_state, fusion.GetInputPort("robot_state"))
         builder.Connect(tracker.GetOutputPort("tracks"), fusion.GetInputPort("tracks"))
+        # the face detector looks where the robot's own tracker says people are
+        builder.Connect(tracker.GetOutputPort("crowd"), classifier.GetInputPort("heads"))
         builder.Connect(
             fusion.GetOutputPort("track_emotions"), tracker.GetInputPort("track_emotions")
         )

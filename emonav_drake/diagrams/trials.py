@@ -403,4 +403,28 @@ def run_trials(
         blobs = {m.name: Path(m.checkpoint).read_bytes() for m in spec.methods if m.checkpoint}
         return spec, blobs
 
-    run_tasks(worker_cls or TrialWorker, tasks, on_result, workers, address, args)
+    run_tasks(
+        worker_cls or TrialWorker,
+        tasks,
+        on_result,
+        workers,
+        address,
+        args,
+        recycle_after=CAMERA_RECYCLE_AFTER if renders_faces(spec) else None,
+    )
+
+
+# trials per worker process when the head camera renders faces: pydrake keeps every diagram
+# with Python systems alive (Drake issue #22515), and a camera diagram holds 27-75 MB
+CAMERA_RECYCLE_AFTER = 20
+
+
+def renders_faces(spec: BenchmarkSpec) -> bool:
+    """Whether the benchmark's emotions come from the head camera (a camera mode)."""
+    if spec.emotion_estimate_yaml is None:
+        return False
+    from emonav_drake.perception.noisy_emotions import CAMERA_MODES, EmotionEstimateParams
+    from emonav_drake.typed_yaml import load_typed_yaml
+
+    mode = load_typed_yaml(EmotionEstimateParams, data=spec.emotion_estimate_yaml).mode
+    return mode in CAMERA_MODES

@@ -19,8 +19,15 @@ from emonav_drake.parallel import Worker
 from emonav_drake.params import EmoNavConfig
 
 # The emotion sources compared: the simulator's emotions; the paper's per-frame camera
-# (the Haar cascade); emotions kept per track with the cascade and with BlazeFace.
-VARIANTS = ("truth", "camera", "camera_tracks_haar", "camera_tracks_blazeface")
+# (the Haar cascade, 0.5 Hz); emotions kept per track with the cascade and with BlazeFace
+# at 0.5 Hz, and with BlazeFace at 2.5 Hz (`--emotion-source camera_tracks`).
+VARIANTS = (
+    "truth",
+    "camera",
+    "camera_tracks_haar",
+    "camera_tracks_blazeface",
+    "camera_tracks_blazeface_0.4s",
+)
 FAMILIES = ("paper", "dense_12", "group_approach", "robot_crowding")
 RECYCLE_AFTER = 20  # episodes per Ray worker process (≈ 1.5 GB of leaked camera diagrams)
 
@@ -35,9 +42,20 @@ def variant_estimate(variant: str) -> Any:
         return EmotionEstimateParams(mode="camera").validate()
     if variant.startswith("camera_tracks_"):
         params = EmotionEstimateParams(mode="camera_tracks")
-        params.camera.face_detector = variant.removeprefix("camera_tracks_")
-        return params.validate()
-    raise ValueError(f"variant {variant!r}: one of {VARIANTS}")
+        detector, _, period = variant.removeprefix("camera_tracks_").partition("_")
+        params.camera.face_detector = detector
+        if period:  # e.g. camera_tracks_blazeface_0.4s: a classification every 0.4 s
+            try:
+                params.period = float(period.removesuffix("s"))
+            except ValueError:
+                raise ValueError(f"variant {variant!r}: a period is written like _0.4s") from None
+        try:
+            return params.validate()
+        except ValueError as e:  # ConfigError: a detector or period out of range
+            raise ValueError(f"variant {variant!r}: {e}") from None
+    raise ValueError(
+        f"variant {variant!r}: one of {VARIANTS}, or camera_tracks_<detector>_<period>s"
+    )
 
 
 def episode(seed: int, family: str, variant: str) -> dict:

@@ -24,6 +24,7 @@ import numpy as np
 from emonav_drake.config_fields import SEED_RANGE, setting
 from emonav_drake.core.crowd import CrowdSnapshot
 from emonav_drake.params import EMOTION_NAMES, ConfigError
+from emonav_drake.perception.track_emotions import TrackEmotionParams
 from emonav_drake.typed_yaml import validate_fields
 
 NUM_EMOTIONS = len(EMOTION_NAMES)
@@ -179,6 +180,13 @@ class HeadCameraParams:
         return self
 
 
+# `EmotionEstimateParams.tracked_faces` classifies at the planner's 2.5 Hz: BlazeFace on a
+# region per tracked person and the CNN on each face cost a few ms per person
+# (docs/perception.md), and a face seen more often is more often seen close, where the CNN
+# reads it right (the paper's 0.5 Hz was the rate of its cascade on whole frames)
+CAMERA_TRACKS_PERIOD = 0.4  # [s]
+
+
 @dc.dataclass
 class EmotionEstimateParams:
     """Where the emotions that shape the discomfort zones come from (YAML-loadable).
@@ -220,6 +228,38 @@ class EmotionEstimateParams:
         (0.1, 1000.0),
     )
 
+    track_zero_weight_px: float = setting(
+        32.0,
+        'mode "camera_tracks": a face this tall or smaller adds nothing to its track\'s '
+        "emotion (the CNN reads small faces as neutral whatever they show)",
+        "px",
+        (1.0, 1000.0),
+    )
+    track_full_weight_px: float = setting(
+        48.0,
+        'mode "camera_tracks": a face this tall or taller counts fully (linear between)',
+        "px",
+        (1.0, 1000.0),
+    )
+
+    @classmethod
+    def tracked_faces(cls) -> "EmotionEstimateParams":
+        """What `--emotion-source camera_tracks` (and `--deployable`) runs: emotions kept per
+        LiDAR track, BlazeFace at each tracked head, a classification every
+        `CAMERA_TRACKS_PERIOD` (validated)."""
+        params = cls(mode="camera_tracks", period=CAMERA_TRACKS_PERIOD)
+        params.camera.face_detector = "blazeface"
+        return params.validate()
+
+    def track_params(self, pedestrian_radius: float) -> TrackEmotionParams:
+        """The per-track memory's parameters of mode "camera_tracks"."""
+        return TrackEmotionParams(
+            decay_time=self.track_decay,
+            pedestrian_radius=pedestrian_radius,
+            zero_weight_face_px=self.track_zero_weight_px,
+            full_weight_face_px=self.track_full_weight_px,
+        )
+
     def validate(self) -> "EmotionEstimateParams":
         """Raise `ConfigError` naming the field if a value is invalid (the fields' ranges,
         the camera's included; seeds in [0, 2**64 - 1])."""
@@ -227,5 +267,10 @@ class EmotionEstimateParams:
             raise ConfigError(f"emotion_estimate.mode = {self.mode!r}: one of {ESTIMATE_MODES}")
         validate_confusion(self.confusion, "emotion_estimate.confusion")
         validate_fields(self, "emotion_estimate.")
+        if not self.track_zero_weight_px < self.track_full_weight_px:
+            raise ConfigError(
+                f"emotion_estimate.track_full_weight_px = {self.track_full_weight_px!r}: must "
+                f"be > track_zero_weight_px ({self.track_zero_weight_px!r})"
+            )
         self.camera.validate()
         return self

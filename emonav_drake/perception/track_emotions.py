@@ -4,10 +4,14 @@ The camera classifies faces now and then; the LiDAR tracker keeps people's ident
 all the time. `TrackEmotionMemory` joins the two: at each classification it assigns
 every face to a track (by bearing, and by range when the face's size gives one), fuses
 the face's emotion probabilities into that track's running average, and remembers when
-it last saw the face. A track's emotion is the most probable one of its average while the
-last sighting is at most `decay_time` old, else neutral; a track never seen is neutral
-(the paper's rule for a pedestrian whose face is not visible, §IV-G). Memories of tracks
-the tracker has deleted are dropped.
+it last saw the face. A reading counts by the size of its face (`reading_weight`): the
+emotion CNN was trained on 48-px faces and reads nearly every face under ≈ 30 px as
+neutral whatever its expression (and faces of 30-40 px often wrongly), so a reading of a
+face up to 32 px tall counts nothing (it neither dilutes nor refreshes what the track
+learned up close), one of 48 px or more fully, linearly between. A track's emotion is
+the most probable one of its average while the last sighting is at most `decay_time`
+old, else neutral; a track never seen is neutral (the paper's rule for a pedestrian whose
+face is not visible, §IV-G). Memories of tracks the tracker has deleted are dropped.
 
 Everything is a pure function of the inputs (no clock, no randomness): the same
 sequence of calls gives the same emotions, in any process. Units: seconds, metres,
@@ -38,10 +42,20 @@ class TrackEmotionParams:
     bearing_tolerance: float = math.radians(3.0)  # added to a track's angular radius [rad]
     range_tolerance: float = 0.4  # |face range − track range| ≤ this × track range
     pedestrian_radius: float = 0.3  # a track's radius for its angular size [m]
+    zero_weight_face_px: float = 32.0  # a face this tall or smaller adds nothing [px]
+    full_weight_face_px: float = 48.0  # a face this tall or taller counts fully [px]
 
     def validate(self) -> TrackEmotionParams:
         """Raise ValueError naming the field if a value is out of range; returns self."""
-        for name in ("decay_time", "bearing_tolerance", "range_tolerance", "pedestrian_radius"):
+        names = (
+            "decay_time",
+            "bearing_tolerance",
+            "range_tolerance",
+            "pedestrian_radius",
+            "zero_weight_face_px",
+            "full_weight_face_px",
+        )
+        for name in names:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
                 raise ValueError(f"TrackEmotionParams.{name} must be a finite number, got {v!r}")
@@ -50,7 +64,20 @@ class TrackEmotionParams:
         w = self.window
         if isinstance(w, bool) or not isinstance(w, int) or w < 1:
             raise ValueError(f"TrackEmotionParams.window must be an int >= 1, got {w!r}")
+        if not self.zero_weight_face_px < self.full_weight_face_px:
+            raise ValueError(
+                f"TrackEmotionParams.full_weight_face_px = {self.full_weight_face_px!r}: must "
+                f"be > zero_weight_face_px ({self.zero_weight_face_px!r})"
+            )
         return self
+
+    def reading_weight(self, face_heights: np.ndarray) -> np.ndarray:
+        """How much each face's reading counts (F,) in [0, 1], from its box height [px]:
+        0 up to `zero_weight_face_px`, 1 from `full_weight_face_px`, linear between; NaN
+        (size unknown) counts fully."""
+        h = np.asarray(face_heights, dtype=float)
+        lo, hi = self.zero_weight_face_px, self.full_weight_face_px
+        return np.where(np.isfinite(h), np.clip((h - lo) / (hi - lo), 0.0, 1.0), 1.0)
 
 
 @dc.dataclass
@@ -58,8 +85,9 @@ class TrackEmotion:
     """What a track remembers of its faces."""
 
     probabilities: np.ndarray  # (3,) fused happy / neutral / negative probabilities
-    sightings: int  # faces fused
-    last_seen: float  # time of the last face [s]
+    sightings: int  # faces fused (with a weight > 0)
+    last_seen: float  # time of the last face fused [s]
+    weight: float = 0.0  # the readings' weights in the running average, at most `window`
 
 
 class TrackEmotionMemory:
@@ -86,6 +114,7 @@ class TrackEmotionMemory:
         face_bearings: np.ndarray,
         face_probabilities: np.ndarray,
         face_distances: np.ndarray | None = None,
+        face_heights: np.ndarray | None = None,
     ) -> np.ndarray:
         """Fold one classification in: the index of the track each face went to (−1: none).
 
@@ -101,6 +130,9 @@ class TrackEmotionMemory:
                 probabilities (`face_emotion.three_way_probabilities`).
             face_distances: (F,) range of each face estimated from its size [m] (NaN or
                 None: no range gate).
+            face_heights: (F,) each face's box height [px]: its reading's weight
+                (`TrackEmotionParams.reading_weight`; None: every reading counts fully).
+                A face is assigned whatever its weight; one of weight 0 changes nothing.
         """
         ids = np.asarray(track_ids, dtype=np.int64).reshape(-1)
         bearings = np.asarray(track_bearings, dtype=float).reshape(-1)
@@ -125,20 +157,28 @@ class TrackEmotionMemory:
             off = np.abs(fd[:, None] - dist[None, :])
             allowed = ~np.isfinite(fd)[:, None] | (off <= p.range_tolerance * dist[None, :])
         owner = assign_faces(fb, bearings, dist, gate, allowed)
+        if face_heights is None:
+            weights = np.ones(len(fb))
+        else:
+            heights = np.asarray(face_heights, dtype=float).reshape(-1)
+            if len(heights) != len(fb):
+                raise ValueError(f"{len(fb)} face bearings, {len(heights)} face heights")
+            weights = p.reading_weight(heights)
         for f, k in enumerate(owner.tolist()):
-            if k >= 0:
-                self._fuse(int(ids[k]), probs[f], float(t))
+            if k >= 0 and weights[f] > 0.0:
+                self._fuse(int(ids[k]), probs[f], float(t), float(weights[f]))
         return owner
 
-    def _fuse(self, track_id: int, probabilities: np.ndarray, t: float) -> None:
+    def _fuse(self, track_id: int, probabilities: np.ndarray, t: float, weight: float) -> None:
+        """A weighted running average over the last `window` readings' worth of weight: a
+        reading of weight 1 into a full window counts 1/window, as an unweighted one."""
         old = self._memory.get(track_id)
         if old is None:
-            self._memory[track_id] = TrackEmotion(probabilities.copy(), 1, t)
+            self._memory[track_id] = TrackEmotion(probabilities.copy(), 1, t, weight)
             return
-        n = old.sightings + 1
-        weight = 1.0 / min(n, self.params.window)
-        fused = old.probabilities + weight * (probabilities - old.probabilities)
-        self._memory[track_id] = TrackEmotion(fused, n, t)
+        total = min(old.weight + weight, float(self.params.window))  # weight <= 1 <= window
+        fused = old.probabilities + (weight / total) * (probabilities - old.probabilities)
+        self._memory[track_id] = TrackEmotion(fused, old.sightings + 1, t, total)
 
     def emotions(self, t: float, track_ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(codes (T,) int64, confidences (T,)) of the tracks at time `t` [s]: a track
@@ -161,6 +201,7 @@ class TrackEmotionMemory:
                 "probabilities": v.probabilities.tolist(),
                 "sightings": v.sightings,
                 "last_seen": v.last_seen,
+                "weight": v.weight,
             }
             for k, v in sorted(self._memory.items())
         }
@@ -172,6 +213,7 @@ class TrackEmotionMemory:
                 np.asarray(v["probabilities"], dtype=float).reshape(NUM_EMOTIONS),
                 int(v["sightings"]),
                 float(v["last_seen"]),
+                float(v.get("weight", min(int(v["sightings"]), self.params.window))),
             )
             for k, v in state.items()
         }

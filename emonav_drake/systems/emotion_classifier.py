@@ -13,6 +13,10 @@ Input ports:
     robot_state (4): (x [m], y [m], θ [rad], v [m/s]) of the robot CoM, world frame.
     crowd (abstract `CrowdSnapshot`): tracked pedestrians; only their positions [m,
         world] are used, to compute their bearings in the camera.
+    heads (abstract `CrowdSnapshot`, optional): where the face detector looks
+        ("blazeface": a region at each of its pedestrians' heads), e.g. the LiDAR
+        tracker's crowd on a robot that finds people with its own sensors. Unconnected:
+        `crowd`'s pedestrians.
 Output ports:
     detections (abstract `EmotionEstimate`): the faces of the last classified frame —
         boxes (x, y, w, h) [px], 7 class probabilities, 3-way labels, bearings [rad,
@@ -156,6 +160,7 @@ class EmotionClassifier(LeafSystem):
         self._image_in = self.DeclareAbstractInputPort("image", AbstractValue.Make(ImageRgba8U()))
         self._robot_in = self.DeclareVectorInputPort("robot_state", 4)
         self._crowd_in = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
+        self._heads_in = self.DeclareAbstractInputPort("heads", AbstractValue.Make(object()))
         state_ticket = {self.abstract_state_ticket(self._state)}
         self.DeclareAbstractOutputPort(
             "detections",
@@ -184,9 +189,12 @@ class EmotionClassifier(LeafSystem):
         )
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
 
-    def pedestrian_bearings(self, context: Context) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(bearing [rad] or NaN when out of view, distance [m], gate [rad]) per pedestrian."""
-        crowd = self._crowd_in.Eval(context)
+    def pedestrian_bearings(
+        self, context: Context, port: str = "crowd"
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(bearing [rad] or NaN when out of view, distance [m], gate [rad]) per pedestrian
+        of the input `port` ("crowd" or "heads")."""
+        crowd = self.GetInputPort(port).Eval(context)
         robot = lip_state_from_vector(self._robot_in.Eval(context))
         return pedestrian_bearings(
             crowd.positions,
@@ -248,7 +256,10 @@ class EmotionClassifier(LeafSystem):
         if self._blazeface is None:
             faces = self.classifier.classify(image.data, channel_order="rgb")
         else:
-            faces = self._blazeface_faces(np.asarray(image.data), bearing, dist)
+            heads = (bearing, dist)
+            if self._heads_in.HasValue(context):
+                heads = self.pedestrian_bearings(context, "heads")[:2]
+            faces = self._blazeface_faces(np.asarray(image.data), *heads)
         boxes = np.array([f.box for f in faces], dtype=np.int64).reshape(-1, 4)
         probs = np.array([f.probabilities for f in faces]).reshape(-1, len(CLASS_NAMES))
         cam = self.camera

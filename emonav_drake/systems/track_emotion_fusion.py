@@ -9,7 +9,9 @@ At every scan period (`crowd.dt`) it folds in the classifier's newest classifica
 it has not yet: each face goes to a track by bearing (`perception/track_emotions.py`:
 the track's angular radius plus a tolerance; the camera's field of view and range decide
 which tracks it could see), the face's happy / neutral / negative probabilities are
-averaged into the track's memory, and the track remembers when it was seen. Its output
+averaged into the track's memory, each reading weighted by its face's size (a face up to 32
+px tall adds nothing, one of 48 px or more counts fully:
+`TrackEmotionParams.reading_weight`), and the track remembers when it was seen. Its output
 is each track's emotion now: the fused one until `decay_time` after the last face, then
 neutral; a track never seen is neutral.
 
@@ -120,9 +122,9 @@ class TrackEmotionFusion(LeafSystem):
         # an obstacle, and a face seen at its bearing belongs to someone moving
         bearings = np.where(np.asarray(tracks.static, dtype=bool), np.nan, bearings)
         memory = copy.deepcopy(memory)
+        heights = np.asarray(estimate.boxes, dtype=float).reshape(-1, 4)[:, 3]
         face_distances = None
         if self.focal_y is not None:
-            heights = np.asarray(estimate.boxes, dtype=float).reshape(-1, 4)[:, 3]
             face_distances = self.focal_y * FACE_BOX_HEIGHT / np.maximum(heights, 1.0)
         memory.update(
             estimate.time,
@@ -132,6 +134,7 @@ class TrackEmotionFusion(LeafSystem):
             estimate.bearings,
             three_way_probabilities(np.asarray(estimate.probabilities).reshape(-1, 7)),
             face_distances,
+            heights,
         )
         state.get_mutable_abstract_state(self._memory).set_value((memory, estimate.time))
 
