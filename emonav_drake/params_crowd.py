@@ -33,6 +33,9 @@ SCENARIO_FAMILIES = (
     "dense_12",
     "dense_20",
     "fast_pedestrians",
+    "t_junction",
+    "doorway",
+    "office",
     "mixed",
 )
 

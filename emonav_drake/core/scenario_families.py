@@ -7,7 +7,12 @@ evaluating social robot navigation algorithms") as implemented by social-jym —
 crossing, parallel and perpendicular traffic, robot crowding, delayed crossing, crossing
 with static obstacles, corner traffic — the paper's hardware cases (a blocker who steps
 into the robot's path and stands, a group walking towards the robot, an all-dynamic
-crowd), a corridor with a head-on pedestrian, dense crowds and fast pedestrians.
+crowd), a corridor with a head-on pedestrian, dense crowds and fast pedestrians, and three
+buildings whose goal is out of sight of the start: a T-junction of corridors
+(`t_junction`), two rooms joined by one door (`doorway`) and an office floor of three
+rooms off a corridor (`office`). In the buildings every pedestrian walks a route
+(`core/global_route.py::plan_route`, waypoints) round the walls and through the doors,
+planned with its radius plus `PED_ROUTE_MARGIN`.
 
 Each family draws from its own random stream: the generator of seed `s` in family `f` is
 `numpy.random.default_rng([crc32(f), s])`, so the same seed gives the same scene, and
@@ -17,7 +22,8 @@ overlap at the start) and its robot goal is checked reachable past the static ge
 Emotions are drawn from `crowd.emotion_probs` as in the paper.
 
 World frame: x towards the robot's goal (the robot walks (−4, 0) → (4, 0) except in
-`corner_traffic`), y left, metres, seconds, m/s.
+`corner_traffic` and the buildings, whose starts and goals are drawn inside them), y left,
+metres, seconds, m/s.
 """
 
 from __future__ import annotations
@@ -30,6 +36,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from emonav_drake.core.global_route import NoRouteError, StaticMap, plan_route
 from emonav_drake.core.paper_scenario import (
     _sample_obstacles,
     _sample_pedestrians,
@@ -47,6 +54,12 @@ from emonav_drake.typed_yaml import ConfigError
 
 SCENE_TRIES = 200  # whole-scene draws before a family gives up on a seed
 REACH_CELL = 0.1  # [m] grid cell of the reachability check
+PED_ROUTE_MARGIN = 0.1  # [m] a building's pedestrian routes keep its ORCA radius + this off walls
+DOOR_VIA = (0.8, 0.8)  # [m] a pedestrian's route passes this far before, behind a door's middle
+DOORWAY_DOOR = (1.2, 1.5)  # [m] the width of the door of `doorway`: bounds
+OFFICE_DOOR = (1.2, 1.3)  # [m] the width of the doors of `office`: bounds
+INSET = 0.7  # [m] starts and goals in a building keep this far from its walls
+SPOT_TRIES = 100  # draws of a free spot before a building scene is drawn again
 
 
 class Family(NamedTuple):
@@ -237,18 +250,271 @@ def _fast(rng: np.random.Generator, cfg: EmoNavConfig) -> Scenario:
     return scene
 
 
+# ------------------------------------------------------------------------------ buildings
+
+
+def _chain(*points: tuple[float, float]) -> list[WallSpec]:
+    """Walls along the polyline through `points` (world [m])."""
+    return [
+        WallSpec(start=[float(a[0]), float(a[1])], end=[float(b[0]), float(b[1])])
+        for a, b in zip(points[:-1], points[1:], strict=True)
+    ]
+
+
+Box = tuple[float, float, float, float]  # x_min, x_max, y_min, y_max, world [m]
+
+
+def _in_box(rng: np.random.Generator, box: Box, inset: float = INSET) -> list[float]:
+    """A uniform point of `box` shrunk by `inset` on every side (world [m])."""
+    x0, x1, y0, y1 = box
+    return [float(rng.uniform(x0 + inset, x1 - inset)), float(rng.uniform(y0 + inset, y1 - inset))]
+
+
+def _spot(rng: np.random.Generator, box: Box, taken: list[list[float]], gap: float) -> list[float]:
+    """A point of `box` (`INSET` inside it) at least `gap` [m] from every point in `taken`,
+    which it joins; `ScenarioSamplingError` after `SPOT_TRIES` draws (the scene is drawn
+    again)."""
+    for _ in range(SPOT_TRIES):
+        p = _in_box(rng, box)
+        if all(math.dist(p, q) >= gap for q in taken):
+            taken.append(p)
+            return p
+    raise ScenarioSamplingError(f"no spot {gap:g} m clear of {len(taken)} others")
+
+
+def _crosses(a: list[float], b: list[float], walls: list[WallSpec]) -> bool:
+    """Whether the segment a → b (world [m]) crosses or touches a wall."""
+
+    def side(p: list[float], q: list[float], r: list[float]) -> float:
+        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+
+    for w in walls:
+        d1, d2 = side(w.start, w.end, a), side(w.start, w.end, b)
+        d3, d4 = side(a, b, w.start), side(a, b, w.end)
+        if d1 * d2 <= 0 and d3 * d4 <= 0:
+            return True
+    return False
+
+
+class Door(NamedTuple):
+    """A door: the middle of its opening and the unit normal of its wall (world [m])."""
+
+    middle: tuple[float, float]
+    normal: tuple[float, float]
+
+    def through(self, coming_from: list[float]) -> list[list[float]]:
+        """The two points `DOOR_VIA` before and behind the door on its axis, the one on the
+        side of `coming_from` first: a route through them crosses the door head-on."""
+        (mx, my), (nx, ny) = self.middle, self.normal
+        side = 1.0 if (coming_from[0] - mx) * nx + (coming_from[1] - my) * ny >= 0 else -1.0
+        before, behind = DOOR_VIA
+        return [[mx + s * d * nx, my + s * d * ny] for s, d in ((side, before), (-side, behind))]
+
+
+def _walker(
+    rng: np.random.Generator,
+    cfg: EmoNavConfig,
+    walls: list[WallSpec],
+    start: list[float],
+    goal: list[float],
+    via: list[list[float]] | None = None,
+    **kw: object,
+) -> PedestrianSpec:
+    """A pedestrian walking the shortest route start → `via`… → goal round `walls`, kept
+    its ORCA radius (radius plus safety space) plus `PED_ROUTE_MARGIN` off every wall: the
+    via points and the route's corners are its waypoints. `ScenarioSamplingError` (the
+    scene is drawn again) if there is no such route."""
+    static_map = StaticMap.of([[w.start, w.end] for w in walls])
+    c = cfg.crowd
+    clearance = c.pedestrian_radius + c.safety_space + PED_ROUTE_MARGIN
+    stops = [start, *(via or []), goal]
+    waypoints: list[list[float]] = []
+    for a, b in zip(stops[:-1], stops[1:], strict=True):
+        try:
+            leg = plan_route(a, b, static_map, clearance)
+        except NoRouteError as e:
+            raise ScenarioSamplingError(f"a pedestrian has no route: {e}") from None
+        waypoints += [[float(x), float(y)] for x, y in leg[1:]]
+    return PedestrianSpec(
+        start=start, goal=goal, waypoints=waypoints[:-1], emotion=_emotion(rng, cfg), **kw
+    )
+
+
+def _building(
+    cfg: EmoNavConfig,
+    walls: list[WallSpec],
+    start: list[float],
+    goal: list[float],
+    heading: float,
+    pedestrians: list[PedestrianSpec],
+) -> Scenario:
+    return Scenario(
+        pedestrians=pedestrians,
+        walls=walls,
+        robot_start=start,
+        robot_goal=goal,
+        robot_heading=heading,
+        emotion_change_period=cfg.crowd.emotion_change_period,
+    )
+
+
+def _gap(cfg: EmoNavConfig) -> float:
+    """The least distance [m] between two ends of pedestrians' routes (they walk to and fro
+    and must pass each other there) and between one and the robot's start: two ORCA discs
+    (radius plus safety space) or a pedestrian's and the robot's disc, plus 0.2 m."""
+    r, p = cfg.robot.radius, cfg.crowd.pedestrian_radius + cfg.crowd.safety_space
+    return max(2.0 * p, r + p) + 0.2
+
+
+OFFICE_DELAY = 6.0  # [s] an office pedestrian starts after U(0, this)
+
+
+def _t_junction(rng: np.random.Generator, cfg: EmoNavConfig) -> Scenario:
+    """A stem corridor (x < 0, |y| < w/2) meets a cross corridor (0 < x < w, |y| < 6 m) in a T, w ~
+    U(2.2, 2.6) m, walled all round (the ends closed). The robot starts in the stem facing the
+    junction and turns left or right (even odds) to a goal 4–5 m along the cross corridor; two
+    to four pedestrians start in the cross corridor and walk to its other end (two in three) or
+    down the stem towards the robot."""
+    width = float(rng.uniform(2.2, 2.6))
+    h, stem, arm = width / 2.0, 6.0, 6.0
+    walls = _chain(
+        (-stem, h), (0.0, h), (0.0, arm), (width, arm), (width, -arm), (0.0, -arm), (0.0, -h),
+        (-stem, -h), (-stem, h),
+    )  # fmt: skip
+    start = [-stem + float(rng.uniform(1.0, 1.5)), float(rng.uniform(-0.3, 0.3))]
+    side = 1.0 if rng.random() < 0.5 else -1.0  # +1: the robot turns left
+    goal = [float(rng.uniform(0.7, width - 0.7)), side * float(rng.uniform(arm - 2.0, arm - 1.0))]
+    upper: Box = (0.0, width, 1.0, arm)
+    lower: Box = (0.0, width, -arm, -1.0)
+    ends, gap, peds = [start], _gap(cfg), []
+    for _ in range(int(rng.integers(2, 5))):
+        up = rng.random() < 0.5  # it starts in the upper arm of the cross corridor
+        ped_start = _spot(rng, upper if up else lower, ends, gap)
+        if rng.random() < 2.0 / 3.0:  # to the cross corridor's other end
+            ped_goal = _spot(rng, lower if up else upper, ends, gap)
+        else:  # down the stem, towards the robot
+            ped_goal = _spot(rng, (-stem, -2.0, -h, h), ends, gap)
+        peds.append(_walker(rng, cfg, walls, ped_start, ped_goal))
+    return _building(cfg, walls, start, goal, 0.0, peds)
+
+
+def _robot_ends(
+    rng: np.random.Generator, start_box: Box, goal_box: Box, walls: list[WallSpec]
+) -> tuple[list[float], list[float]]:
+    """The robot's start in `start_box` and goal in `goal_box` (`INSET` inside them) such
+    that the straight segment between them meets a wall: the goal is out of sight."""
+    for _ in range(SPOT_TRIES):
+        start, goal = _in_box(rng, start_box), _in_box(rng, goal_box)
+        if _crosses(start, goal, walls):
+            return start, goal
+    raise ScenarioSamplingError("the robot's goal is in sight of its start in every draw")
+
+
+def _heading(start: list[float], towards: list[float]) -> float:
+    """The heading [rad] from `start` towards a point (world frame)."""
+    return math.atan2(towards[1] - start[1], towards[0] - start[0])
+
+
+def _doorway(rng: np.random.Generator, cfg: EmoNavConfig) -> Scenario:
+    """Two rooms side by side, x in [−a, 0] and [0, b] (a, b ~ U(5.5, 6.5) m), |y| < d/2 (d ~
+    U(5.5, 6.5) m), walled all round; the wall x = 0 between them has one door U(1.2, 1.5) m
+    wide (`DOORWAY_DOOR`) at a drawn height. The robot starts in the left room facing the door,
+    its goal is in the right room out of sight; one to three pedestrians walk from the right
+    room through the door to the left one, zero to two more walk to and fro inside one room,
+    standing 0–3 s at each end."""
+    left, right = float(rng.uniform(5.5, 6.5)), float(rng.uniform(5.5, 6.5))
+    h = float(rng.uniform(5.5, 6.5)) / 2.0
+    width = float(rng.uniform(*DOORWAY_DOOR))
+    yd = float(rng.uniform(-h + 0.8 + width / 2.0, h - 0.8 - width / 2.0))  # the door's middle
+    walls = _chain((-left, -h), (right, -h), (right, h), (-left, h), (-left, -h))
+    walls += _chain((0.0, -h), (0.0, yd - width / 2.0))
+    walls += _chain((0.0, yd + width / 2.0), (0.0, h))
+    door = Door((0.0, yd), (1.0, 0.0))
+    rooms: tuple[Box, Box] = ((-left, 0.0, -h, h), (0.0, right, -h, h))
+    start, goal = _robot_ends(rng, (-left, -1.0, -h, h), (1.0, right, -h, h), walls)
+    ends, gap, peds = [start], _gap(cfg), []
+    for _ in range(int(rng.integers(1, 4))):  # through the door, against the robot
+        ped_start, ped_goal = _spot(rng, rooms[1], ends, gap), _spot(rng, rooms[0], ends, gap)
+        peds.append(_walker(rng, cfg, walls, ped_start, ped_goal, door.through(ped_start)))
+    for _ in range(int(rng.integers(0, 3))):  # to and fro in one room
+        room = rooms[int(rng.integers(2))]
+        ped_start, ped_goal = _spot(rng, room, ends, gap), _spot(rng, room, ends, gap)
+        stand = round(float(rng.uniform(0.0, 3.0)), 1)
+        peds.append(_walker(rng, cfg, walls, ped_start, ped_goal, stand_time=stand))
+    return _building(cfg, walls, start, goal, _heading(start, [0.0, yd]), peds)
+
+
+def _office(rng: np.random.Generator, cfg: EmoNavConfig) -> Scenario:
+    """An office floor: three rooms side by side (each U(3.5, 4.5) m wide, all U(3.5, 4.5) m deep,
+    y < 0) off a corridor U(2.2, 2.6) m wide along their north side (y > 0), walled all round.
+    Each room opens onto the corridor through a door U(1.2, 1.3) m wide (`OFFICE_DOOR`) at a
+    drawn place in its north wall. The robot starts in one room facing its door, its goal is in
+    another; two to four pedestrians walk between two different places of the four (a room or
+    the corridor), each starting after U(0, `OFFICE_DELAY`) s."""
+    widths = rng.uniform(3.5, 4.5, size=3)
+    depth, corridor = float(rng.uniform(3.5, 4.5)), float(rng.uniform(2.2, 2.6))
+    xs = [float(x) for x in np.concatenate([[0.0], np.cumsum(widths)]) - widths.sum() / 2.0]
+    walls = _chain((xs[0], -depth), (xs[3], -depth), (xs[3], corridor), (xs[0], corridor))
+    walls += _chain((xs[0], corridor), (xs[0], -depth))
+    walls += _chain((xs[1], -depth), (xs[1], 0.0)) + _chain((xs[2], -depth), (xs[2], 0.0))
+    jambs = [xs[0]]  # the north wall of the rooms, broken by the doors
+    doors = []
+    for k in range(3):
+        width = float(rng.uniform(*OFFICE_DOOR))
+        middle = float(rng.uniform(xs[k] + 0.5 + width / 2.0, xs[k + 1] - 0.5 - width / 2.0))
+        doors.append(Door((middle, 0.0), (0.0, 1.0)))
+        jambs += [middle - width / 2.0, middle + width / 2.0]
+    jambs.append(xs[3])
+    for a, b in zip(jambs[0::2], jambs[1::2], strict=True):
+        walls += _chain((a, 0.0), (b, 0.0))
+    places: list[Box] = [(xs[k], xs[k + 1], -depth, 0.0) for k in range(3)]
+    places.append((xs[0], xs[3], 0.0, corridor))
+    here, there = (int(k) for k in rng.choice(3, size=2, replace=False))
+    start, goal = _robot_ends(rng, places[here], places[there], walls)
+    ends, gap, peds = [start], _gap(cfg), []
+    for _ in range(int(rng.integers(2, 5))):
+        a, b = (int(k) for k in rng.choice(4, size=2, replace=False))
+        ped_start, ped_goal = _spot(rng, places[a], ends, gap), _spot(rng, places[b], ends, gap)
+        via = []  # out of its room into the corridor, from the corridor into its room
+        if a < 3:
+            via += doors[a].through(ped_start)
+        if b < 3:
+            via += doors[b].through(ped_goal)[::-1]
+        delay = round(float(rng.uniform(0.0, OFFICE_DELAY)), 1)
+        peds.append(_walker(rng, cfg, walls, ped_start, ped_goal, via, start_delay=delay))
+    return _building(cfg, walls, start, goal, _heading(start, list(doors[here].middle)), peds)
+
+
 MIXED_PAPER_SHARE = 0.5  # the paper's arena in the mixed family (for training)
+# The families `mixed` draws from besides the paper's arena: those it was made with, fixed
+# so that a mixed seed keeps its scene as families are added (the buildings are not in it).
+MIXED_FAMILIES = (
+    "circle_crossing",
+    "parallel_traffic",
+    "perpendicular_traffic",
+    "robot_crowding",
+    "delayed_crossing",
+    "crossing_with_obstacles",
+    "corner_traffic",
+    "blocker",
+    "group_approach",
+    "all_dynamic",
+    "corridor_head_on",
+    "dense_8",
+    "dense_12",
+    "dense_20",
+    "fast_pedestrians",
+)
 
 
 def _mixed(rng: np.random.Generator, cfg: EmoNavConfig) -> Scenario:
     """A training distribution that includes the families: the paper's arena with
-    probability `MIXED_PAPER_SHARE`, else one of the other families, uniformly. Every
+    probability `MIXED_PAPER_SHARE`, else one of `MIXED_FAMILIES`, uniformly. Every
     draw comes from the mixed family's own stream, so no scene of it is an evaluation
     scene of another family (nor a paper seed below 2**63)."""
-    others = [n for n in FAMILIES if n not in ("paper", "mixed")]
     if rng.random() < MIXED_PAPER_SHARE:
         return sample_paper_scenario(int(rng.integers(2**63)), cfg)
-    return FAMILIES[others[int(rng.integers(len(others)))]].draw(rng, cfg)
+    return FAMILIES[MIXED_FAMILIES[int(rng.integers(len(MIXED_FAMILIES)))]].draw(rng, cfg)
 
 
 FAMILIES: dict[str, Family] = {
@@ -290,7 +556,22 @@ FAMILIES: dict[str, Family] = {
             "dense_20", "20 pedestrians crossing a circle", lambda rng, cfg: _circle(rng, cfg, 20)
         ),
         Family("fast_pedestrians", "the paper's crowd at 1.3-1.6 m/s", _fast),
-        Family("mixed", "for training: the paper's arena half the time, else any family", _mixed),
+        Family(
+            "t_junction", "a T of 2.4 m corridors, the robot turns; 2-4 pedestrians", _t_junction
+        ),
+        Family(
+            "doorway",
+            "two 6 x 6 m rooms, a 1.2-1.5 m door; 1-3 come through it, 0-2 wander",
+            _doorway,
+        ),
+        Family(
+            "office", "three rooms off a corridor, 1.2 m doors; room to room, 2-4 walk", _office
+        ),
+        Family(
+            "mixed",
+            "for training: the paper's arena half the time, else one of 15 families",
+            _mixed,
+        ),
     ]
 }
 
