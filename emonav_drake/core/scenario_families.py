@@ -569,7 +569,7 @@ FAMILIES: dict[str, Family] = {
         ),
         Family(
             "mixed",
-            "for training: the paper's arena half the time, else one of 15 families",
+            "training: the paper's arena half the time, else one of 15 families",
             _mixed,
         ),
     ]
