@@ -194,3 +194,25 @@ def test_with_a_global_route_the_planner_steers_to_the_subgoal_and_without_to_th
         plain.planner.planner_input(plain.planner.GetMyContextFromRoot(pctx)).goal_xy,
         scenario.robot_goal,
     )
+
+
+def test_a_scene_whose_goal_no_route_reaches_is_refused_when_built():
+    from emonav_drake.core.scenario import Scenario, WallSpec
+    from emonav_drake.diagrams.navigation import build_navigation_diagram, make_route_planner
+    from emonav_drake.params import ConfigError, EmoNavConfig
+    from emonav_drake.planners import make_planner
+
+    cfg = EmoNavConfig()
+    box = [[3, -1], [5, -1], [5, 1], [3, 1], [3, -1]]  # a closed room round the goal (4, 0)
+    walls = [WallSpec(start=a, end=b) for a, b in zip(box[:-1], box[1:], strict=True)]
+    closed = Scenario(walls=walls)
+    with pytest.raises(ConfigError, match="cannot be reached: no route .* close it off"):
+        make_route_planner(closed, cfg)
+    # a 1.2 m door in the room's west wall opens it; without the route layer nothing is checked
+    door = [
+        *walls[:3],
+        WallSpec(start=[3, 1], end=[3, 0.6]),
+        WallSpec(start=[3, -0.6], end=[3, -1]),
+    ]
+    assert len(make_route_planner(Scenario(walls=door), cfg).static_map.walls) == 5
+    build_navigation_diagram(closed, cfg, make_planner("dwa", cfg))

@@ -48,7 +48,7 @@ from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 
 from emonav_drake.core.episode_trace import EpisodeTrace
-from emonav_drake.core.global_route import StaticMap
+from emonav_drake.core.global_route import NoRouteError, StaticMap, plan_route
 from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.episode import (
@@ -117,13 +117,18 @@ ROUTE_MARGIN = 0.1
 def make_route_planner(scenario: Scenario, config: EmoNavConfig) -> GlobalRoutePlanner:
     """The `GlobalRoutePlanner` of a scene: its walls and static discs, its goal, a
     clearance of the robot's radius + `ROUTE_MARGIN` (the robot's radius when it stands
-    closer), checked every walking step."""
+    closer), checked every walking step. `ConfigError` naming what blocks it when no route
+    with the robot's radius joins the start to the goal."""
     static_map = StaticMap.of(
         [[w.start, w.end] for w in scenario.walls],
         [o.center for o in scenario.obstacles],
         [o.radius for o in scenario.obstacles],
     )
     r = config.robot.radius
+    try:  # a goal no route reaches is refused here, naming what blocks it
+        plan_route(scenario.robot_start, scenario.robot_goal, static_map, r)
+    except NoRouteError as e:
+        raise ConfigError(f"the scene's goal cannot be reached: {e}") from None
     return GlobalRoutePlanner(
         static_map,
         np.asarray(scenario.robot_goal, float),
