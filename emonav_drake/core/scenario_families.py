@@ -488,23 +488,9 @@ def _office(rng: np.random.Generator, cfg: EmoNavConfig) -> Scenario:
 MIXED_PAPER_SHARE = 0.5  # the paper's arena in the mixed family (for training)
 # The families `mixed` draws from besides the paper's arena: those it was made with, fixed
 # so that a mixed seed keeps its scene as families are added (the buildings are not in it).
-MIXED_FAMILIES = (
-    "circle_crossing",
-    "parallel_traffic",
-    "perpendicular_traffic",
-    "robot_crowding",
-    "delayed_crossing",
-    "crossing_with_obstacles",
-    "corner_traffic",
-    "blocker",
-    "group_approach",
-    "all_dynamic",
-    "corridor_head_on",
-    "dense_8",
-    "dense_12",
-    "dense_20",
-    "fast_pedestrians",
-)
+MIXED_FAMILIES = SCENARIO_FAMILIES[
+    SCENARIO_FAMILIES.index("circle_crossing") : SCENARIO_FAMILIES.index("fast_pedestrians") + 1
+]
 
 
 def _mixed(rng: np.random.Generator, cfg: EmoNavConfig) -> Scenario:
