@@ -216,3 +216,33 @@ def test_a_scene_whose_goal_no_route_reaches_is_refused_when_built():
     ]
     assert len(make_route_planner(Scenario(walls=door), cfg).static_map.walls) == 5
     build_navigation_diagram(closed, cfg, make_planner("dwa", cfg))
+
+
+def test_the_route_and_its_subgoal_are_drawn_in_meshcat():
+    from pydrake.systems.analysis import Simulator
+    from pydrake.systems.framework import DiagramBuilder
+
+    from emonav_drake.core.scenario import sample_scenario
+    from emonav_drake.diagrams.meshcat_viewing import make_meshcat
+    from emonav_drake.diagrams.navigation import AddNavigationStack, AddNavigationVisualizer
+    from emonav_drake.params import EmoNavConfig
+    from emonav_drake.planners import make_planner
+    from emonav_drake.systems.lip_robot_plant import LipRobotPlant
+
+    cfg = EmoNavConfig()
+    cfg.crowd.family = "corner_traffic"
+    scenario = sample_scenario(6001, cfg)
+    meshcat = make_meshcat(live=False)
+    b = DiagramBuilder()
+    robot = b.AddNamedSystem("robot", LipRobotPlant(scenario, cfg))
+    state = robot.GetOutputPort("robot_state")
+    stack = AddNavigationStack(b, scenario, cfg, make_planner("dwa", cfg), state, global_route=True)
+    b.Connect(stack.planner.GetOutputPort("command"), robot.GetInputPort("command"))
+    AddNavigationVisualizer(b, stack, state, meshcat)
+    diagram = b.Build()
+    sim = Simulator(diagram)
+    sim.Initialize()
+    sim.AdvanceTo(2 * cfg.robot.step_time)
+    assert meshcat.HasPath("/emonav/route/0") and meshcat.HasPath("/emonav/subgoal")
+    route = stack.route.route(stack.route.GetMyContextFromRoot(sim.get_context()))
+    assert len(route) > 2  # round the corner

@@ -108,6 +108,7 @@ class NavigationStack:
     goal_radius: float | None  # the monitor's [m]; None: config.episode.goal_radius
     perception: CameraPerception | None = None  # mode "camera": the camera chain
     tracker: CrowdTrackerSystem | None = None  # perception.state_source "lidar"
+    route: GlobalRoutePlanner | None = None  # global_route in a scene with walls
 
 
 # The route keeps this much beyond the robot's radius from walls and static discs [m].
@@ -176,6 +177,7 @@ def AddNavigationStack(
     monitor = b.AddNamedSystem("monitor", EpisodeMonitor(scenario, config, goal_radius))
     for sys in (crowd, maps, plan, monitor):
         b.Connect(robot_state, sys.GetInputPort("robot_state"))
+    route = None
     if global_route and scenario.walls:  # the planner steers to a sub-goal along the route
         route = b.AddNamedSystem("global_route", make_route_planner(scenario, config))
         b.Connect(robot_state, route.GetInputPort("robot_state"))
@@ -226,7 +228,7 @@ def AddNavigationStack(
     b.Connect(plan.GetOutputPort("command"), monitor.GetInputPort("command"))  # for the jerk
     b.Connect(maps.GetOutputPort("lgm_stack"), plan.GetInputPort("lgm_stack"))
     return NavigationStack(
-        crowd, maps, plan, monitor, scenario, config, goal_radius, perception, tracker
+        crowd, maps, plan, monitor, scenario, config, goal_radius, perception, tracker, route
     )
 
 
@@ -241,9 +243,10 @@ def AddNavigationVisualizer(
     """Add the drawing of a navigation stack (`NavigationMeshcatVisualizer`, named `name`,
     its goal pad the stack's goal radius [m]) wired to the robot's `robot_state` (x [m],
     y [m], θ [rad], v [m/s], world frame), the true crowd and, with LiDAR tracking, the
-    tracked crowd the planner reads beside it; with the camera, its rendered heads and
-    faces (`draw_in_meshcat`). `options` go to the visualizer (`show_rays`,
-    `draw_robot`); the caller connects the plant's own inputs (`scan`, `footstep_targets`)."""
+    tracked crowd the planner reads beside it; with the global route layer, the route and
+    its sub-goal; with the camera, its rendered heads and faces (`draw_in_meshcat`).
+    `options` go to the visualizer (`show_rays`, `draw_robot`); the caller connects the
+    plant's own inputs (`scan`, `footstep_targets`)."""
     from emonav_drake.diagrams.camera_perception import draw_in_meshcat
 
     b = builder
@@ -262,6 +265,9 @@ def AddNavigationVisualizer(
     b.Connect(stack.crowd.GetOutputPort("crowd"), vis.GetInputPort("crowd"))
     if stack.tracker is not None:  # the crowd the planner reads, beside the true one
         b.Connect(stack.tracker.GetOutputPort("crowd"), vis.GetInputPort("tracks"))
+    if stack.route is not None:  # the global route and its sub-goal
+        b.Connect(stack.route.GetOutputPort("route"), vis.GetInputPort("route"))
+        b.Connect(stack.route.GetOutputPort("subgoal"), vis.GetInputPort("subgoal"))
     return vis
 
 

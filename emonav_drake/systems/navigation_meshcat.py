@@ -12,6 +12,9 @@ Input ports:
         scan (`CrowdTrackerSystem.crowd`, with `perception.state_source` "lidar": what the
         state-based planners read): pedestrians' positions [m] and velocities [m/s],
         static discs' centres and radii [m]; leave unconnected when the state is the truth.
+    route (abstract (K, 2) float array) and subgoal (2): the global route's points and
+        its current sub-goal [m, world] (`GlobalRoutePlanner`); leave unconnected without
+        the route layer.
 
 What is drawn (all under `/emonav`, world frame W, z up), in the shared palette
 (`core/palette.py`, as Drake colours in `navigation_meshcat_style.py`; the names of the
@@ -43,6 +46,10 @@ colours here are its roles):
       is drawn once, hidden, and a slot is shown while a track is in it (a track keeps its
       slot while it lives); a replay thus shows a track appear once it is confirmed, coast
       on while its pedestrian is hidden from the LiDAR, and vanish when deleted;
+    * with `route` connected, once per walking step: the route as a thin black line on
+      the floor, a new line object from the step a replanned route is first seen (the
+      previous one hidden then), and with `subgoal` the sub-goal as a small black sphere
+      at `SUBGOAL_HEIGHT`;
     * with `footstep_targets` connected: a foot-sized marker at each planned footstep
       (left sky blue, right reddish purple), following the target while the planner
       re-plans it and pale once `FOOTSTEPS_RECENT` newer steps have started;
@@ -89,6 +96,9 @@ from emonav_drake.systems.navigation_meshcat_style import (
     TRAIL_RGBA,
 )
 from emonav_drake.systems.navigation_meshcat_tracks import TrackDrawing
+
+ROUTE_HEIGHT = 0.03  # [m] the global route's line, just above the floor and the bands
+SUBGOAL_HEIGHT = 0.3  # [m] the sub-goal's sphere
 
 TRAIL_RECENT_STEPS = 10  # trail segments drawn bright for this many walking steps
 FOOTSTEPS_RECENT = 6  # footstep markers drawn bright until this many newer steps
@@ -156,6 +166,8 @@ class NavigationMeshcatVisualizer(LeafSystem):
             "footstep_targets", AbstractValue.Make(object())
         )
         self._tracks = self.DeclareAbstractInputPort("tracks", AbstractValue.Make(object()))
+        self._route = self.DeclareAbstractInputPort("route", AbstractValue.Make(np.zeros((0, 2))))
+        self._subgoal = self.DeclareVectorInputPort("subgoal", 2)
         self._track_drawing = TrackDrawing(meshcat)  # the `tracks` input's slots
         self._step_time = config.robot.step_time
         self._reset_drawing()
@@ -176,6 +188,8 @@ class NavigationMeshcatVisualizer(LeafSystem):
         self._step_start: float | None = None
         self._footstep_count = 0
         self._track_drawing.reset()
+        self._shown_route: np.ndarray | None = None
+        self._route_count = 0
 
     def _draw_static_scene(self, scenario: Scenario) -> None:
         m, c = self._meshcat, self._config
@@ -341,7 +355,32 @@ class NavigationMeshcatVisualizer(LeafSystem):
             self._draw_trail_segment(point, t)
         if self._show_rays and self._scan.HasValue(context):
             self._draw_rays(k, self._scan.Eval(context), x, y, th, t)
+        if self._route.HasValue(context):
+            self._draw_route(np.asarray(self._route.Eval(context), dtype=float), t)
+        if self._subgoal.HasValue(context):
+            gx, gy = self._subgoal.Eval(context)
+            if not self._meshcat.HasPath(f"{PREFIX}/subgoal"):
+                self._meshcat.SetObject(f"{PREFIX}/subgoal", Sphere(0.1), GOAL_RGBA)
+            self._meshcat.SetTransform(
+                f"{PREFIX}/subgoal", RigidTransform([gx, gy, SUBGOAL_HEIGHT]), t
+            )
         return EventStatus.Succeeded()
+
+    def _draw_route(self, route: np.ndarray, t: float) -> None:
+        """A new line for a route not drawn yet (world [m]); the previous one hidden."""
+        if len(route) < 2 or (
+            self._shown_route is not None
+            and self._shown_route.shape == route.shape
+            and np.array_equal(self._shown_route, route)
+        ):
+            return
+        m, n = self._meshcat, self._route_count
+        points = np.vstack([route.T, np.full(len(route), ROUTE_HEIGHT)])
+        m.SetLine(f"{PREFIX}/route/{n}", points, 3.0, GOAL_RGBA)
+        self._appear(f"{PREFIX}/route/{n}", t)
+        if n > 0:
+            m.SetProperty(f"{PREFIX}/route/{n - 1}", "visible", False, t)
+        self._shown_route, self._route_count = route.copy(), n + 1
 
     def _draw_trail_segment(self, point: np.ndarray, t: float) -> None:
         start = self._start if self._trail_point is None else self._trail_point
