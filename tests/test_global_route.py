@@ -246,3 +246,20 @@ def test_the_route_and_its_subgoal_are_drawn_in_meshcat():
     assert meshcat.HasPath("/emonav/route/0") and meshcat.HasPath("/emonav/subgoal")
     route = stack.route.route(stack.route.GetMyContextFromRoot(sim.get_context()))
     assert len(route) > 2  # round the corner
+
+
+def test_sim_global_route_flag_builds_the_route_layer_and_says_so(tmp_path):
+    """`emonav sim --global-route` on the office floor: the route layer runs, the JSON
+    says so, and the robot walks from its room into the goal's room."""
+    import json
+
+    from emonav_drake.cli import main
+
+    out = tmp_path / "r.json"
+    args = ["sim", "--family", "office", "--seed", "3", "--plant", "lip", "--planner", "mpc"]
+    assert main([*args, "--global-route", "--json", str(out), "--quiet"]) == 0
+    rec = json.loads(out.read_text())
+    assert rec["global_route"] is True and rec["outcome"] == "success"
+    plain = tmp_path / "plain.json"
+    assert main([*args, "--json", str(plain), "--quiet"]) == 0
+    assert json.loads(plain.read_text())["global_route"] is False

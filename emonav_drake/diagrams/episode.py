@@ -74,6 +74,8 @@ class EpisodeRequest:
         camera_frames: emotion estimate mode "camera": every classified head-camera image
             is appended as (time [s], BGR image) (`write_camera_gif`).
         trace: keep the `EpisodeTrace` (returned beside the record; None otherwise).
+        global_route: in a scene with walls, a `GlobalRoutePlanner` on the known map gives
+            the planner a sub-goal along the route (`AddNavigationStack`; `--global-route`).
     """
 
     scenario: Scenario
@@ -90,6 +92,7 @@ class EpisodeRequest:
     progress: bool = False
     camera_frames: list | None = None
     trace: bool = False
+    global_route: bool = False
 
     def __post_init__(self) -> None:
         if self.goal_radius is None:

@@ -281,6 +281,7 @@ def build_navigation_diagram(
     goal_radius: float | None = None,
     emotion_estimate: EmotionEstimateParams | None = None,
     camera_frames: list | None = None,
+    global_route: bool = False,
 ) -> NavigationDiagram:
     """Wire the navigation diagram for one scenario.
 
@@ -301,6 +302,7 @@ def build_navigation_diagram(
             the ground truth, so the metrics measure real discomfort. In "camera" mode
             the robot's head camera and the face pipeline (`diagrams/camera_perception.py`).
         camera_frames: with "camera": collects the classified images (AddNavigationStack).
+        global_route: the global route layer in a scene with walls (AddNavigationStack).
     """
     config.validate()
     scenario.validate()
@@ -321,6 +323,7 @@ def build_navigation_diagram(
         emotion_estimate,
         mount,
         camera_frames,
+        global_route,
     )
     crowd, maps, plan, monitor = stack.crowd, stack.grid_maps, stack.planner, stack.monitor
     b.Connect(plan.GetOutputPort("command"), robot.GetInputPort("command"))
@@ -363,5 +366,6 @@ def build_episode(r: EpisodeRequest) -> EpisodeSystems:
         r.goal_radius,
         r.emotion_estimate,
         r.camera_frames,
+        r.global_route,
     )
     return nav.systems()
