@@ -263,3 +263,100 @@ def test_sim_global_route_flag_builds_the_route_layer_and_says_so(tmp_path):
     plain = tmp_path / "plain.json"
     assert main([*args, "--json", str(plain), "--quiet"]) == 0
     assert json.loads(plain.read_text())["global_route"] is False
+
+
+def two_doors() -> list[list[list[float]]]:
+    """Two 4 × 4 m rooms side by side along x (0-8), the wall between them at x = 4 with two
+    1.2 m doors (y 0.4-1.6 and 2.4-3.6); the outer walls closed."""
+    return [
+        [[0, 0], [8, 0]],
+        [[8, 0], [8, 4]],
+        [[8, 4], [0, 4]],
+        [[0, 4], [0, 0]],
+        [[4, 0], [4, 0.4]],
+        [[4, 1.6], [4, 2.4]],
+        [[4, 3.6], [4, 4]],
+    ]
+
+
+def test_a_disc_put_in_a_doorway_replans_through_the_other_door_then_leaves_no_route():
+    from pydrake.systems.analysis import Simulator
+
+    from emonav_drake.systems.global_route_planner import GlobalRoutePlanner
+
+    m = StaticMap.of(two_doors(), [[4.0, 1.0], [4.0, 3.0]], [0.5, 0.5])
+    planner = GlobalRoutePlanner(m, [7.0, 1.0], CLEARANCE, 0.3, period=0.4, appear_times=[0.5, 1.0])
+    ctx = planner.CreateDefaultContext()
+    planner.GetInputPort("robot_state").FixValue(ctx, np.array([1.0, 1.0, 0.0, 0.0]))
+    sim = Simulator(planner, ctx)
+    sim.Initialize()
+    route = planner.GetOutputPort("route").Eval(ctx)
+    has_route = planner.GetOutputPort("has_route")
+    crossing = route[np.argmin(np.abs(route[:, 0] - 4.0))]
+    assert has_route.Eval(ctx)[0] == 1.0 and crossing[1] < 1.6  # through the lower door
+    sim.AdvanceTo(0.45)  # before the first disc: the same route
+    assert np.array_equal(planner.GetOutputPort("route").Eval(ctx), route)
+    sim.AdvanceTo(0.85)  # the lower door blocked at 0.5 s: replanned at 0.8 s
+    new = planner.GetOutputPort("route").Eval(ctx)
+    ys = [y for x, y in new if 3.0 < x < 5.0]
+    assert min(ys) > 2.4 - 1e-9 and has_route.Eval(ctx)[0] == 1.0  # through the upper door
+    assert min_clearance(new, planner.map_at(0.85)) >= CLEARANCE - 1e-6
+    sim.AdvanceTo(1.25)  # both doors blocked: no route left, the last one kept
+    assert has_route.Eval(ctx)[0] == 0.0
+    assert np.array_equal(planner.GetOutputPort("route").Eval(ctx), new)
+
+
+def _doorway_scene(appears_at: float):
+    from emonav_drake.core.scenario import Scenario, StaticDiscSpec, WallSpec
+
+    walls = [WallSpec(start=a, end=b) for a, b in two_doors()[:5]]  # the lower door only
+    walls.append(WallSpec(start=[4, 1.6], end=[4, 4]))
+    cart = StaticDiscSpec(center=[4.0, 1.0], radius=0.5, appears_at=appears_at)
+    return Scenario(
+        walls=walls, obstacles=[cart], robot_start=[1.0, 1.0], robot_goal=[7.0, 1.0], seed=5
+    )
+
+
+def test_a_robot_whose_only_door_is_closed_ends_its_trial_with_no_route():
+    from emonav_drake.core.crowd import Crowd
+    from emonav_drake.diagrams.episode import EpisodeRequest, run_navigation_episode
+    from emonav_drake.diagrams.navigation import build_episode, make_route_planner
+    from emonav_drake.params import ConfigError, EmoNavConfig
+    from emonav_drake.planners import make_planner
+
+    cfg = EmoNavConfig()
+    scenario = _doorway_scene(appears_at=1.0)
+    crowd = Crowd(scenario, cfg)
+    assert len(crowd.static_discs(0.9)[1]) == 0 and len(crowd.static_discs(1.0)[1]) == 1
+    request = EpisodeRequest(scenario, cfg, make_planner("dwa", cfg), global_route=True)
+    record, _ = run_navigation_episode(request, build_episode)
+    # placed at 1.0 s, seen by the route layer at its update at 1.2 s, the trial ends at
+    # the next walking step (1.6 s): an outcome, not a timeout
+    assert record.outcome == "no_route" and record.steps == 4
+    # without the route layer the same robot walks on into the closed door
+    plain = EpisodeRequest(scenario, cfg, make_planner("dwa", cfg))
+    assert run_navigation_episode(plain, build_episode)[0].outcome in {"timeout", "collision"}
+    # placed before the scene starts, the cart makes the scene one no route solves
+    with pytest.raises(ConfigError, match="cannot be reached"):
+        make_route_planner(_doorway_scene(appears_at=0.0), cfg)
+
+
+def test_the_closed_door_example_replans_through_the_other_door(tmp_path):
+    """The shipped `closed_door`: a cart closes the robot's door at 3 s; DWA with the route
+    layer goes round through the other door and arrives, DWA alone does not."""
+    import json
+
+    from emonav_drake.cli import main
+
+    outcomes = {}
+    for flags in ([], ["--global-route"]):
+        out = tmp_path / f"{len(flags)}.json"
+        args = ["sim", "--scenario", "closed_door", "--plant", "lip", "--planner", "dwa"]
+        assert main([*args, *flags, "--json", str(out), "--quiet"]) == 0
+        rec = json.loads(out.read_text())
+        outcomes[bool(flags)] = rec["outcome"]
+        if flags:  # it went through the upper door (y > 1): round the cart
+            robot = np.asarray(rec["trajectory"]["robot"])
+            near_wall = robot[np.abs(robot[:, 0]) < 0.3]
+            assert len(near_wall) and (near_wall[:, 1] > 1.0).all()
+    assert outcomes == {False: "timeout", True: "success"}

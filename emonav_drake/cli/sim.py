@@ -231,6 +231,7 @@ def _open_viewer(
                 rays=args.rays,
                 footsteps=robot.footsteps,
                 tracks=cfg.perception.state_source == "lidar",
+                route=bool(args.global_route and scenario.walls),
             )
             start_live_view(meshcat, wait=not args.no_wait, caption=caption)
     return meshcat, caption

@@ -133,6 +133,10 @@ class Crowd:
             -1, 2
         )
         self.static_radii = np.array([o.radius for o in scenario.obstacles], dtype=float)
+        # When each disc is put in place [s] (`StaticDiscSpec.appears_at`); before, no one
+        # sees or meets it.
+        self.static_appear_times = np.array([o.appears_at for o in scenario.obstacles], dtype=float)
+        self._all_static_present = not bool((self.static_appear_times > 0).any())
         self.wall_segments = np.array(
             [[w.start, w.end] for w in scenario.walls], dtype=float
         ).reshape(-1, 2, 2)
@@ -215,7 +219,8 @@ class Crowd:
         visible = self._visible.copy()
         ped_speed = np.hypot(state.velocities[:, 0], state.velocities[:, 1])
         visible[:-1, -1] = ped_speed > math.hypot(robot_velocity[0], robot_velocity[1])
-        active, centers, radii = self._active, self.static_centers, self.static_radii
+        active = self._active
+        centers, radii = self.static_discs(state.substep * self.dt)
         if standing is not None and standing.any():
             # A standing pedestrian holds its spot: to the others it is a static disc
             # (they avoid it fully), and ORCA does not move it.
@@ -255,16 +260,24 @@ class Crowd:
             walked=walked,
         )
 
+    def static_discs(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """The static discs in place at time `t` [s]: centres (S', 2) [m], radii (S',) [m]."""
+        if self._all_static_present:
+            return self.static_centers, self.static_radii
+        here = self.static_appear_times <= t + 1e-9
+        return self.static_centers[here], self.static_radii[here]
+
     def snapshot(self, state: CrowdState) -> CrowdSnapshot:
         """What sensors and planners may know of the crowd in `state`."""
+        centers, radii = self.static_discs(state.substep * self.dt)
         return CrowdSnapshot(
             positions=state.positions,
             velocities=state.velocities,
             radius=self.radius,
             emotions=state.emotions,
             discomfort=self.emotion_distances[state.emotions],
-            static_centers=self.static_centers,
-            static_radii=self.static_radii,
+            static_centers=centers,
+            static_radii=radii,
             static_discomfort=self.static_discomfort,
             wall_segments=self.wall_segments,
             gait_phase=gait_phase(_walked(state), self._gait_offsets),

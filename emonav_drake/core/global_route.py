@@ -154,6 +154,15 @@ def _visible(a: np.ndarray, b: np.ndarray, static_map: StaticMap, clearance: flo
     return ok
 
 
+def segments_clear(route: np.ndarray, static_map: StaticMap, clearance: float) -> bool:
+    """Whether every segment of the polyline `route` (K, 2) [m] keeps `clearance` [m] from
+    every obstacle of the map (a single point: whether it does)."""
+    r = np.asarray(route, dtype=float).reshape(-1, 2)
+    if len(r) == 1:
+        return _free(r, static_map, clearance)[0]
+    return bool(_visible(r[:-1], r[1:], static_map, clearance).all())
+
+
 def plan_route(
     start: object,
     goal: object,

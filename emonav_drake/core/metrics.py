@@ -32,13 +32,15 @@ from emonav_drake.core.social_metrics import (
 )
 
 SUCCESS, COLLISION, TIMEOUT, FALL = "success", "collision", "timeout", "fall"
+# The global route layer found no route left to the goal (a doorway closed off mid-episode).
+NO_ROUTE = "no_route"
 
 
 @dc.dataclass
 class EpisodeRecord:
     """The outcome and social metrics of one episode (the `--json` of `emonav sim`)."""
 
-    outcome: str = TIMEOUT  # success | collision | timeout | fall (full-order robot)
+    outcome: str = TIMEOUT  # success | collision | timeout | fall (full-order) | no_route
     steps: int = 0
     nav_time: float = 0.0  # [s]
     path_length: float = 0.0  # [m]
@@ -87,13 +89,19 @@ class EpisodeTracker:
         self._unmeasured = False
 
     def add(
-        self, ev: StepEvaluation, step_length: float, motion: StepMotion | None = None
+        self,
+        ev: StepEvaluation,
+        step_length: float,
+        motion: StepMotion | None = None,
+        no_route: bool = False,
     ) -> str | None:
         """Record one step; return the outcome if the episode ended with it, else None.
 
         `motion` (the robot at both foot switches, the crowd, the command) feeds the
         field's metrics; without it they stay None for the whole episode. The paper's
-        metrics do not read it.
+        metrics do not read it. `no_route`: the global route layer has no route left to
+        the goal; the episode ends with `NO_ROUTE` unless the step collided or reached
+        the goal.
         """
         if self.done:
             raise RuntimeError("the episode has already ended")
@@ -111,6 +119,8 @@ class EpisodeTracker:
             r.collided_with = ev.collided_with
         elif ev.reached_goal:
             r.outcome = SUCCESS
+        elif no_route:
+            r.outcome = NO_ROUTE
         elif r.steps >= self.max_steps:
             r.outcome = TIMEOUT
         else:
@@ -189,6 +199,7 @@ def summarize(records: list[EpisodeRecord]) -> dict:
         "collision_rate": outcomes.count(COLLISION) / n,
         "timeout_rate": outcomes.count(TIMEOUT) / n,
         "fall_rate": outcomes.count(FALL) / n,
+        "no_route_rate": outcomes.count(NO_ROUTE) / n,
         "NT_mean": float(nt.mean()) if nt.size else None,
         "NT_std": float(nt.std()) if nt.size else None,
         "DT": int(sum(r.discomfort_steps for r in records)),

@@ -109,7 +109,11 @@ GRID_COLLISION_RGB: RGB = (0.10, 0.15, 0.40)
 
 # How an episode ended, for charts of outcomes (`evaluation/diagnosis.py`): collisions
 # take the colour of what was hit (an emotion, STATIC_RGB), these the rest.
-OUTCOME_RGB: dict[str, RGB] = {"timeout": OKABE_ITO["reddish_purple"], "fall": INK_RGB}
+OUTCOME_RGB: dict[str, RGB] = {
+    "timeout": OKABE_ITO["reddish_purple"],
+    "fall": INK_RGB,
+    "no_route": (0.55, 0.50, 0.05),  # olive: the route layer found none left
+}
 
 # The HTML overlay of a Meshcat replay (caption and legend)
 CAPTION_BOX_RGB: RGB = PAPER_RGB

@@ -119,6 +119,13 @@ class StaticDiscSpec:
     center: list[float] = setting([0.0, 0.0], "its centre, world x, y", "m", WORLD_POINT)
     # A hand-placed disc may be larger than the sampler's (`crowd.static_radius_max`).
     radius: float = setting(0.3, "its radius", "m", (0.01, 5.0))
+    appears_at: float = setting(
+        0.0,
+        "when it is put in place (a cart left in a doorway): before, it is not there for "
+        "anyone (crowd, sensors, collisions, the route's map)",
+        "s",
+        (0.0, 1000.0),
+    )
 
     _REQUIRED = ("center", "radius")  # in YAML (no annotation: not a field)
 

@@ -185,6 +185,7 @@ def run_navigation_episode(
             rays=req.show_rays,
             footsteps=systems.footsteps,
             tracks=req.config.perception.state_source == "lidar",
+            route=req.global_route and bool(req.scenario.walls),
         )
         write_replay_html(meshcat, req.record_html, caption)
     return record, trace

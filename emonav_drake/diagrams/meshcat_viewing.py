@@ -59,6 +59,7 @@ TRACKS_LEGEND = (
     ("tracked pedestrian (LiDAR), arrow: 1 s of its velocity", palette.css(palette.TRACK_RGB)),
     ("tracked static obstacle (LiDAR)", palette.css(palette.TRACK_STATIC_RGB)),
 )
+ROUTE_LEGEND = (("global route, its sub-goal (sphere)", _css(style.GOAL_RGBA)),)
 FOOTSTEP_LEGEND = (
     ("footstep target, left", _css(style.FOOT_RGBA[0])),
     ("footstep target, right", _css(style.FOOT_RGBA[1])),
@@ -206,10 +207,12 @@ class ReplayCaption:
         planner: planner name ("dwa", "mpc", "policy", ...).
         plant: "LIP" or "Digit".
         seed: the scenario's seed (None for a hand-made scenario without one).
-        outcome: "success", "collision", "timeout", "fall" (None while running).
+        outcome: "success", "collision", "timeout", "fall", "no_route" (None while
+            running).
         steps: walking steps taken; nav_time: simulated time [s].
         rays: the replay draws LiDAR rays; footsteps: it draws footstep targets; tracks:
-            it draws the LiDAR tracks the state-based planners read (`--state-source lidar`).
+            it draws the LiDAR tracks the state-based planners read (`--state-source lidar`);
+            route: it draws the global route and its sub-goal.
     """
 
     planner: str
@@ -221,6 +224,7 @@ class ReplayCaption:
     rays: bool = False
     footsteps: bool = False
     tracks: bool = False
+    route: bool = False
 
     @classmethod
     def for_episode(
@@ -232,6 +236,7 @@ class ReplayCaption:
         rays: bool = False,
         footsteps: bool = False,
         tracks: bool = False,
+        route: bool = False,
     ) -> ReplayCaption:
         """The caption of an episode: `planner` a `Planner` (its `name`), `plant` the
         robot's caption name (`Plant.caption_name`), `scenario` a `Scenario` (its `seed`),
@@ -250,6 +255,7 @@ class ReplayCaption:
             rays=rays,
             footsteps=footsteps,
             tracks=tracks,
+            route=route,
         )
         if record is not None:
             cap.set_outcome(record)
@@ -276,6 +282,8 @@ class ReplayCaption:
             items.extend(FOOTSTEP_LEGEND)
         if self.tracks:
             items.extend(TRACKS_LEGEND)
+        if self.route:
+            items.extend(ROUTE_LEGEND)
         return items
 
 

@@ -119,24 +119,29 @@ def make_route_planner(scenario: Scenario, config: EmoNavConfig) -> GlobalRouteP
     """The `GlobalRoutePlanner` of a scene: its walls and static discs, its goal, a
     clearance of the robot's radius + `ROUTE_MARGIN` (the robot's radius when it stands
     closer), checked every walking step. `ConfigError` naming what blocks it when no route
-    with the robot's radius joins the start to the goal."""
+    with the robot's radius joins the start to the goal on the map at t = 0 (a disc put in
+    place later, `appears_at` > 0, may close the route during the episode: the outcome
+    "no_route")."""
     static_map = StaticMap.of(
         [[w.start, w.end] for w in scenario.walls],
         [o.center for o in scenario.obstacles],
         [o.radius for o in scenario.obstacles],
     )
-    r = config.robot.radius
-    try:  # a goal no route reaches is refused here, naming what blocks it
-        plan_route(scenario.robot_start, scenario.robot_goal, static_map, r)
-    except NoRouteError as e:
-        raise ConfigError(f"the scene's goal cannot be reached: {e}") from None
-    return GlobalRoutePlanner(
+    route = GlobalRoutePlanner(
         static_map,
         np.asarray(scenario.robot_goal, float),
-        r + ROUTE_MARGIN,
-        r,
+        config.robot.radius + ROUTE_MARGIN,
+        config.robot.radius,
         period=config.robot.step_time,
+        appear_times=[o.appears_at for o in scenario.obstacles],
     )
+    try:  # a goal no route reaches is refused here, naming what blocks it
+        plan_route(
+            scenario.robot_start, scenario.robot_goal, route.map_at(0.0), route.min_clearance
+        )
+    except NoRouteError as e:
+        raise ConfigError(f"the scene's goal cannot be reached: {e}") from None
+    return route
 
 
 def AddNavigationStack(
@@ -182,6 +187,7 @@ def AddNavigationStack(
         route = b.AddNamedSystem("global_route", make_route_planner(scenario, config))
         b.Connect(robot_state, route.GetInputPort("robot_state"))
         b.Connect(route.GetOutputPort("subgoal"), plan.GetInputPort("goal"))
+        b.Connect(route.GetOutputPort("has_route"), monitor.GetInputPort("has_route"))
     planner_crowd = plan.GetInputPort("crowd")
     tracker = None
     if config.perception.state_source == "lidar":  # the planner reads the tracked crowd

@@ -225,6 +225,9 @@ def social_rows(summary: dict, plant: str) -> tuple[list[str], list[list[object]
     falls = plant in PLANTS and PLANTS[plant].can_fall
     if falls:
         header.append("fall rate")
+    no_route = any(s.get("no_route_rate", 0.0) > 0 for s in summary.values())
+    if no_route:  # only where a route layer ran out of routes
+        header.append("no-route rate")
     header.append("wall s / trial")
     rows = []
     for m, s in summary.items():
@@ -238,6 +241,8 @@ def social_rows(summary: dict, plant: str) -> tuple[list[str], list[list[object]
         ]
         if falls:
             row.append(f"{s['fall_rate']:.3f}")
+        if no_route:
+            row.append(f"{s['no_route_rate']:.3f}")
         row.append(f"{s['wall_seconds_mean']:.2f}")
         rows.append(row)
     return header, rows

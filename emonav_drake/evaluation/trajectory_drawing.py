@@ -36,6 +36,7 @@ _OUTCOME_TEXT = {
     "collision": "collision",
     "timeout": "timeout",
     "fall": "fall",
+    "no_route": "no route left",
 }
 
 

@@ -13,7 +13,7 @@ import dataclasses as dc
 import math
 from typing import TYPE_CHECKING, Any
 
-from emonav_drake.core.metrics import COLLISION, FALL, SUCCESS, TIMEOUT, EpisodeRecord
+from emonav_drake.core.metrics import COLLISION, FALL, NO_ROUTE, SUCCESS, TIMEOUT, EpisodeRecord
 from emonav_drake.core.scenario import MAX_SEED
 from emonav_drake.core.social_metrics import check_social_fields
 from emonav_drake.diagrams.plants import PLANTS
@@ -21,7 +21,7 @@ from emonav_drake.diagrams.plants import PLANTS
 if TYPE_CHECKING:
     from emonav_drake.params import EmoNavConfig
 
-OUTCOMES = (SUCCESS, COLLISION, TIMEOUT, FALL)
+OUTCOMES = (SUCCESS, COLLISION, TIMEOUT, FALL, NO_ROUTE)
 
 _LINE_FIELDS = {"method", "seed", "plant", "record", "wall_seconds"}
 _RECORD_FIELDS = {f.name for f in dc.fields(EpisodeRecord)}

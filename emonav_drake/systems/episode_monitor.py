@@ -6,6 +6,9 @@ Input ports:
     command (2, optional): the planner's command (u_v [m/s], u_Δθ [rad]); at t_k, before
         the planner's update, the command u_{k−1} of the step that ends. It feeds the
         jerk of the field's metrics only: left unconnected, `jerk_mean` is None.
+    has_route (1, optional): the global route layer's `has_route`; 0 at t_k ends the
+        episode with the outcome "no_route" (unless step k collided or reached the goal).
+        Left unconnected: a route is assumed.
 Output port:
     status (abstract `EpisodeStatus`): the `EpisodeRecord` (outcome, steps, path length,
         discomfort steps, IDT, …) including the walking step that ends now, and whether
@@ -85,6 +88,7 @@ class EpisodeMonitor(LeafSystem):
         self._robot = self.DeclareVectorInputPort("robot_state", 4)
         self._crowd = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
         self._command = self.DeclareVectorInputPort("command", 2)
+        self._has_route = self.DeclareVectorInputPort("has_route", 1)
         self.DeclareAbstractOutputPort(
             "status",
             lambda: AbstractValue.Make(EpisodeStatus(EpisodeRecord(), False)),
@@ -125,7 +129,8 @@ class EpisodeMonitor(LeafSystem):
         )
         command = self._command.Eval(context).copy() if self._command.HasValue(context) else None
         motion = StepMotion(st.robot, robot, crowd, self._goal, c.robot.radius, command)
-        new.tracker.add(ev, math.dist(st.position, new.position), motion=motion)
+        no_route = self._has_route.HasValue(context) and self._has_route.Eval(context)[0] < 0.5
+        new.tracker.add(ev, math.dist(st.position, new.position), motion, no_route)
         return new
 
     def _update(self, context: Context, state: State) -> None:

@@ -4,10 +4,15 @@ The global layer of a navigation stack (Nav2's planner server, move_base's globa
 planner): at a low rate it plans the shortest route from the robot to the goal around the
 walls and static discs (`core/global_route.py`), and at any time it gives the sub-goal a
 local planner steers to, `lookahead` metres along the route beyond the robot. It replans
-when it has no route yet or the robot has strayed more than `stray` from it. A robot
-standing within the clearance of an obstacle (it may pass closer than the route's margin)
-is routed from there with the clearance reduced to `min_clearance`; when even that finds
-no route, the last route is kept and `has_route` tells the planner.
+when it has no route yet, when the robot has strayed more than `stray` from it, or when
+a disc put in place since (`appear_times`: a cart left in a doorway) blocks what is left
+of it. A robot standing within the clearance of an obstacle (it may pass closer than the
+route's margin) is routed from there with the clearance reduced to `min_clearance`; when
+even that finds no route, the last route is kept and `has_route` turns 0 (the episode
+monitor ends the trial with the outcome "no_route").
+
+The map is told when a disc is put in place (as a building's map server would be): the
+route layer does not discover it with the robot's sensors.
 
 Input port:
     robot_state (4): (x [m], y [m], θ [rad], v [m/s]) of the robot, world frame.
@@ -16,11 +21,14 @@ Output ports:
         nearest point on it (the goal when less is left; the goal itself before any
         route).
     route (abstract (K, 2) float array): the route's points [m, world], robot to goal.
-Abstract state: the route (empty before the first plan) and whether the last replanning
-found one. Updated every `period` from t = 0.
+    has_route (1): 1 while a route to the goal exists on the map, 0 once none is left.
+Abstract state: the route (empty before the first plan), the discs in place when it was
+planned, and whether the last replanning found one. Updated every `period` from t = 0.
 """
 
 from __future__ import annotations
+
+import dataclasses as dc
 
 import numpy as np
 from pydrake.common.value import AbstractValue
@@ -31,9 +39,17 @@ from emonav_drake.core.global_route import (
     StaticMap,
     lookahead_point,
     plan_route,
+    segments_clear,
 )
 from emonav_drake.core.walls import point_segment_distances
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
+
+
+@dc.dataclass(frozen=True)
+class _Plan:
+    route: np.ndarray  # (K, 2) [m]; (0, 2) before the first plan
+    discs: tuple[bool, ...]  # which of the map's discs were in place when it was planned
+    found: bool = True  # whether the last replanning found a route
 
 
 class GlobalRoutePlanner(LeafSystem):
@@ -48,6 +64,7 @@ class GlobalRoutePlanner(LeafSystem):
         period: replanning check period [s].
         lookahead: sub-goal distance along the route [m].
         stray: replan when the robot is farther than this from the route [m].
+        appear_times: when each of the map's discs is put in place [s] (None: all at 0).
     """
 
     def __init__(
@@ -59,6 +76,7 @@ class GlobalRoutePlanner(LeafSystem):
         period: float = 0.4,
         lookahead: float = 2.0,
         stray: float = 1.0,
+        appear_times: object = None,
     ) -> None:
         super().__init__()
         if not 0 < min_clearance <= clearance:
@@ -67,8 +85,14 @@ class GlobalRoutePlanner(LeafSystem):
         self.goal = np.asarray(goal, dtype=float).reshape(2)
         self.clearance, self.min_clearance = float(clearance), float(min_clearance)
         self.lookahead, self.stray = float(lookahead), float(stray)
+        n = len(static_map.radii)
+        times = np.zeros(n) if appear_times is None else np.asarray(appear_times, float)
+        if times.shape != (n,) or not (np.isfinite(times).all() and (times >= 0).all()):
+            raise ValueError(f"appear_times: {n} finite times >= 0 expected, got {times!r}")
+        self.appear_times = times
         self._robot_in = self.DeclareVectorInputPort("robot_state", 4)
-        self._route = self.DeclareAbstractState(AbstractValue.Make(np.zeros((0, 2))))
+        empty = _Plan(np.zeros((0, 2)), tuple(bool(t <= 0) for t in times))
+        self._plan = self.DeclareAbstractState(AbstractValue.Make(empty))
         self.DeclareVectorOutputPort(
             "subgoal",
             2,
@@ -81,12 +105,27 @@ class GlobalRoutePlanner(LeafSystem):
             lambda context, out: out.set_value(self.route(context)),
             {self.all_state_ticket()},
         )
+        self.DeclareVectorOutputPort(
+            "has_route",
+            1,
+            lambda context, out: out.SetAtIndex(0, float(self._state(context).found)),
+            {self.all_state_ticket()},
+        )
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._replan)
         self.DeclareInitializationUnrestrictedUpdateEvent(self._replan)
 
+    def _state(self, context: Context) -> _Plan:
+        return context.get_abstract_state(self._plan).get_value()
+
     def route(self, context: Context) -> np.ndarray:
         """The route in `context` ((0, 2) before the first plan)."""
-        return context.get_abstract_state(self._route).get_value()
+        return self._state(context).route
+
+    def map_at(self, t: float) -> StaticMap:
+        """The map at time `t` [s]: the walls and the discs in place by then."""
+        here = self.appear_times <= t + 1e-9
+        m = self.static_map
+        return StaticMap(m.walls, m.centers[here], m.radii[here])
 
     def _robot_xy(self, context: Context) -> np.ndarray:
         robot = lip_state_from_vector(self._robot_in.Eval(context))
@@ -94,18 +133,34 @@ class GlobalRoutePlanner(LeafSystem):
 
     def _replan(self, context: Context, state: State) -> None:
         xy = self._robot_xy(context)
-        route = self.route(context)
-        if len(route) >= 2:
+        plan = self._state(context)
+        t = context.get_time()
+        discs = tuple(bool(v) for v in self.appear_times <= t + 1e-9)
+        static_map = self.map_at(t)
+        route = plan.route
+        if len(route) >= 2 and plan.found:
             seg = np.stack([route[:-1], route[1:]], axis=1)
-            if point_segment_distances(xy, seg).min() <= self.stray:
+            gaps = point_segment_distances(xy, seg)
+            near = int(np.argmin(gaps))
+            blocked = discs != plan.discs and not segments_clear(
+                route[near:], static_map, self.min_clearance
+            )
+            if gaps[near] <= self.stray and not blocked:
+                if discs != plan.discs:  # a disc elsewhere: the route still holds
+                    state.get_mutable_abstract_state(self._plan).set_value(
+                        dc.replace(plan, discs=discs)
+                    )
                 return
+        elif not plan.found and discs == plan.discs:
+            return  # nothing has changed since no route was found
         for clearance in (self.clearance, self.min_clearance):
             try:
-                new = plan_route(xy, self.goal, self.static_map, clearance)
+                new = plan_route(xy, self.goal, static_map, clearance)
             except NoRouteError:
                 continue
-            state.get_mutable_abstract_state(self._route).set_value(new)
+            state.get_mutable_abstract_state(self._plan).set_value(_Plan(new, discs))
             return
+        state.get_mutable_abstract_state(self._plan).set_value(_Plan(route, discs, found=False))
 
     def _calc_subgoal(self, context: Context, output: BasicVector) -> None:
         route = self.route(context)

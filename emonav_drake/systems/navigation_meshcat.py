@@ -232,6 +232,8 @@ class NavigationMeshcatVisualizer(LeafSystem):
             )
             m.SetTransform(f"{path}/ring", RigidTransform([0, 0, 0.005]))
             m.SetTransform(path, RigidTransform([o.center[0], o.center[1], 0.0]))
+            if o.appears_at > 0:  # put in place during the episode
+                self._appear(path, o.appears_at)
         for i, w in enumerate(scenario.walls):
             self._draw_wall(f"{PREFIX}/walls/{i}", w.start, w.end, c.reward.static_discomfort)
         dist = c.reward.emotion_distances()
