@@ -36,7 +36,7 @@ from emonav_drake.params_crowd import (
     EpisodeParams,
     RewardParams,
 )
-from emonav_drake.params_planners import DwaParams, MpcParams
+from emonav_drake.params_planners import DwaParams, MpcParams, RouteParams
 from emonav_drake.params_robot import (
     NUM_BEAMS,
     PEOPLE_AS,
@@ -81,6 +81,7 @@ __all__ = [
     "PerceptionParams",
     "RewardParams",
     "RobotParams",
+    "RouteParams",
     "SensorParams",
     "WalkingParams",
     "apply_deployable",
@@ -105,6 +106,7 @@ class EmoNavConfig:
     episode: EpisodeParams = setting(factory=EpisodeParams)
     dwa: DwaParams = setting(factory=DwaParams)
     mpc: MpcParams = setting(factory=MpcParams)
+    route: RouteParams = setting(factory=RouteParams)
     walking: WalkingParams = setting(factory=WalkingParams)
     perception: PerceptionParams = setting(factory=PerceptionParams)
     sensor: SensorParams = setting(factory=SensorParams)

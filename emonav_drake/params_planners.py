@@ -1,4 +1,4 @@
-"""The model-based planners' sections of the configuration: DWA and the OSQP MPC.
+"""The model-based planners' sections of the configuration: DWA, the OSQP MPC, the route.
 
 Part of `EmoNavConfig` (`params.py`, which re-exports every name here). Each field gives
 its default, doc, unit and allowed range (`config_fields.setting`). Units are SI
@@ -108,4 +108,37 @@ class MpcParams:
     # warns.
     time_limit: float = setting(
         1.0, "OSQP wall-clock limit per QP, a safety only", "s", (1e-4, 10.0)
+    )
+
+
+@dc.dataclass
+class RouteParams:
+    """The global route layer: a route on the known map in scenes with walls (docs/global_route.md).
+
+    Off by default while its settings are tuned; in a scene without walls it is never
+    built, whatever `enabled` says.
+    """
+
+    enabled: bool = setting(
+        False,
+        "in a scene with walls, plan a route on the known map (walls and static discs) and "
+        "give the planner a sub-goal along it",
+    )
+    margins: list[float] = setting(
+        [0.1],
+        "the route's distance from walls and static discs beyond the robot's radius, tried "
+        "in order (the first that gives a route wins; then the radius alone)",
+        "m",
+        (None, 0.0, 2.0),
+    )
+    lookahead: float = setting(
+        2.0, "the sub-goal's distance along the route beyond the robot", "m", (0.2, 20.0)
+    )
+    line_of_sight: bool = setting(
+        False,
+        "pull the sub-goal back along the route until the straight line from the robot to "
+        "it keeps the robot's radius from every wall and disc (no corner cut)",
+    )
+    stray: float = setting(
+        1.0, "replan when the robot is farther than this from the route", "m", (0.05, 20.0)
     )

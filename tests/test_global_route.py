@@ -328,7 +328,9 @@ def test_a_robot_whose_only_door_is_closed_ends_its_trial_with_no_route():
     scenario = _doorway_scene(appears_at=1.0)
     crowd = Crowd(scenario, cfg)
     assert len(crowd.static_discs(0.9)[1]) == 0 and len(crowd.static_discs(1.0)[1]) == 1
-    request = EpisodeRequest(scenario, cfg, make_planner("dwa", cfg), global_route=True)
+    routed = EmoNavConfig()
+    routed.route.enabled = True
+    request = EpisodeRequest(scenario, routed, make_planner("dwa", routed))
     record, _ = run_navigation_episode(request, build_episode)
     # placed at 1.0 s, seen by the route layer at its update at 1.2 s, the trial ends at
     # the next walking step (1.6 s): an outcome, not a timeout
@@ -360,3 +362,54 @@ def test_the_closed_door_example_replans_through_the_other_door(tmp_path):
             near_wall = robot[np.abs(robot[:, 0]) < 0.3]
             assert len(near_wall) and (near_wall[:, 1] > 1.0).all()
     assert outcomes == {False: "timeout", True: "success"}
+
+
+def test_widest_clearance_first_keeps_to_the_middle_of_a_door():
+    from emonav_drake.systems.global_route_planner import GlobalRoutePlanner
+
+    m = office()  # the first door: x = 4, y 1.4-2.6
+    planner = GlobalRoutePlanner(m, [11.0, 1.0], [0.55, 0.4], 0.3, period=0.4)
+    ctx = planner.CreateDefaultContext()
+    planner.GetInputPort("robot_state").FixValue(ctx, np.array([1.0, 1.0, 0.0, 0.0]))
+    planner.ExecuteInitializationEvents(ctx)  # only 0.05 m to spare each side: planned at 0.55
+    route = planner.GetOutputPort("route").Eval(ctx)
+    assert min_clearance(route, m) >= 0.55 - 1e-6
+    tight = plan_route([1, 1], [11, 1], m, 0.3)  # at the radius alone it grazes the jamb
+    for r, far in ((route, 0.05 + 1e-6), (tight, 0.3)):
+        dense = np.concatenate(
+            [
+                a + np.linspace(0, 1, 400)[:, None] * (b - a)
+                for a, b in zip(r[:-1], r[1:], strict=True)
+            ]
+        )
+        y = dense[np.argmin(np.abs(dense[:, 0] - 4.0)), 1]
+        assert abs(y - 2.0) <= far
+    assert abs(tight[np.argmin(np.abs(tight[:, 0] - 4.0)), 1] - 2.0) > 0.2
+
+
+def test_the_line_of_sight_subgoal_never_sends_the_robot_across_a_corner():
+    from emonav_drake.core.global_route import segments_clear
+    from emonav_drake.systems.global_route_planner import GlobalRoutePlanner
+
+    m = office()
+    route = plan_route([1, 1], [11, 1], m, 0.4)
+    cut = 0
+    for seen in (False, True):
+        planner = GlobalRoutePlanner(m, [11.0, 1.0], 0.4, 0.3, lookahead=3.0, line_of_sight=seen)
+        ctx = planner.CreateDefaultContext()
+        port = planner.GetInputPort("robot_state")
+        port.FixValue(ctx, np.array([1.0, 1.0, 0.0, 0.0]))
+        planner.ExecuteInitializationEvents(ctx)
+        assert np.array_equal(planner.GetOutputPort("route").Eval(ctx), route)
+        for s in np.linspace(0.0, route_length(route), 60):  # the robot along its route
+            xy = lookahead_point(route, route[0], s)
+            port.FixValue(ctx, np.array([*xy, 0.0, 0.0]))
+            sub = planner.GetOutputPort("subgoal").Eval(ctx)
+            clear = segments_clear(np.stack([xy, sub]), m, 0.3)
+            if seen:
+                assert clear, (xy, sub)
+                # still ahead, not at the robot's feet (but near the goal: the goal)
+                assert math.dist(xy, sub) > 0.3 or np.allclose(sub, [11, 1])
+            else:
+                cut += not clear
+    assert cut > 0  # without it, a 3 m look-ahead cuts the jambs' corners

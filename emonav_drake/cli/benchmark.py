@@ -22,6 +22,7 @@ from emonav_drake.cli.resolve import (
     add_config_choice,
     add_deployable,
     add_family,
+    add_global_route,
     add_sensor,
     add_state_source,
     resolve_config,
@@ -99,6 +100,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     add_deployable(b)
     add_state_source(b)
     add_family(b)
+    add_global_route(b)
     add_sensor(b)
     b.add_argument(
         "--checkpoint",

@@ -20,6 +20,7 @@ from emonav_drake.cli.resolve import (
     add_config_choice,
     add_deployable,
     add_family,
+    add_global_route,
     add_sensor,
     add_state_source,
 )
@@ -167,6 +168,7 @@ def add_episode_flags(p: argparse.ArgumentParser) -> None:
     add_deployable(p)
     add_state_source(p)
     add_family(p)
+    add_global_route(p)
     add_sensor(p)
     p.add_argument(
         "--time-varying",

@@ -52,12 +52,13 @@ class ResolvedConfig:
     family: str | None = None  # --family, if given (applied to `config`)
     sensor: str | None = None  # --sensor, if given (applied to `config`)
     deployable: bool = False  # --deployable was given (applied to `config`)
+    global_route: bool = False  # --global-route was given (applied to `config`)
 
     @property
     def source(self) -> str:
         """`origin` plus " --time-varying" / " --deployable" / " --state-source S" /
-        " --family F" / " --sensor P" when given (recorded by `benchmark`, printed by
-        `config`)."""
+        " --family F" / " --sensor P" / " --global-route" when given (recorded by
+        `benchmark`, printed by `config`)."""
         flags = " --time-varying" if self.time_varying else ""
         if self.deployable:
             flags += " --deployable"
@@ -67,6 +68,8 @@ class ResolvedConfig:
             flags += f" --family {self.family}"
         if self.sensor is not None:
             flags += f" --sensor {self.sensor}"
+        if self.global_route:
+            flags += " --global-route"
         return self.origin + flags
 
 
@@ -95,6 +98,9 @@ def resolve_config(args: argparse.Namespace) -> ResolvedConfig:
     family = getattr(args, "family", None)
     if family is not None:
         cfg.crowd.family = family
+    global_route = bool(getattr(args, "global_route", False))
+    if global_route:
+        cfg.route.enabled = True
     sensor = getattr(args, "sensor", None)
     deployable = bool(getattr(args, "deployable", False))
     if deployable:
@@ -114,7 +120,7 @@ def resolve_config(args: argparse.Namespace) -> ResolvedConfig:
         except ConfigError as e:
             raise ConfigError(f"--sensor {sensor} with {origin}: {e}") from None
     return ResolvedConfig(
-        cfg, setting, origin, time_varying, state_source, family, sensor, deployable
+        cfg, setting, origin, time_varying, state_source, family, sensor, deployable, global_route
     )
 
 
@@ -176,6 +182,18 @@ def add_family(p: argparse.ArgumentParser) -> None:
     from emonav_drake.params import SCENARIO_FAMILIES
 
     p.add_argument("--family", choices=SCENARIO_FAMILIES, metavar="NAME", help=FAMILY_HELP)
+
+
+def add_global_route(p: argparse.ArgumentParser) -> None:
+    """`--global-route` (`RouteParams.enabled`, docs/global_route.md)."""
+    p.add_argument(
+        "--global-route",
+        action="store_true",
+        help="in a scene with walls, a global route on the known map (walls and static "
+        "discs) gives the planner a sub-goal along it, drawn in Meshcat and replays "
+        "(the configuration's route.enabled; off by default while its settings are tuned; "
+        "no effect without walls)",
+    )
 
 
 SENSOR_HELP = (

@@ -94,13 +94,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         help="profile the run: events per simulated second and wall-time share of every "
         "system (printed, and added to --json as 'rates' and 'wall_time_share')",
     )
-    s.add_argument(
-        "--global-route",
-        action="store_true",
-        help="in a scene with walls, a global route on the known map (walls and static "
-        "discs) gives the planner a sub-goal along it, drawn in Meshcat and --record "
-        "(off by default while its settings are tuned; no effect without walls)",
-    )
     add_episode_flags(s)
     s.set_defaults(func=cmd_sim)
     return s
@@ -148,7 +141,6 @@ def cmd_sim(args: argparse.Namespace) -> int:
         progress=True,  # drawn only where `emonav` allows bars: a terminal, no --quiet
         camera_frames=[] if args.camera_gif is not None else None,
         trace=bool(args.json or args.steps_out),
-        global_route=args.global_route,
     )
     t0 = time.perf_counter()
     record, trace = _run_sim_episode(args, robot, request)
@@ -159,7 +151,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     out["sensor"] = cfg.sensor.preset  # the LiDAR the scan came from (ideal: exact)
     out["deployable"] = is_deployable(cfg)
     out["emotion_source"] = "truth" if estimate is None else estimate.mode
-    out["global_route"] = bool(args.global_route and scenario.walls)
+    out["global_route"] = bool(cfg.route.enabled and scenario.walls)
     if rates is not None and rates.report is not None:
         out.update(rates.report.to_json())
         print(_format_rates(rates.report))
@@ -231,7 +223,7 @@ def _open_viewer(
                 rays=args.rays,
                 footsteps=robot.footsteps,
                 tracks=cfg.perception.state_source == "lidar",
-                route=bool(args.global_route and scenario.walls),
+                route=bool(cfg.route.enabled and scenario.walls),
             )
             start_live_view(meshcat, wait=not args.no_wait, caption=caption)
     return meshcat, caption

@@ -74,8 +74,6 @@ class EpisodeRequest:
         camera_frames: emotion estimate mode "camera": every classified head-camera image
             is appended as (time [s], BGR image) (`write_camera_gif`).
         trace: keep the `EpisodeTrace` (returned beside the record; None otherwise).
-        global_route: in a scene with walls, a `GlobalRoutePlanner` on the known map gives
-            the planner a sub-goal along the route (`AddNavigationStack`; `--global-route`).
     """
 
     scenario: Scenario
@@ -92,7 +90,6 @@ class EpisodeRequest:
     progress: bool = False
     camera_frames: list | None = None
     trace: bool = False
-    global_route: bool = False
 
     def __post_init__(self) -> None:
         if self.goal_radius is None:
@@ -185,7 +182,7 @@ def run_navigation_episode(
             rays=req.show_rays,
             footsteps=systems.footsteps,
             tracks=req.config.perception.state_source == "lidar",
-            route=req.global_route and bool(req.scenario.walls),
+            route=req.config.route.enabled and bool(req.scenario.walls),
         )
         write_replay_html(meshcat, req.record_html, caption)
     return record, trace

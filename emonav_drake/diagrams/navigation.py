@@ -111,14 +111,11 @@ class NavigationStack:
     route: GlobalRoutePlanner | None = None  # global_route in a scene with walls
 
 
-# The route keeps this much beyond the robot's radius from walls and static discs [m].
-ROUTE_MARGIN = 0.1
-
-
 def make_route_planner(scenario: Scenario, config: EmoNavConfig) -> GlobalRoutePlanner:
-    """The `GlobalRoutePlanner` of a scene: its walls and static discs, its goal, a
-    clearance of the robot's radius + `ROUTE_MARGIN` (the robot's radius when it stands
-    closer), checked every walking step. `ConfigError` naming what blocks it when no route
+    """The `GlobalRoutePlanner` of a scene: its walls and static discs, its goal, the
+    clearances of the robot's radius + each of `config.route.margins` (then the radius
+    alone), look-ahead, line of sight and stray distance of `config.route`, checked every
+    walking step. `ConfigError` naming what blocks it when no route
     with the robot's radius joins the start to the goal on the map at t = 0 (a disc put in
     place later, `appears_at` > 0, may close the route during the episode: the outcome
     "no_route")."""
@@ -127,13 +124,17 @@ def make_route_planner(scenario: Scenario, config: EmoNavConfig) -> GlobalRouteP
         [o.center for o in scenario.obstacles],
         [o.radius for o in scenario.obstacles],
     )
+    r, rp = config.robot.radius, config.route
     route = GlobalRoutePlanner(
         static_map,
         np.asarray(scenario.robot_goal, float),
-        config.robot.radius + ROUTE_MARGIN,
-        config.robot.radius,
+        [r + m for m in rp.margins] or r,
+        r,
         period=config.robot.step_time,
+        lookahead=rp.lookahead,
+        stray=rp.stray,
         appear_times=[o.appears_at for o in scenario.obstacles],
+        line_of_sight=rp.line_of_sight,
     )
     try:  # a goal no route reaches is refused here, naming what blocks it
         plan_route(
@@ -155,7 +156,7 @@ def AddNavigationStack(
     emotion_estimate: EmotionEstimateParams | None = None,
     camera_mount: CameraMount | None = None,
     camera_frames: list | None = None,
-    global_route: bool = False,
+    global_route: bool | None = None,
 ) -> NavigationStack:
     """Add crowd, grid maps, planner and episode monitor, wired to a robot.
 
@@ -167,10 +168,10 @@ def AddNavigationStack(
             estimate's mode "camera": `diagrams/camera_perception.py`).
         camera_frames: mode "camera" only: every classified image, annotated, is
             appended to this list as (time [s], BGR image) (`write_camera_gif`).
-        global_route: in a scene with walls, a `GlobalRoutePlanner` gives the planner its
-            goal, a sub-goal along the route around the walls (off by default: on
-            `corner_traffic` it does not help the local planners yet — LIP, LiDAR state,
-            seeds 6000-6039: DWA 10/40 either way, the MPC 1/40 against 8/40).
+        global_route: in a scene with walls, a `GlobalRoutePlanner` (`make_route_planner`)
+            gives the planner its goal, a sub-goal along the route around the walls, and
+            the monitor its `has_route` (docs/global_route.md); None: as
+            `config.route.enabled` (off by default).
         Others: as `build_navigation_diagram`.
     The caller connects the planner's `command` output to its robot: (u_v [m/s], u_Δθ
     [rad]), held for the whole walking step (u_k during step k, planned at t_k).
@@ -183,6 +184,8 @@ def AddNavigationStack(
     for sys in (crowd, maps, plan, monitor):
         b.Connect(robot_state, sys.GetInputPort("robot_state"))
     route = None
+    if global_route is None:
+        global_route = config.route.enabled
     if global_route and scenario.walls:  # the planner steers to a sub-goal along the route
         route = b.AddNamedSystem("global_route", make_route_planner(scenario, config))
         b.Connect(robot_state, route.GetInputPort("robot_state"))
@@ -287,7 +290,6 @@ def build_navigation_diagram(
     goal_radius: float | None = None,
     emotion_estimate: EmotionEstimateParams | None = None,
     camera_frames: list | None = None,
-    global_route: bool = False,
 ) -> NavigationDiagram:
     """Wire the navigation diagram for one scenario.
 
@@ -308,7 +310,6 @@ def build_navigation_diagram(
             the ground truth, so the metrics measure real discomfort. In "camera" mode
             the robot's head camera and the face pipeline (`diagrams/camera_perception.py`).
         camera_frames: with "camera": collects the classified images (AddNavigationStack).
-        global_route: the global route layer in a scene with walls (AddNavigationStack).
     """
     config.validate()
     scenario.validate()
@@ -329,7 +330,6 @@ def build_navigation_diagram(
         emotion_estimate,
         mount,
         camera_frames,
-        global_route,
     )
     crowd, maps, plan, monitor = stack.crowd, stack.grid_maps, stack.planner, stack.monitor
     b.Connect(plan.GetOutputPort("command"), robot.GetInputPort("command"))
@@ -372,6 +372,5 @@ def build_episode(r: EpisodeRequest) -> EpisodeSystems:
         r.goal_radius,
         r.emotion_estimate,
         r.camera_frames,
-        r.global_route,
     )
     return nav.systems()

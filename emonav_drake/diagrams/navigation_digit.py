@@ -94,7 +94,6 @@ def build_digit_navigation_diagram(
     goal_radius: float | None = None,
     emotion_estimate: EmotionEstimateParams | None = None,
     camera_frames: list | None = None,
-    global_route: bool = False,
 ) -> DigitNavigationDiagram:
     """Wire the navigation stack around the Digit station for one scenario.
 
@@ -106,7 +105,8 @@ def build_digit_navigation_diagram(
     (the Gymnasium observation of `EmoNavDigit-v0`, `systems.navigation_observation`).
     `emotion_estimate` as in `build_navigation_diagram`; in mode "camera" the head camera
     rides on Digit's torso (`HeadCameraParams.digit_offset`) and sways with it.
-    `global_route`: the global route layer in a scene with walls (`AddNavigationStack`).
+    With `config.route.enabled`, the global route layer in a scene with walls
+    (`AddNavigationStack`).
     """
     config.validate()
     scenario.validate()
@@ -131,7 +131,6 @@ def build_digit_navigation_diagram(
         emotion_estimate=emotion_estimate,
         camera_mount=mount,
         camera_frames=camera_frames,
-        global_route=global_route,
     )
     crowd, nav, monitor = stack.crowd, stack.planner, stack.monitor
     b.Connect(nav.GetOutputPort("command"), station.GetInputPort("command"))
@@ -193,7 +192,6 @@ def build_episode(r: EpisodeRequest) -> EpisodeSystems:
         r.goal_radius,
         r.emotion_estimate,
         r.camera_frames,
-        r.global_route,
     )
     return nd.systems()
 

@@ -67,6 +67,11 @@ def setting_label(config: EmoNavConfig, name: str | None) -> str:
         label += f", family {config.crowd.family}"
     if not config.sensor.is_exact() and not is_deployable(config):
         label += f", sensor {config.sensor.preset}"
+    if config.route.enabled:
+        rp = config.route
+        margins = "/".join(f"{m:g}" for m in rp.margins) or "0"
+        label += f", global route (margin {margins} m, look-ahead {rp.lookahead:g} m"
+        label += ", line of sight)" if rp.line_of_sight else ")"
     return label
 
 

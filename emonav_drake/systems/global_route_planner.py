@@ -3,7 +3,12 @@
 The global layer of a navigation stack (Nav2's planner server, move_base's global
 planner): at a low rate it plans the shortest route from the robot to the goal around the
 walls and static discs (`core/global_route.py`), and at any time it gives the sub-goal a
-local planner steers to, `lookahead` metres along the route beyond the robot. It replans
+local planner steers to, `lookahead` metres along the route beyond the robot (with
+`line_of_sight`, pulled back along the route until the straight line from the robot to
+it keeps `min_clearance` from every obstacle: the local planner is never sent across a
+door jamb's corner). A route is planned at each of `clearance` in turn (a list: the
+widest first, so a route through a door keeps to its middle) and at `min_clearance`
+last; the first that exists wins. It replans
 when it has no route yet, when the robot has strayed more than `stray` from it, or when
 a disc put in place since (`appear_times`: a cart left in a doorway) blocks what is left
 of it. A robot standing within the clearance of an obstacle (it may pass closer than the
@@ -29,6 +34,7 @@ planned, and whether the last replanning found one. Updated every `period` from 
 from __future__ import annotations
 
 import dataclasses as dc
+from collections.abc import Sequence
 
 import numpy as np
 from pydrake.common.value import AbstractValue
@@ -58,32 +64,38 @@ class GlobalRoutePlanner(LeafSystem):
     Args:
         static_map: the walls and static discs.
         goal: the goal [m, world].
-        clearance: the route's distance from every obstacle [m] (robot radius + margin).
-        min_clearance: the clearance when the robot stands closer than `clearance` [m]
-            (its radius).
+        clearance: the route's distance from every obstacle [m] (robot radius + margin),
+            or a sequence of them tried in order.
+        min_clearance: the clearance tried last, also when the robot stands closer than
+            every `clearance` [m] (its radius).
         period: replanning check period [s].
         lookahead: sub-goal distance along the route [m].
         stray: replan when the robot is farther than this from the route [m].
         appear_times: when each of the map's discs is put in place [s] (None: all at 0).
+        line_of_sight: keep the sub-goal in the robot's line of sight (module docstring).
     """
 
     def __init__(
         self,
         static_map: StaticMap,
         goal: np.ndarray,
-        clearance: float,
+        clearance: float | Sequence[float],
         min_clearance: float,
         period: float = 0.4,
         lookahead: float = 2.0,
         stray: float = 1.0,
         appear_times: object = None,
+        line_of_sight: bool = False,
     ) -> None:
         super().__init__()
-        if not 0 < min_clearance <= clearance:
+        wanted = [float(c) for c in np.atleast_1d(np.asarray(clearance, dtype=float))]
+        if not (0 < min_clearance and all(c >= min_clearance for c in wanted)):
             raise ValueError(f"need 0 < min_clearance ({min_clearance}) <= clearance ({clearance})")
         self.static_map = static_map
         self.goal = np.asarray(goal, dtype=float).reshape(2)
-        self.clearance, self.min_clearance = float(clearance), float(min_clearance)
+        self.clearances = (*wanted, float(min_clearance))
+        self.clearance, self.min_clearance = self.clearances[0], float(min_clearance)
+        self.line_of_sight = bool(line_of_sight)
         self.lookahead, self.stray = float(lookahead), float(stray)
         n = len(static_map.radii)
         times = np.zeros(n) if appear_times is None else np.asarray(appear_times, float)
@@ -153,7 +165,7 @@ class GlobalRoutePlanner(LeafSystem):
                 return
         elif not plan.found and discs == plan.discs:
             return  # nothing has changed since no route was found
-        for clearance in (self.clearance, self.min_clearance):
+        for clearance in self.clearances:
             try:
                 new = plan_route(xy, self.goal, static_map, clearance)
             except NoRouteError:
@@ -167,4 +179,25 @@ class GlobalRoutePlanner(LeafSystem):
         if len(route) < 2:
             output.SetFromVector(self.goal)
             return
-        output.SetFromVector(lookahead_point(route, self._robot_xy(context), self.lookahead))
+        xy = self._robot_xy(context)
+        sub = lookahead_point(route, xy, self.lookahead)
+        if self.line_of_sight:
+            sub = self._in_sight(route, xy, sub, self.map_at(context.get_time()))
+        output.SetFromVector(sub)
+
+    def _in_sight(
+        self, route: np.ndarray, xy: np.ndarray, sub: np.ndarray, static_map: StaticMap
+    ) -> np.ndarray:
+        """The farthest point up to `sub` along the route that the robot sees with its
+        radius clear (bisection over the distance along the route, 1 cm)."""
+        if segments_clear(np.stack([xy, sub]), static_map, self.min_clearance):
+            return sub
+        lo, hi = 0.0, self.lookahead
+        while hi - lo > 0.01:
+            mid = 0.5 * (lo + hi)
+            point = lookahead_point(route, xy, mid)
+            if segments_clear(np.stack([xy, point]), static_map, self.min_clearance):
+                lo = mid
+            else:
+                hi = mid
+        return lookahead_point(route, xy, lo)
