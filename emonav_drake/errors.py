@@ -39,3 +39,12 @@ class PluginError(UserError, RuntimeError):
     """A planner of the user's own (from `--planner-module` or an entry point) failed in
     its own code: it raised, returned no command, or hung. The message names the planner
     and its module; the fault is in that module, not in the package (exit code 2)."""
+
+
+def did_you_mean(word: str, choices: object) -> str:
+    """The hint " (did you mean 'x'?)" naming the choice closest to a mistyped `word`
+    (difflib's ratio ≥ 0.6), or "" when none is close: for error messages."""
+    import difflib
+
+    close = difflib.get_close_matches(str(word), [str(c) for c in choices], n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""

@@ -26,6 +26,7 @@ import dataclasses as dc
 from pathlib import Path
 
 from emonav_drake.config_fields import setting
+from emonav_drake.errors import did_you_mean
 from emonav_drake.params_crowd import (
     EMOTION_NAMES,
     HAPPY,
@@ -163,7 +164,12 @@ class EmoNavConfig:
             f"< lidar.max_range ({li.max_range})",
         )
         family = self.crowd.family
-        require(family in SCENARIO_FAMILIES, "crowd.family", family, f"one of {SCENARIO_FAMILIES}")
+        require(
+            family in SCENARIO_FAMILIES,
+            "crowd.family",
+            family,
+            f"one of {SCENARIO_FAMILIES}{did_you_mean(family, SCENARIO_FAMILIES)}",
+        )
         source = self.perception.state_source
         require(source in STATE_SOURCES, "perception.state_source", source, '"truth" or "lidar"')
         self._validate_sensor()
@@ -190,7 +196,12 @@ class EmoNavConfig:
         its beams in every LGM sector (angular resolution ≤ 360° / lidar.grid_size) and a
         rated range that covers the maps' range L (docs/perception.md)."""
         s, li = self.sensor, self.lidar
-        require(s.preset in SENSOR_PRESETS, "sensor.preset", s.preset, f"one of {SENSOR_NAMES}")
+        require(
+            s.preset in SENSOR_PRESETS,
+            "sensor.preset",
+            s.preset,
+            f"one of {SENSOR_NAMES}{did_you_mean(s.preset, SENSOR_NAMES)}",
+        )
         require(s.people_as in PEOPLE_AS, "sensor.people_as", s.people_as, '"disc" or "legs"')
         sector = 360.0 / li.grid_size
         require(

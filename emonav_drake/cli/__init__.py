@@ -51,7 +51,7 @@ from emonav_drake.cli import (
     walk,
 )
 from emonav_drake.cli import eval as eval_cmd
-from emonav_drake.cli.common import UserHelpFormatter
+from emonav_drake.cli.common import SuggestingParser, UserHelpFormatter
 from emonav_drake.errors import RunInterrupted, UserError
 
 # Exit codes.
@@ -107,7 +107,7 @@ Ctrl-C stops cleanly (exit code 130: `eval` keeps finished episodes, `train` sav
 def build_parser() -> argparse.ArgumentParser:
     """The `emonav` parser: every sub-command module's `add_parser`, `--version`,
     `--verbose`, `--quiet` and `--debug`."""
-    p = argparse.ArgumentParser(
+    p = SuggestingParser(
         prog="emonav",
         description=DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -229,6 +229,16 @@ def _sigterm_as_interrupt() -> Iterator[None]:
         signal.signal(signal.SIGTERM, previous)
 
 
+def _parse(parser: argparse.ArgumentParser, argv: list[str]) -> argparse.Namespace:
+    """`parser.parse_args(argv)`, but a flag the sub-command does not know is that
+    sub-command's error (its usage, the closest flag it has), not the top level's."""
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        subparsers = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        subparsers.choices[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
+    return args
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run a sub-command; the one place where exceptions become messages and exit codes.
 
@@ -242,7 +252,7 @@ def main(argv: list[str] | None = None) -> int:
         from emonav_drake.planners.plugins import import_planner_modules
 
         import_planner_modules(planner_modules_in(argv))  # their names: valid choices
-        args = build_parser().parse_args(argv)
+        args = _parse(build_parser(), argv)
     except USER_ERRORS as e:  # a flag value refused while parsing (the seed flags)
         if "--debug" in argv:
             raise

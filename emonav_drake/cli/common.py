@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from emonav_drake.atomic_io import check_distinct, check_output_file, write_text_atomic
 from emonav_drake.cli.resolve import (
@@ -42,6 +42,33 @@ PLANT_HELP = (
     "the robot: lip (the reduced-order LIP, fast: training and large benchmarks) or digit "
     "(the full-order Digit in Drake, about 5x real time)"
 )
+
+
+class SuggestingParser(argparse.ArgumentParser):
+    """argparse's parser whose errors suggest the closest valid word: an invalid choice
+    ("invalid choice: 'ofice' (did you mean 'office'?) (choose from ...)") and an unknown
+    flag ("--planer (did you mean '--planner'?)")."""
+
+    def error(self, message: str) -> NoReturn:
+        import re
+
+        from emonav_drake.errors import did_you_mean
+
+        bad = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)$", message)
+        if bad:
+            choices = re.findall(r"'([^']*)'", bad.group(2))
+            hint = did_you_mean(bad.group(1), choices)
+            message = message[: bad.start()] + f"invalid choice: {bad.group(1)!r}{hint} "
+            message += f"(choose from {bad.group(2)})"
+        unknown = re.match(r"unrecognized arguments: (.*)$", message)
+        if unknown:
+            flags = [k for k in self._option_string_actions if k.startswith("--")]
+            words = [
+                f"{w}{did_you_mean(w.split('=')[0], flags) if w.startswith('-') else ''}"
+                for w in unknown.group(1).split()
+            ]
+            message = f"unrecognized arguments: {' '.join(words)}"
+        super().error(message)
 
 
 class UserHelpFormatter(argparse.RawDescriptionHelpFormatter):

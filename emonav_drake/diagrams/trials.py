@@ -31,11 +31,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from emonav_drake.atomic_io import json_safe
-from emonav_drake.errors import RunInterrupted
+from emonav_drake.errors import RunInterrupted, did_you_mean
 from emonav_drake.parallel import Worker, run_tasks
 from emonav_drake.params import ConfigError, EmoNavConfig, load_config
-from emonav_drake.planners import is_registered, model_planner_names, planner_kind
-from emonav_drake.planners.variants import VARIANTS
+from emonav_drake.planners import is_registered, planner_kind, planner_names
 from emonav_drake.provenance import sha256_file
 
 if TYPE_CHECKING:
@@ -150,12 +149,13 @@ def method_specs(
             runs_as = kind.runs_as if kind is not None else "policy"
             methods.append(MethodSpec(n, runs_as, str(path), sha256_file(path)))
         else:
+            names = planner_names()
             raise _refused(
-                "{planners}: unknown method {n!r}; use {models}, policy, sac, a variant "
-                "({variants}), or name a learned policy with {checkpoint} {n}=PATH",
+                "{planners}: unknown method {n!r}{hint}; the planners: {names}; or a "
+                "policy of your own: {checkpoint} {n}=PATH",
                 n=n,
-                models=", ".join(model_planner_names()),
-                variants=", ".join(VARIANTS),
+                hint=did_you_mean(n, names),
+                names=" ".join(names),
             )
     return methods
 

@@ -9,6 +9,7 @@ refused instead of started). The ranges of what a training configuration shares 
 
 from emonav_drake.config_fields import field_range
 from emonav_drake.core.observations import observation_kind, observation_kinds
+from emonav_drake.errors import did_you_mean
 from emonav_drake.params import (
     SENSOR_NAMES,
     EmoNavConfig,
@@ -84,4 +85,7 @@ def with_sensor(env_cfg: EmoNavConfig, sensor: str) -> EmoNavConfig:
 def check_choice(name: str, value: str, allowed: tuple[str, ...]) -> None:
     """`ConfigError` unless `value` is one of `allowed`."""
     if value not in allowed:
-        raise ConfigError(f"{name} = {value!r} is invalid: must be one of {list(allowed)}")
+        raise ConfigError(
+            f"{name} = {value!r} is invalid: must be one of {list(allowed)}"
+            f"{did_you_mean(value, allowed)}"
+        )
