@@ -25,7 +25,7 @@ def test_every_subcommand_takes_quiet_and_shows_defaults():
         assert "--quiet" in p._option_string_actions, name
         assert "show this help" in p.format_help(), name
     sim_help = " ".join(sub.choices["sim"].format_help().split())
-    assert "(default: dwa)" in sim_help and "(default: 0)" in sim_help
+    assert "(default: policy)" in sim_help and "(default: 0)" in sim_help
     assert "emonav planners" in sim_help  # the planner list is one command away, not 28 names
     assert "policy_mpc_shield_digit" not in sim_help
     top = parser.format_help()
@@ -66,13 +66,13 @@ def test_sim_names_the_scene_it_ran(capsys, tmp_path):
     short = tmp_path / "short.yaml"
     short.write_text("episode: {max_steps: 2}\n")
     cases = [
-        (["--scenario", "crossing"], "scenario crossing (seed 0): "),
-        (["--family", "blocker", "--seed", "3"], "family blocker, seed 3: "),
-        (["--seed", "7"], "seed 7: "),
+        (["--scenario", "crossing"], "scenario crossing (seed 0), policy on LIP: "),
+        (["--family", "blocker", "--seed", "3"], "family blocker, seed 3, policy on LIP: "),
+        (["--seed", "7", "--planner", "dwa"], "seed 7, dwa on LIP: "),
     ]
     for extra, start in cases:
         assert main(["sim", *extra, "--config", str(short)]) == 0
-        assert capsys.readouterr().out.startswith(start), extra
+        assert capsys.readouterr().out.splitlines()[-1].startswith(start), extra
 
 
 def test_config_list_descriptions_are_whole_sentences(capsys):

@@ -84,7 +84,8 @@ def test_contradicting_flags_are_one_line_and_nothing_is_written(tmp_path, capsy
     code, err = run(capsys, "benchmark", "--planners", "dwa", "--deployable", *flags, "--out", out)
     assert_user_error(code, err, culprit, "--deployable")
     assert not out.exists()
-    code, err = run(capsys, "sim", "--deployable", *flags, "--json", tmp_path / "t.json")
+    sim = ["sim", "--planner", "dwa", "--deployable", *flags, "--json", tmp_path / "t.json"]
+    code, err = run(capsys, *sim)
     assert_user_error(code, err, culprit, "--deployable")
     assert not (tmp_path / "t.json").exists()
 

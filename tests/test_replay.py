@@ -403,7 +403,7 @@ def test_sim_meshcat_no_wait_returns_at_once(tmp_path):
     )
     assert p.returncode == 0, p.stderr
     assert re.search(r"Meshcat: http://\S+:\d+", p.stdout)
-    assert "seed 3: timeout after 3 steps" in p.stdout
+    assert "seed 3, dwa on LIP: timeout after 3 steps" in p.stdout
     assert "waiting" not in p.stdout and "still serving" not in p.stdout
     assert time.monotonic() - t0 < 300
 
@@ -453,7 +453,7 @@ def test_sim_meshcat_waits_for_a_browser_and_serves_until_ctrl_c(tmp_path):
         assert q.empty()
         client = connect_websocket(port)
         seen = _read_until(q, "still serving", 300)
-        assert any("seed 3: timeout after 3 steps" in line for line in seen)
+        assert any("seed 3, dwa on LIP: timeout after 3 steps" in line for line in seen)
         time.sleep(1.0)
         assert proc.poll() is None  # the scene is still served after the episode
         proc.send_signal(signal.SIGINT)

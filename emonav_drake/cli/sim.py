@@ -38,12 +38,19 @@ from emonav_drake.diagrams.plants import DEFAULT_PLANT, PLANTS, Plant, plant_nam
 from emonav_drake.params import ConfigError, is_deployable
 from emonav_drake.planners import planner_names
 
+# `sim` runs the shipped default learned policy unless told otherwise (as the README's demo)
+DEFAULT_PLANNER = "policy"
+
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register `emonav sim` on the CLI's sub-parsers."""
     s = subparsers.add_parser("sim", help="run one navigation episode in the Drake diagram")
     s.add_argument(
-        "--planner", default="dwa", choices=planner_names(), metavar="NAME", help=PLANNER_HELP
+        "--planner",
+        default=DEFAULT_PLANNER,
+        choices=planner_names(),
+        metavar="NAME",
+        help=PLANNER_HELP,
     )
     s.add_argument("--plant", default=DEFAULT_PLANT, choices=list(PLANTS), help=PLANT_HELP)
     s.add_argument("--seed", action=SeedArg, default=0, help="scenario seed, in [0, 2**64 - 1]")
@@ -156,7 +163,8 @@ def cmd_sim(args: argparse.Namespace) -> int:
         out.update(rates.report.to_json())
         print(_format_rates(rates.report))
     print(
-        f"{_scene_label(args, cfg, scenario.seed)}: {record.outcome} after {record.steps} steps "
+        f"{_scene_label(args, cfg, scenario.seed)}, {args.planner} on {robot.caption_name}: "
+        f"{outcome_words(record)} after {record.steps} steps "
         f"({record.nav_time:.1f} s simulated, {wall:.2f} s wall), path "
         f"{record.path_length:.2f} m, min pedestrian distance "
         f"{record.min_ped_distance:.2f} m, discomfort steps {record.discomfort_steps}, "
@@ -259,6 +267,20 @@ def _write_sim_outputs(
             raise ConfigError(f"--steps-out: --plant {args.plant} gave no per-step trace")
         n = write_steps_csv(args.steps_out, episode_steps_table(cfg, trace))
         print(f"{n} steps written to {args.steps_out}")
+
+
+def outcome_words(record: Any) -> str:
+    """The outcome in words, with what was hit: "collision with a static disc", "collision
+    with a negative pedestrian", "fall (reason)", "no route left", "success", "timeout"."""
+    if record.outcome == "collision":
+        hit = record.collided_with
+        what = {"static": "a static disc", "wall": "a wall"}.get(hit, f"a {hit} pedestrian")
+        return f"collision with {what}" if hit else "collision"
+    if record.outcome == "fall":
+        return f"fall ({record.fall_reason})" if record.fall_reason else "fall"
+    if record.outcome == "no_route":
+        return "no route left"
+    return record.outcome
 
 
 def _scene_label(args: argparse.Namespace, config: Any, seed: int) -> str:

@@ -158,16 +158,22 @@ class EpisodeTracker:
                 setattr(self.record, name, None)
 
 
+# Below this many values a t interval says little (from 2 values its half-width is
+# 12.7 standard errors): the mean is given without one.
+MIN_INTERVAL_N = 5
+
+
 def mean_interval(
     values: list[float], support: tuple[float | None, float | None] = (None, None)
 ) -> tuple[float | None, list[float] | None]:
-    """The mean and its 95 % Student-t interval [lo, hi] (None below 2 values; both None
-    for no value), clipped to the values' `support` (a share cannot fall below 0)."""
+    """The mean and its 95 % Student-t interval [lo, hi] (None below `MIN_INTERVAL_N`
+    values; both None for no value), clipped to the values' `support` (a share cannot
+    fall below 0)."""
     x = np.asarray(values, dtype=float)
     if x.size == 0:
         return None, None
     mean = float(x.mean())
-    if x.size < 2:
+    if x.size < MIN_INTERVAL_N:
         return mean, None
     from scipy.stats import t
 
