@@ -116,7 +116,8 @@ class TrialsFailed(Exception):
 
 
 class _Progress:
-    """tqdm bar with the running SR per method."""
+    """tqdm bar with the running SR per method, labelled "starting workers" until the first
+    trial of this run is in (Ray takes ~10 s to start), then "benchmark"."""
 
     def __init__(self, total: int, done: list[dict], methods: Sequence[str], enabled: bool):
         from emonav_drake.progress import progress_bar
@@ -127,7 +128,10 @@ class _Progress:
         self.errors = 0
         for t in done:
             self._count(t)
-        self.bar = progress_bar(total=total, initial=len(done), unit="trial", enabled=enabled)
+        self.bar = progress_bar(
+            total=total, initial=len(done), unit="trial", enabled=enabled, desc="starting workers"
+        )
+        self._started = False
         self._postfix()
 
     def _count(self, t: dict) -> None:
@@ -144,6 +148,9 @@ class _Progress:
         self.bar.set_postfix_str(" | ".join(parts), refresh=False)
 
     def update(self, t: dict) -> None:
+        if not self._started:
+            self.bar.set_description_str("benchmark", refresh=False)
+            self._started = True
         self._count(t)
         self._postfix()
         self.bar.update(1)

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 from pydrake.common.eigen_geometry import AngleAxis
-from pydrake.geometry import HalfSpace, SceneGraph
+from pydrake.geometry import Box, HalfSpace, SceneGraph
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import (
@@ -46,6 +46,10 @@ SHIN_LENGTH = 0.45
 ANKLE_TO_SOLE = 0.05  # foot frame origin (ankle) above the sole plane [m]
 HIP_PITCH_BELOW_TORSO = 0.135  # hip-pitch axis below the torso origin [m]
 HIP_Y = 0.091
+# The ground as drawn (its collision geometry is a half-space): a slab this wide [m] and
+# thick [m], its top at z = 0.
+GROUND_VISUAL_SIZE = 100.0
+GROUND_VISUAL_THICKNESS = 0.02
 
 
 def _drop_deformable_half_space_warning(record: logging.LogRecord) -> bool:
@@ -149,8 +153,13 @@ def AddDigitPlant(
     plant.RegisterCollisionGeometry(
         plant.world_body(), X_WG, HalfSpace(), "ground_collision", friction
     )
+    # drawn as a thin slab, its top at z = 0 (Meshcat cannot draw a half-space)
     plant.RegisterVisualGeometry(
-        plant.world_body(), X_WG, HalfSpace(), "ground_visual", np.array([0.8, 0.8, 0.78, 1.0])
+        plant.world_body(),
+        RigidTransform([0.0, 0.0, -GROUND_VISUAL_THICKNESS / 2]),
+        Box(GROUND_VISUAL_SIZE, GROUND_VISUAL_SIZE, GROUND_VISUAL_THICKNESS),
+        "ground_visual",
+        np.array([0.8, 0.8, 0.78, 1.0]),
     )
     plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, -gravity])
     plant.Finalize()
