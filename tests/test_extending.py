@@ -218,18 +218,36 @@ def test_a_registered_plant_runs_in_sim_eval_and_benchmark(half_speed_plant, tmp
     runs = {}
     for plant in ("lip", "lip_half"):
         out = tmp_path / f"{plant}.json"
-        assert main(["sim", "--plant", plant, "--seed", "5", "--json", str(out)]) == 0
+        assert (
+            main(["sim", "--planner", "dwa", "--plant", plant, "--seed", "5", "--json", str(out)])
+            == 0
+        )
         runs[plant] = json.loads(out.read_text())
     # the slow robot takes more steps to the goal (or times out), deterministically
     assert runs["lip_half"]["steps"] > runs["lip"]["steps"]
     again = tmp_path / "again.json"
-    assert main(["sim", "--plant", "lip_half", "--seed", "5", "--json", str(again)]) == 0
+    assert (
+        main(
+            ["sim", "--planner", "dwa", "--plant", "lip_half", "--seed", "5", "--json", str(again)]
+        )
+        == 0
+    )
     assert json.loads(again.read_text()) == runs["lip_half"]
     assert "trajectory" not in runs["lip_half"]  # it gave no trace
     assert main(["sim", "--plant", "lip_half", "--record", str(tmp_path / "r.html")]) == 2
     assert "--record need --plant lip or digit" in capsys.readouterr().err
     ev = tmp_path / "eval.json"
-    argv = ["eval", "--plant", "lip_half", "--episodes", "1", "--first-seed", "5"]
+    argv = [
+        "eval",
+        "--planner",
+        "dwa",
+        "--plant",
+        "lip_half",
+        "--episodes",
+        "1",
+        "--first-seed",
+        "5",
+    ]
     assert main([*argv, "--json", str(ev)]) == 0
     assert json.loads(ev.read_text())["episodes"][0]["steps"] == runs["lip_half"]["steps"]
     out = tmp_path / "bench"
@@ -266,14 +284,27 @@ def test_a_registered_plant_with_viewers_gets_the_sim_outputs_and_replays(
     runs = {}
     for plant in ("lip_half", "lip_half_sim"):
         out = tmp_path / f"{plant}.json"
-        assert main(["sim", "--plant", plant, "--seed", "5", "--json", str(out)]) == 0
+        assert (
+            main(["sim", "--planner", "dwa", "--plant", plant, "--seed", "5", "--json", str(out)])
+            == 0
+        )
         runs[plant] = json.loads(out.read_text())
     steps = runs["lip_half"]["steps"]
     assert runs["lip_half_sim"]["steps"] == steps
     assert "trajectory" in runs["lip_half_sim"] and "trajectory" not in runs["lip_half"]
     assert runs["lip_half_sim"]["trajectory"]["plant"] == "lip_half_sim"
     csv = tmp_path / "steps.csv"
-    argv = ["sim", "--plant", "lip_half_sim", "--seed", "5", "--steps-out", str(csv)]
+    argv = [
+        "sim",
+        "--planner",
+        "dwa",
+        "--plant",
+        "lip_half_sim",
+        "--seed",
+        "5",
+        "--steps-out",
+        str(csv),
+    ]
     assert main(argv) == 0
     assert len(csv.read_text().splitlines()) == steps + 1  # header + one row a step
     # a trial of either replays on its plant; the one without a trace gives None

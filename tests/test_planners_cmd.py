@@ -18,7 +18,7 @@ def test_every_planner_is_listed_with_what_it_reads():
         assert "--state-source lidar" in rows[name].privileged
     assert rows["policy"].privileged.startswith("deployable")
     assert rows["policy"].checkpoint.endswith(DEFAULT_POLICY.name)
-    assert rows["policy"].default and rows["dwa"].default
+    assert rows["policy"].default and not rows["dwa"].default
     assert rows["drlvo"].privileged.startswith("privileged")  # velocities from the simulator
     assert rows["ogm"].reads.endswith("occupancy grid maps")
     assert "LGM shield" in rows["policy_shield"].reads
@@ -29,7 +29,7 @@ def test_every_planner_is_listed_with_what_it_reads():
 def test_the_command_prints_text_and_json(capsys):
     assert main(["planners"]) == 0
     text = capsys.readouterr().out
-    assert "policy  [default learned policy]" in text
+    assert "policy  [default learned policy; sim/eval default]" in text
     assert main(["planners", "--json"]) == 0
     rows = json.loads(capsys.readouterr().out)
     assert {r["name"] for r in rows} == set(planner_names())

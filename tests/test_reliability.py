@@ -133,8 +133,12 @@ def test_cuda_without_a_gpu_blames_the_device_not_the_checkpoint(capsys):
 
 
 def test_device_or_checkpoint_with_a_planner_that_ignores_them(tmp_path, capsys):
-    assert_user_error(*run(capsys, "sim", "--device", "cuda"), "--device", "--planner policy")
-    assert_user_error(*run(capsys, "sim", "--checkpoint", tmp_path), "--checkpoint")
+    assert_user_error(
+        *run(capsys, "sim", "--planner", "dwa", "--device", "cuda"), "--device", "dwa"
+    )
+    assert_user_error(
+        *run(capsys, "sim", "--planner", "dwa", "--checkpoint", tmp_path), "--checkpoint"
+    )
 
 
 def _broken_policy(tmp_path, edit):

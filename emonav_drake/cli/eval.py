@@ -20,6 +20,7 @@ from emonav_drake.cli.common import (
     check_seed_range,
     emotion_estimate_of,
 )
+from emonav_drake.cli.planners_cmd import DEFAULT_PLANNER
 from emonav_drake.cli.resolve import resolve_config, sample
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.errors import RunInterrupted
@@ -36,7 +37,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     """Register `emonav eval` on the CLI's sub-parsers."""
     e = subparsers.add_parser("eval", help="evaluate a planner over many seeds (SR, NT, DT, IDT)")
     e.add_argument(
-        "--planner", default="dwa", choices=planner_names(), metavar="NAME", help=PLANNER_HELP
+        "--planner",
+        default=DEFAULT_PLANNER,
+        choices=planner_names(),
+        metavar="NAME",
+        help=PLANNER_HELP,
     )
     e.add_argument("--plant", default="lip", choices=list(PLANTS), help=PLANT_HELP)
     e.add_argument(

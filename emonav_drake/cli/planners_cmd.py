@@ -7,8 +7,8 @@ is, what it reads of the world, whether that is privileged (the simulator's exac
 no robot has it) or deployable (the robot's own LiDAR, or the crowd it tracks with
 `--state-source lidar`), the checkpoint it runs by default, and its spec as a route's
 YAML writes it (`planners/specs.py`: `expert: !PlannerSpec {name: NAME}` takes any of them
-by name). The planner `sim` and
-`eval` run without `--planner` and the default learned policy are marked.
+by name). The default learned policy, which `sim` and
+`eval` run without `--planner`, is marked.
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ import sys
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-DEFAULT_PLANNER = "dwa"  # `sim` / `eval --planner`'s default
 DEFAULT_POLICY_NAME = "policy"  # the learned policy we ship as the default
+DEFAULT_PLANNER = DEFAULT_POLICY_NAME  # `sim` / `eval --planner`'s default
 STATE = "crowd state"
 READS_STATE = "privileged (truth); deployable with --state-source lidar"
 
@@ -73,10 +73,8 @@ def planner_rows() -> list[PlannerRow]:
                     reads += f" + the MPC on the {STATE}"
                     privileged = READS_STATE
         default = ""
-        if name == DEFAULT_PLANNER:
-            default = "sim/eval default"
-        elif name == DEFAULT_POLICY_NAME:
-            default = "default learned policy"
+        if name == DEFAULT_POLICY_NAME:
+            default = "default learned policy; sim/eval default"
         spec = describe_spec(kind.spec)
         rows.append(PlannerRow(name, kind.summary, reads, privileged, checkpoint, default, spec))
     return rows

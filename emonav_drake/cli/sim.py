@@ -31,15 +31,13 @@ from emonav_drake.cli.common import (
     meshcat_host,
     write_steps_csv,
 )
+from emonav_drake.cli.planners_cmd import DEFAULT_PLANNER
 from emonav_drake.cli.resolve import resolve_config, resolve_scenario
 from emonav_drake.core.metrics import format_idt
 from emonav_drake.diagrams.episode import EpisodeRequest
 from emonav_drake.diagrams.plants import DEFAULT_PLANT, PLANTS, Plant, plant_named
 from emonav_drake.params import ConfigError, is_deployable
 from emonav_drake.planners import planner_names
-
-# `sim` runs the shipped default learned policy unless told otherwise (as the README's demo)
-DEFAULT_PLANNER = "policy"
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
