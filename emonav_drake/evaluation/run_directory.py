@@ -47,6 +47,7 @@ from emonav_drake.evaluation.run_settings import (
 )
 from emonav_drake.evaluation.trial_check import check_trial
 from emonav_drake.json_input import JsonInputError, parse_json, read_json
+from emonav_drake.params import ConfigError, load_config
 from emonav_drake.run_lock import RunDirectoryBusy, locked_directory
 
 log = logging.getLogger(__name__)
@@ -287,6 +288,7 @@ class RunDirectory:
         if not trials:
             return md
         obs = {m: settings["methods"][m]["observation"] for m in methods}
+        reads = _method_reads(settings, obs)
         label = settings["setting_label"]
         plant = settings["plant"]
         summary = tables.summarize_methods(trials, methods)
@@ -319,7 +321,14 @@ class RunDirectory:
         write_text_atomic(
             md,
             tables.render_markdown(
-                trials, methods, label, plant, obs, title=f"Benchmark {self.path.name}", notes=notes
+                trials,
+                methods,
+                label,
+                plant,
+                obs,
+                title=f"Benchmark {self.path.name}",
+                notes=notes,
+                reads=reads,
             ),
         )
         csvs = (
@@ -331,6 +340,22 @@ class RunDirectory:
         for name, text in zip(TABLE_CSV_FILES, csvs, strict=True):
             write_text_atomic(self.path / name, text)
         return md
+
+
+def _method_reads(settings: dict, observations: dict) -> dict | None:
+    """`tables.method_reads` of every method of a run, from its recorded configuration
+    (None when a run directory of an older format lacks what it needs)."""
+    from emonav_drake.planners import MPC_STEERED
+
+    try:
+        config = load_config(data=settings["config_yaml"])
+    except (KeyError, ConfigError):
+        return None
+    source, sensor = config.perception.state_source, config.sensor.preset
+    return {
+        m: tables.method_reads(obs, source, sensor, steered=m in MPC_STEERED)
+        for m, obs in observations.items()
+    }
 
 
 def _append_line(path: Path, obj: dict, what: str) -> None:

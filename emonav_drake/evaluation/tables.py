@@ -190,12 +190,50 @@ def markdown_table(header: Sequence[str], rows: Iterable[Sequence[object]]) -> s
     return "\n".join(lines)
 
 
-def table2_rows(summary: dict) -> tuple[list[str], list[list[object]]]:
-    """Table II: Method | SR [95 % CI] (n) | NT [s] | DT | DT / trial."""
+READS_HEADER = "reads — could a robot run it?"
+
+
+def method_reads(
+    observation: str, state_source: str = "truth", sensor: str = "ideal", steered: bool = False
+) -> str:
+    """What a method reads and whether a robot could run it, for the tables' reads column.
+
+    `observation`: "state" (the crowd state: DWA, MPC, SARL, RGL) or a learned policy's map
+    kind ("LGM", "OGM", "SCAN", "DRLVO"); `state_source` and `sensor` the run's
+    (`perception.state_source`, `sensor.preset`); `steered`: a policy that hands its
+    command to the MPC on the crowd state. Privileged: the simulator's crowd (or its
+    pedestrians' velocities, DRL-VO*); an exact scan is an upper bound (no sensor gives
+    it); a real sensor's scan or the tracks in it: deployable."""
+    scan = "the exact scan" if sensor == "ideal" else f"the {sensor} scan"
+    verdict = "upper bound (exact scan)" if sensor == "ideal" else "deployable"
+    crowd = (
+        ("the simulator's crowd", "privileged")
+        if state_source == "truth"
+        else (f"tracks in {scan}", verdict)
+    )
+    kind = observation.lower()
+    if kind == "state":
+        return f"{crowd[0]} — {crowd[1]}"
+    if kind == "drlvo":
+        return f"maps of {scan} + the simulator's pedestrian velocities — privileged"
+    maps = {"lgm": "LiDAR grid maps", "ogm": "occupancy grid maps", "scan": "LiDAR scans"}
+    text = f"{maps.get(kind, kind)} of {scan}"
+    if steered:  # the maps' scan and the crowd come from the same sensor
+        return f"{text} + the MPC on {crowd[0]} — {crowd[1]}"
+    return f"{text} — {verdict}"
+
+
+def table2_rows(summary: dict, reads: dict | None = None) -> tuple[list[str], list[list[object]]]:
+    """Table II: Method | SR [95 % CI] (n) | NT [s] | DT | DT / trial (| what each method
+    reads and whether a robot could run it, given `reads` by method)."""
     header = ["Method", "SR [95% CI] (n)", "NT [s] (successes)", "DT (sum)", "DT / trial"]
     rows = [
         [m, _sr(s), format_nt(s), s["DT"], f"{s['DT_per_trial']:.2f}"] for m, s in summary.items()
     ]
+    if reads:
+        header.append(READS_HEADER)
+        for row in rows:
+            row.append(reads.get(row[0], "?"))
     return header, rows
 
 
@@ -374,8 +412,10 @@ def render_markdown(
     observations: dict | None = None,
     title: str = "Benchmark",
     notes: Sequence[str] = (),
+    reads: dict | None = None,
 ) -> str:
-    """All tables as one Markdown document."""
+    """All tables as one Markdown document (`reads`: what each method reads and whether a
+    robot could run it, `method_reads`, as a column of Table II)."""
     summary = summarize_methods(trials, methods)
     pairs = pairwise_comparisons(trials, methods)
     parts = [f"# {title}", ""]
@@ -388,7 +428,7 @@ def render_markdown(
         "the successful trials; DT: walking steps inside any discomfort zone, summed over the "
         "trials (the paper's DT) and per trial.",
         "",
-        markdown_table(*table2_rows(summary)),
+        markdown_table(*table2_rows(summary, reads)),
         "",
         "## Table III style: individual discomfort times",
         "",
