@@ -46,3 +46,57 @@ def test_a_planners_spec_as_listed_is_a_routes_expert_as_written(name):
     (row,) = [r for r in planner_rows() if r.name == name]
     route = load_typed_yaml(DaggerConfig, data=f"expert: {row.spec}\n")
     assert route.expert == planner_kind(name).spec
+
+
+def test_the_catalog_matches_every_shipped_checkpoint():
+    """`data/policies/catalog.json` is what the checkpoints say, hash for hash and fact for
+    fact (`python scripts/write_policy_catalog.py` rewrites it)."""
+    from emonav_drake.planners.catalog import (
+        DATA_DIR,
+        catalog_key,
+        describe_checkpoint,
+        load_catalog,
+    )
+    from emonav_drake.provenance import sha256_file
+    from emonav_drake.torch_load import load_checked
+
+    catalog = load_catalog()
+    files = sorted(DATA_DIR.rglob("*.pt"))
+    assert set(catalog) == {catalog_key(p) for p in files}
+    for path in files:
+        expected = describe_checkpoint(load_checked(path), sha256_file(path), path.stat().st_size)
+        assert catalog[catalog_key(path)] == expected, path.name
+
+
+def test_the_listing_reads_no_checkpoint_and_groups_the_planners():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "from emonav_drake.cli import main\n"
+        "assert main(['planners']) == 0\n"
+        "assert 'torch' not in sys.modules, 'the listing imported torch'\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
+    groups = [line for line in out.splitlines() if line and not line.startswith(" ")]
+    assert groups[0] == "the default:" and groups[1].startswith("policy  [default")
+    for header in ("model-based:", "learned baselines of the paper:"):
+        assert header in groups
+    assert "made by: teacher the OSQP MPC; imitation" in out  # SARL's route, from the catalog
+    assert "route stages, ablations and shields (16; " in out
+    assert (
+        "emobipednav_mixed" in out
+        and "    spec: !PolicySpec {variant: 'emobipednav_mixed'}" not in out
+    )
+
+
+def test_all_lists_every_planner_with_how_it_was_made(capsys):
+    assert main(["planners", "--all"]) == 0
+    out = capsys.readouterr().out
+    for name in planner_names():
+        assert f"\n{name}\n" in out or f"\n{name}  [" in out or out.startswith(name), name
+    assert "    spec: !PolicySpec {variant: 'emobipednav_mixed'}" in out
+    assert "teacher the OSQP MPC; starts from the LIP-trained policy" in out

@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import textwrap
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -36,6 +37,19 @@ class PlannerRow:
     checkpoint: str  # the default checkpoint (package-relative path), or "-"
     default: str  # "" or why it is marked
     spec: str  # the registry's spec in YAML form (`describe_spec`), e.g. "!MpcSpec {}"
+    made_by: str = ""  # a learned planner's route, teacher, stages (`planners/catalog.py`)
+    run: str = ""  # the run directory its default checkpoint came from
+    group: str = ""  # `GROUPS`: where the listing puts it
+
+
+# The listing's groups, in order; without --all the last one is summarised in a line.
+GROUPS = (
+    "the default",
+    "model-based",
+    "learned baselines of the paper",
+    "route stages, ablations and shields",
+)
+_PAPER_BASELINES = ("sarl", "rgl", "drlvo", "lndnl", "single_lgm", "ogm", "lidar_sac", "sac")
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -46,6 +60,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "its default checkpoint",
     )
     p.add_argument("--json", action="store_true", help="print the rows as JSON")
+    p.add_argument(
+        "--all",
+        action="store_true",
+        help="also list the route stages, ablations and shielded planners one by one",
+    )
     p.set_defaults(func=cmd_planners)
     return p
 
@@ -53,19 +72,23 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 def planner_rows() -> list[PlannerRow]:
     """The rows, in registration order."""
     from emonav_drake.planners import MPC_STEERED, SHIELDED, planner_kind, planner_names
+    from emonav_drake.planners.catalog import catalog_entry, made_by
     from emonav_drake.planners.specs import describe_spec
 
     rows = []
     for name in planner_names():
         kind = planner_kind(name)
-        checkpoint, reads, privileged = "-", STATE, READS_STATE
+        checkpoint, reads, privileged, how, run = "-", STATE, READS_STATE, "", ""
         if kind.learned:
             path = _default_checkpoint(kind)
             checkpoint = "- (give --checkpoint)" if path is None else _shown(path)
+            entry = None if path is None else catalog_entry(path)
+            if entry is not None:
+                how, run = made_by(entry), entry["run"]
             if kind.runs_as == "sarl":
                 reads = f"{STATE} (value network)"
             else:
-                reads, privileged = _policy_reads(path)
+                reads, privileged = _policy_reads(path, entry)
                 base = name.removesuffix("_digit")
                 if base in SHIELDED:
                     reads += " + the LGM shield"
@@ -76,8 +99,37 @@ def planner_rows() -> list[PlannerRow]:
         if name == DEFAULT_POLICY_NAME:
             default = "default learned policy; sim/eval default"
         spec = describe_spec(kind.spec)
-        rows.append(PlannerRow(name, kind.summary, reads, privileged, checkpoint, default, spec))
+        rows.append(
+            PlannerRow(
+                name,
+                kind.summary,
+                reads,
+                privileged,
+                checkpoint,
+                default,
+                spec,
+                how,
+                run,
+                _group(name, kind),
+            )
+        )
     return rows
+
+
+def _group(name: str, kind) -> str:  # noqa: ANN001 - a PlannerKind
+    if name == DEFAULT_POLICY_NAME:
+        return GROUPS[0]
+    if not kind.learned and name not in _steered_or_shielded():
+        return GROUPS[1]
+    if name in _PAPER_BASELINES:
+        return GROUPS[2]
+    return GROUPS[3]
+
+
+def _steered_or_shielded() -> set[str]:
+    from emonav_drake.planners import MPC_STEERED, SHIELDED
+
+    return set(MPC_STEERED) | set(SHIELDED) | {f"{n}_digit" for n in SHIELDED}
 
 
 def _default_checkpoint(kind) -> Path | None:  # noqa: ANN001 - a PlannerKind
@@ -91,12 +143,15 @@ def _default_checkpoint(kind) -> Path | None:  # noqa: ANN001 - a PlannerKind
         return None
 
 
-def _policy_reads(path: Path | None) -> tuple[str, str]:
-    """(what a policy checkpoint reads, privileged or deployable)."""
-    from emonav_drake.planners.policy import load_policy
-
+def _policy_reads(path: Path | None, entry: dict | None = None) -> tuple[str, str]:
+    """(what a policy checkpoint reads, privileged or deployable): from its catalog `entry`
+    for a shipped one (no torch), else from the file."""
+    if entry is not None:
+        return entry["reads"], entry["privileged"]
     if path is None or not path.is_file():
         return "its checkpoint's map observation", "deployable unless its maps are DRL-VO*"
+    from emonav_drake.planners.policy import load_policy
+
     _, meta = load_policy(path)
     kind = meta["observation"]["grid_kind"]
     frames = meta["observation"]["num_frames"]
@@ -124,12 +179,27 @@ def cmd_planners(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(json.dumps([asdict(r) for r in rows], indent=1) + "\n")
         return 0
-    for r in rows:
-        mark = f"  [{r.default}]" if r.default else ""
-        print(f"{r.name}{mark}")
-        print(f"    {r.summary}")
-        print(f"    reads: {r.reads} — {r.privileged}")
-        if r.checkpoint != "-":
-            print(f"    checkpoint: {r.checkpoint}")
-        print(f"    spec: {r.spec}")
+    for group in GROUPS:
+        members = [r for r in rows if r.group == group]
+        if group == GROUPS[-1] and not args.all:
+            names = ", ".join(r.name for r in members)
+            print(f"\n{group} ({len(members)}; `emonav planners --all` describes them):")
+            print(textwrap.fill(names, 88, initial_indent="  ", subsequent_indent="  "))
+            continue
+        print(f"\n{group}:" if group != GROUPS[0] else f"{group}:")
+        for r in members:
+            _print_row(r)
     return 0
+
+
+def _print_row(r: PlannerRow) -> None:
+    mark = f"  [{r.default}]" if r.default else ""
+    print(f"{r.name}{mark}")
+    print(f"    {r.summary}")
+    print(f"    reads: {r.reads} — {r.privileged}")
+    if r.made_by:
+        print(f"    made by: {r.made_by}")
+        print(f"    run: {r.run}")
+    if r.checkpoint != "-":
+        print(f"    checkpoint: {r.checkpoint}")
+    print(f"    spec: {r.spec}")

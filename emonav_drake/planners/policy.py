@@ -36,6 +36,7 @@ from emonav_drake.core.navigation import PlannerInput
 from emonav_drake.core.observations import observation_kind, observation_kinds
 from emonav_drake.errors import UserError
 from emonav_drake.params import NUM_BEAMS, LidarParams, RobotParams
+from emonav_drake.planners import catalog
 from emonav_drake.planners.networks import (
     Actor,
     CategoricalPolicy,
@@ -53,7 +54,7 @@ LIP_POLICY = _DATA / "policy_lgm.pt"
 # What `--planner policy` runs without a --checkpoint: the distilled route's Digit round 2
 # (the MPC route's student, `emobipednav_digit_mpc`, distilled with its LGM shield in the
 # calibrated world and then on Digit; data/README.md says why and with which numbers).
-DEFAULT_POLICY = _DATA / "policies" / "emobipednav_distilled_digit.pt"
+DEFAULT_POLICY = catalog.DEFAULT_POLICY
 
 
 class PolicyError(UserError, ValueError):

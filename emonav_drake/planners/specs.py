@@ -66,7 +66,7 @@ class _Learned:
             return resolve_policy_file(self.checkpoint, "checkpoint")
         if self.variant:
             return shipped_checkpoint(self.variant)
-        from emonav_drake.planners.policy import DEFAULT_POLICY
+        from emonav_drake.planners.catalog import DEFAULT_POLICY
 
         return DEFAULT_POLICY
 
