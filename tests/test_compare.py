@@ -46,13 +46,20 @@ def test_two_runs_compare_as_one_on_the_seeds_they_share(runs, tmp_path, capsys)
     assert "combined from a (dwa; commit" in md and "b (mpc, dwa; commit" in md
     combined = json.loads((tmp_path / "c" / "combined.json").read_text())
     assert [r["planners"] for r in combined["runs"]] == [["dwa"], ["mpc", "dwa"]]
-    capsys.readouterr()
+    # dwa is in both runs: said on stderr and in the tables, never merged silently
+    assert "dwa is in 2 runs; merged (1 shared trials agree)" in capsys.readouterr().err
+    assert "dwa is in 2 runs (a, b): merged, its 1 trials found in more than one" in md
+    assert settings["merged"] == {"dwa": {"runs": [str(a), str(b)], "shared_trials": 1}}
 
 
 def test_runs_of_other_trials_or_clashing_names_are_refused(runs, tmp_path, capsys):
     root, a, _ = runs
     other = _run(tmp_path / "n", "dwa", config=load_setting("no_emotion"))
-    with pytest.raises(BenchmarkSettingsError, match="configuration"):
+    # the configuration's first differing field is named, with the run each value is from
+    with pytest.raises(
+        BenchmarkSettingsError,
+        match=r"first difference reward\.neutral_discomfort: 0\.35 in a, 0\.2 in n",
+    ):
         combine_runs([a, other])
     with pytest.raises(BenchmarkSettingsError, match="at least two"):
         combine_runs([a])

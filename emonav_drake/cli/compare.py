@@ -6,6 +6,7 @@ each pair shares.
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 
@@ -45,6 +46,12 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if any(out.resolve() == r.resolve() for r in args.runs):
         raise BenchmarkSettingsError(f"--out {out} is one of the runs; give another directory")
     settings, trials = combine_runs(args.runs)
+    for name, m in settings["merged"].items():  # said, not merged silently
+        print(
+            f"emonav compare: {name} is in {len(m['runs'])} runs; merged "
+            f"({m['shared_trials']} shared trials agree)",
+            file=sys.stderr,
+        )
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "combined.json", settings)
     md = RunDirectory(out).write_tables(settings, trials)

@@ -29,7 +29,7 @@ from emonav_drake.evaluation.run_directory import (
     load_run,
     trial_key,
 )
-from emonav_drake.evaluation.run_settings import TRIAL_SETTINGS
+from emonav_drake.evaluation.run_settings import TRIAL_SETTINGS, config_difference
 
 
 def _measured(t: dict) -> bool:
@@ -63,13 +63,20 @@ def combine_runs(paths: Sequence[str | Path]) -> tuple[dict, list[dict]]:
     settings = {k: first[k] for k in first if k not in ("planners", "methods", "extended")}
     settings |= {"planners": [], "methods": {}, "runs": []}
     trials: dict[tuple[str, int], dict] = {}
+    origin: dict[str, list[str]] = {}  # the runs each method's trials come from
+    shared: dict[str, int] = {}  # trials of a method found in two runs (and equal there)
     lo, hi = first["first_seed"], first["first_seed"] + first["trials"]
     for path, s, run_trials in runs:
         for key, what in TRIAL_SETTINGS:
             if s.get(key) != first.get(key):
+                detail = ""
+                if key == "config_sha256" and "config_yaml" in s and "config_yaml" in first:
+                    where = (f"in {first_path.name}", f"in {path.name}")
+                    diff = config_difference(first["config_yaml"], s["config_yaml"], where)
+                    detail = f"; first difference {diff}"
                 raise BenchmarkSettingsError(
                     f"{path}: its {what} is {s.get(key)!r}, {first_path}'s is "
-                    f"{first.get(key)!r}: the runs measure different trials"
+                    f"{first.get(key)!r}{detail}: the runs measure different trials"
                 )
         for name in s["planners"]:
             method = s["methods"][name]
@@ -77,6 +84,7 @@ def combine_runs(paths: Sequence[str | Path]) -> tuple[dict, list[dict]]:
             if known is None:
                 settings["planners"].append(name)
                 settings["methods"][name] = method
+                origin[name] = [str(path)]
             elif (known["planner"], known["checkpoint_sha256"]) != (
                 method["planner"],
                 method["checkpoint_sha256"],
@@ -85,12 +93,16 @@ def combine_runs(paths: Sequence[str | Path]) -> tuple[dict, list[dict]]:
                     f"{path}: method {name!r} is another planner or checkpoint than in an "
                     "earlier run; rename it in one run (--checkpoint NAME=PATH)"
                 )
+            else:
+                origin[name].append(str(path))
         for t in run_trials:
             key = trial_key(t)
             if key in trials and not same_trial(trials[key], t):
                 raise BenchmarkSettingsError(
                     f"{path}: {key[0]} seed {key[1]} differs from the same trial in an earlier run"
                 )
+            if key in trials:
+                shared[key[0]] = shared.get(key[0], 0) + 1
             if key not in trials or (_measured(t) and not _measured(trials[key])):
                 trials[key] = t
         lo, hi = min(lo, s["first_seed"]), max(hi, s["first_seed"] + s["trials"])
@@ -99,6 +111,11 @@ def combine_runs(paths: Sequence[str | Path]) -> tuple[dict, list[dict]]:
             {"path": str(path), "planners": s["planners"], "commit": pkg.get("commit")}
         )
     settings["first_seed"], settings["trials"] = lo, hi - lo
+    settings["merged"] = {  # a method in several runs: said, never merged silently
+        name: {"runs": runs_of, "shared_trials": shared.get(name, 0)}
+        for name, runs_of in origin.items()
+        if len(runs_of) > 1
+    }
     rank = {m: i for i, m in enumerate(settings["planners"])}
     ordered = sorted(trials.values(), key=lambda t: (rank[t["method"]], t["seed"]))
     return settings, ordered

@@ -318,6 +318,13 @@ class RunDirectory:
                 f"{str(r['commit'])[:12]})"
                 for r in settings["runs"]
             )
+            for name, m in settings.get("merged", {}).items():
+                notes.append(
+                    f"{name} is in {len(m['runs'])} runs ("
+                    + ", ".join(Path(r).name for r in m["runs"])
+                    + f"): merged, its {m['shared_trials']} trials found in more than one "
+                    "agree record for record"
+                )
         write_text_atomic(
             md,
             tables.render_markdown(

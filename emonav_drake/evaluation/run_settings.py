@@ -311,7 +311,7 @@ def settings_difference(old: dict, new: dict) -> str | None:
         if old.get(key) != new.get(key):
             extra = ""
             if key == "config_sha256":
-                extra = f" — {_config_diff(old['config_yaml'], new['config_yaml'])}"
+                extra = f" — {config_difference(old['config_yaml'], new['config_yaml'])}"
             return f"{what} is {_short(old.get(key))} there, {_short(new.get(key))} here{extra}"
     changed = _changed_module(old, new)
     if changed is not None:
@@ -349,8 +349,9 @@ def _changed_module(old: dict, new: dict) -> str | None:
     return None
 
 
-def _config_diff(a: str, b: str) -> str:
-    """The first differing line of two configuration dumps, with its section."""
+def config_difference(a: str, b: str, labels: tuple[str, str] = ("there", "here")) -> str:
+    """The first differing field of two configuration dumps, with its section: "reward.
+    negative_discomfort: 0.5 there, 0.2 here" (`labels` name where `a` and `b` come from)."""
     section = ""
     for la, lb in zip(a.splitlines(), b.splitlines(), strict=False):
         if not la.startswith(" "):
@@ -358,5 +359,5 @@ def _config_diff(a: str, b: str) -> str:
         if la != lb:
             key = la.strip().split(":")[0]
             there, here = (x.split(":", 1)[-1].strip() for x in (la, lb))
-            return f"{section}.{key}: {there} there, {here} here"
+            return f"{section}.{key}: {there} {labels[0]}, {here} {labels[1]}"
     return "the dumps differ in length"
