@@ -11,7 +11,7 @@ emonav planners   every planner: what it reads (privileged or deployable), its c
 emonav SUB-COMMAND --help   for every other one
 
 One module per sub-command in emonav_drake/cli/ (sim.py, eval.py, lgm.py, plot.py, walk.py,
-emotion.py, train.py, export.py, benchmark.py, compare.py, diagnose.py, config.py,
+emotion.py, train.py, export.py, benchmark.py, compare.py, report.py, diagnose.py, config.py,
 calibrate.py, digit_rounds.py, planners_cmd.py); --config / --setting / --scenario are
 resolved in one place, resolve.py.
 
@@ -46,6 +46,7 @@ from emonav_drake.cli import (
     lgm,
     planners_cmd,
     plot,
+    report,
     sim,
     train,
     walk,
@@ -79,6 +80,7 @@ SUBCOMMANDS = (
     plot,
     benchmark,
     compare,
+    report,
     diagnose,
     config,
     calibrate,

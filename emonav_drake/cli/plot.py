@@ -1,8 +1,16 @@
 """`emonav plot RUN.json --png out.png [--times 0,5,10] [--gif out.gif]`: one episode, top view.
 
+    emonav plot RUN.json --png out.png
+    emonav plot runs/t2/trials.jsonl --method mpc --seed 3 --png out.png
+
 RUN.json is written by `emonav sim ... --json RUN.json` (its "trajectory" section, for
-either plant). The PNG shows the robot's path coloured by time, every pedestrian's path
-coloured by its emotion (changes marked), the robot and the pedestrians with their
+either plant). A benchmark's `trials.jsonl` (or its run directory) keeps one line per trial
+and no trajectory: `--method` and `--seed` pick the trial, which is simulated again as it
+ran (the run's settings.json: plant, configuration, planner and checkpoint, emotion
+estimate; the same seed gives the same episode).
+
+The PNG shows the robot's path coloured by time, every pedestrian's path coloured by its
+emotion (changes marked), the robot and the pedestrians with their
 discomfort zones at the `--times` [s] (default: four evenly spaced instants), the static
 discs with their discomfort rings, start, goal and the collision point; the title gives
 the outcome, planner, plant and seed. `--gif` renders the episode step by step as a GIF
@@ -25,7 +33,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("run", type=Path, metavar="RUN.json", help="written by `emonav sim --json`")
+    p.add_argument(
+        "run",
+        type=Path,
+        metavar="RUN",
+        help="written by `emonav sim --json`; or a benchmark's trials.jsonl or run directory "
+        "(with --method and --seed)",
+    )
+    p.add_argument("--method", help="with a benchmark run: the trial's method")
+    p.add_argument("--seed", type=int, help="with a benchmark run: the trial's seed")
     p.add_argument("--png", type=Path, help="write the top view of the whole episode")
     p.add_argument(
         "--times",
@@ -63,6 +79,49 @@ def parse_times(text: str) -> list[float]:
     return values
 
 
+def _is_benchmark_run(path: Path) -> bool:
+    return path.suffix == ".jsonl" or path.is_dir()
+
+
+def _benchmark_trial(args: argparse.Namespace):  # noqa: ANN202 - a Trajectory
+    """The trajectory of trial (--method, --seed) of a benchmark run, simulated again."""
+    from emonav_drake.evaluation.run_directory import load_run
+    from emonav_drake.evaluation.run_settings import spec_from_settings
+    from emonav_drake.evaluation.trajectory import trajectory_from_trace
+
+    run = args.run.parent if args.run.suffix == ".jsonl" else args.run
+    settings, trials = load_run(run)
+    if args.method is None or args.seed is None:
+        raise ConfigError(
+            f"{args.run}: a benchmark run holds {len(trials)} trials; pick one with --method "
+            f"({', '.join(settings['planners'])}) and --seed"
+        )
+    if args.method not in settings["planners"]:
+        raise ConfigError(
+            f"--method {args.method}: not in {run} (its methods: {', '.join(settings['planners'])})"
+        )
+    seeds = sorted(t["seed"] for t in trials if t["method"] == args.method)
+    if args.seed not in seeds:
+        span = f"{seeds[0]}–{seeds[-1]}" if seeds else "none"
+        raise ConfigError(f"--seed {args.seed}: {args.method} has no such trial in {run} ({span})")
+    from emonav_drake.diagrams.trials import TrialRunner
+
+    runner = TrialRunner(spec_from_settings(settings))
+    request = runner.request(args.method, args.seed, trace=True)
+    scenario, record, trace = runner.replay(args.method, args.seed)
+    if trace is None:
+        raise ConfigError(f"{run}: plant {settings['plant']} keeps no per-step trace to draw")
+    return trajectory_from_trace(
+        scenario,
+        request.config,
+        record,
+        trace,
+        args.method,
+        settings["plant"],
+        request.goal_radius,
+    )
+
+
 def cmd_plot(args: argparse.Namespace) -> int:
     """Check every flag, then draw the PNG and/or the animation."""
     from emonav_drake.atomic_io import atomic_output, check_distinct, check_output_file
@@ -91,7 +150,13 @@ def cmd_plot(args: argparse.Namespace) -> int:
     from emonav_drake.evaluation.trajectory_check import check_drawable
     from emonav_drake.evaluation.trajectory_plot import render_trajectory_figure
 
-    traj = load_trajectory(args.run)
+    traj = _benchmark_trial(args) if _is_benchmark_run(args.run) else None
+    if traj is None:
+        if args.method is not None or args.seed is not None:
+            raise ConfigError(
+                f"--method/--seed pick a trial of a benchmark run; {args.run} is an episode"
+            )
+        traj = load_trajectory(args.run)
     check_drawable(traj, str(args.run))  # a null/NaN/Infinity: named, nothing drawn
     if times is not None:
         for t in times:

@@ -288,7 +288,7 @@ class RunDirectory:
         if not trials:
             return md
         obs = {m: settings["methods"][m]["observation"] for m in methods}
-        reads = _method_reads(settings, obs)
+        reads = method_reads_of(settings)
         label = settings["setting_label"]
         plant = settings["plant"]
         summary = tables.summarize_methods(trials, methods)
@@ -349,9 +349,10 @@ class RunDirectory:
         return md
 
 
-def _method_reads(settings: dict, observations: dict) -> dict | None:
+def method_reads_of(settings: dict) -> dict | None:
     """`tables.method_reads` of every method of a run, from its recorded configuration
     (None when a run directory of an older format lacks what it needs)."""
+    observations = {m: settings["methods"][m]["observation"] for m in settings["planners"]}
     from emonav_drake.planners import MPC_STEERED
 
     try:
