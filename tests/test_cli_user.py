@@ -116,3 +116,17 @@ def test_replay_caption_names_the_planner_and_a_file_only_if_chosen(tmp_path):
     cap = ReplayCaption.for_episode(make_planner("policy", cfg, mine), "LIP", scenario)
     assert cap.title() == "emonav: policy (my_run.pt) on LIP, seed 3"
     assert ReplayCaption.for_episode(make_planner("mpc", cfg), "LIP", scenario).planner == "mpc"
+
+
+def test_a_replay_of_a_scene_file_names_the_scene_not_a_seed(tmp_path):
+    out = tmp_path / "r.html"
+    argv = ["sim", "--scenario", "crossing", "--planner", "dwa", "--record", str(out)]
+    assert main([*argv, "--config", str(_short_config(tmp_path)), "--quiet"]) == 0
+    html = out.read_text()
+    assert "emonav: dwa on LIP, scenario crossing" in html and "seed 0" not in html
+
+
+def _short_config(tmp_path):
+    short = tmp_path / "short.yaml"
+    short.write_text("episode: {max_steps: 2}\n")
+    return short

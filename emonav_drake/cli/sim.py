@@ -146,6 +146,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
         progress=True,  # drawn only where `emonav` allows bars: a terminal, no --quiet
         camera_frames=[] if args.camera_gif is not None else None,
         trace=bool(args.json or args.steps_out),
+        scene=_scene_label(args, cfg, scenario.seed, caption=True),
     )
     t0 = time.perf_counter()
     record, trace = _run_sim_episode(args, robot, request)
@@ -230,6 +231,7 @@ def _open_viewer(
                 footsteps=robot.footsteps,
                 tracks=cfg.perception.state_source == "lidar",
                 route=bool(cfg.route.enabled and scenario.walls),
+                scene=_scene_label(args, cfg, scenario.seed, caption=True),
             )
             start_live_view(meshcat, wait=not args.no_wait, caption=caption)
     return meshcat, caption
@@ -281,11 +283,16 @@ def outcome_words(record: Any) -> str:
     return record.outcome
 
 
-def _scene_label(args: argparse.Namespace, config: Any, seed: int) -> str:
-    """Which scene ran, for the summary line: "scenario crossing (seed 0)" for --scenario,
-    "family blocker, seed 3" for a family, else "seed 7" (the paper's arena)."""
+def _scene_label(args: argparse.Namespace, config: Any, seed: int, caption: bool = False) -> str:
+    """Which scene ran, for the summary line: "scenario crossing (seed 0)" for --scenario
+    (for a replay's `caption`: "scenario crossing", its seed only with --time-varying, which
+    it picks the changing pedestrian by), "family blocker, seed 3" for a family, else "seed
+    7" (the paper's arena)."""
     if getattr(args, "scenario", None):
-        return f"scenario {Path(args.scenario).stem} (seed {seed})"
+        name = f"scenario {Path(args.scenario).stem}"
+        if caption and not getattr(args, "time_varying", False):
+            return name
+        return f"{name} (seed {seed})"
     family = config.crowd.family
     return f"seed {seed}" if family == "paper" else f"family {family}, seed {seed}"
 

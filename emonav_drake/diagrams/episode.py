@@ -74,6 +74,8 @@ class EpisodeRequest:
         camera_frames: emotion estimate mode "camera": every classified head-camera image
             is appended as (time [s], BGR image) (`write_camera_gif`).
         trace: keep the `EpisodeTrace` (returned beside the record; None otherwise).
+        scene: the scene in words for the replay's caption ("scenario closed_door",
+            "family office, seed 3"); None: "seed N".
     """
 
     scenario: Scenario
@@ -90,6 +92,7 @@ class EpisodeRequest:
     progress: bool = False
     camera_frames: list | None = None
     trace: bool = False
+    scene: str | None = None
 
     def __post_init__(self) -> None:
         if self.goal_radius is None:
@@ -183,6 +186,7 @@ def run_navigation_episode(
             footsteps=systems.footsteps,
             tracks=req.config.perception.state_source == "lidar",
             route=req.config.route.enabled and bool(req.scenario.walls),
+            scene=req.scene,
         )
         write_replay_html(meshcat, req.record_html, caption)
     return record, trace

@@ -212,7 +212,8 @@ class ReplayCaption:
         steps: walking steps taken; nav_time: simulated time [s].
         rays: the replay draws LiDAR rays; footsteps: it draws footstep targets; tracks:
             it draws the LiDAR tracks the state-based planners read (`--state-source lidar`);
-            route: it draws the global route and its sub-goal.
+            route: it draws the global route and its sub-goal; scene: the scene in words
+            (a scenario file's name, a family and seed) instead of "seed N".
     """
 
     planner: str
@@ -225,6 +226,7 @@ class ReplayCaption:
     footsteps: bool = False
     tracks: bool = False
     route: bool = False
+    scene: str | None = None  # what ran, e.g. "scenario closed_door", "family office, seed 3"
 
     @classmethod
     def for_episode(
@@ -237,6 +239,7 @@ class ReplayCaption:
         footsteps: bool = False,
         tracks: bool = False,
         route: bool = False,
+        scene: str | None = None,
     ) -> ReplayCaption:
         """The caption of an episode: `planner` a `Planner` (its `name`), `plant` the
         robot's caption name (`Plant.caption_name`), `scenario` a `Scenario` (its `seed`),
@@ -256,6 +259,7 @@ class ReplayCaption:
             footsteps=footsteps,
             tracks=tracks,
             route=route,
+            scene=scene,
         )
         if record is not None:
             cap.set_outcome(record)
@@ -266,6 +270,8 @@ class ReplayCaption:
         self.outcome, self.steps, self.nav_time = record.outcome, record.steps, record.nav_time
 
     def title(self) -> str:
+        if self.scene:
+            return f"emonav: {self.planner} on {self.plant}, {self.scene}"
         seed = "" if self.seed is None else f", seed {self.seed}"
         return f"emonav: {self.planner} on {self.plant}{seed}"
 
