@@ -72,6 +72,33 @@ def table(num_seeds: int) -> str:
             dt = np.mean([r["discomfort_steps"] for r in rs])
             idt = " / ".join(f"{_idt(rs, k):.2f}" for k in (1, 2, 3))
             rows.append(f"| {m} | {label} | {sst._sr(rs)} | {dt:.2f} | {idt} | {versus} |")
+    return "\n".join(rows) + "\n\n" + fusion_gain(num_seeds)
+
+
+def fusion_gain(num_seeds: int) -> str:
+    """What keeping emotions per track buys over the per-frame camera, on the seeds both
+    ran: negative-zone steps per trial (signed-rank) and success (McNemar)."""
+    rows = [
+        "| method | negative-zone steps / trial: per frame → per track | signed-rank p | "
+        "success only per track : only per frame, McNemar | trials |",
+        "|---|---|---|---|---|",
+    ]
+    for m in METHODS:
+        frame, track = sst.records(RUNS[1][1], m), sst.records(RUNS[2][1], m)
+        both = [s for s in range(num_seeds) if s in frame and s in track]
+        if not both:
+            rows.append(f"| {m} | no paired trials yet | | | |")
+            continue
+        neg_f = [frame[s]["idt"][3] for s in both]
+        neg_t = [track[s]["idt"][3] for s in both]
+        ok = lambda r: r["outcome"] == "success"  # noqa: E731
+        a = sum(ok(track[s]) and not ok(frame[s]) for s in both)
+        b = sum(ok(frame[s]) and not ok(track[s]) for s in both)
+        rows.append(
+            f"| {m} | {np.mean(neg_f):.2f} → {np.mean(neg_t):.2f} | "
+            f"{sst._p(signed_rank_p(neg_f, neg_t))} | {a}:{b}, p {sst._p(mcnemar_exact(a, b))}"
+            f" | {len(both)} |"
+        )
     return "\n".join(rows)
 
 
