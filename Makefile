@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint format bench docs docs-build clean
+.PHONY: demo test lint format bench docs docs-build notebooks clean
 
 $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV) || python3 -m venv $(VENV)
@@ -42,6 +42,11 @@ docs: $(STAMP)
 
 docs-build: $(STAMP)  ## the site in site/, every warning an error
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --site-dir site
+
+# The notebooks in JupyterLab, served on this machine only (installs the notebooks extra once).
+notebooks: $(STAMP)  ## JupyterLab on notebooks/ at http://127.0.0.1:8888
+	@test -x $(VENV)/bin/jupyter-lab || $(PY) -m pip install --quiet -e ".[notebooks]"
+	$(VENV)/bin/jupyter lab --ip 127.0.0.1 --no-browser $(if $(filter 0,$(shell id -u)),--allow-root) notebooks/
 
 clean:
 	rm -rf $(VENV) .pytest_cache site
