@@ -413,3 +413,48 @@ def test_the_line_of_sight_subgoal_never_sends_the_robot_across_a_corner():
             else:
                 cut += not clear
     assert cut > 0  # without it, a 3 m look-ahead cuts the jambs' corners
+
+
+def _first_command(name: str, routed: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(the planner's first command, the goal it was given, the route layer's sub-goal or
+    the goal) in a room whose wall stands across the straight line to the goal."""
+    from pydrake.systems.analysis import Simulator
+
+    from emonav_drake.core.scenario import Scenario, WallSpec
+    from emonav_drake.diagrams.navigation import build_navigation_diagram
+    from emonav_drake.params import EmoNavConfig
+    from emonav_drake.planners import configure_for, make_planner
+
+    cfg = EmoNavConfig()
+    cfg.route.enabled = routed
+    scene = Scenario(
+        walls=[WallSpec(start=[-2.5, -0.6], end=[-2.5, 4.0])],
+        robot_start=[-4.0, 0.0],
+        robot_goal=[4.0, 0.0],
+    )
+    planner = make_planner(name, cfg)
+    cfg, kind = configure_for(planner, cfg)
+    nav = build_navigation_diagram(scene, cfg, planner, grid_kind=kind)
+    sim = Simulator(nav.diagram)
+    sim.Initialize()
+    sim.AdvanceTo(0.01)
+    ctx = nav.planner.GetMyContextFromRoot(sim.get_context())
+    goal = nav.planner.planner_input(ctx).goal_xy
+    command = nav.planner.GetOutputPort("command").Eval(ctx)
+    route = nav.diagram.GetSubsystemByName("global_route") if routed else None
+    sub = (
+        route.GetOutputPort("subgoal").Eval(route.GetMyContextFromRoot(sim.get_context()))
+        if route is not None
+        else np.asarray(scene.robot_goal, float)
+    )
+    return np.asarray(command), np.asarray(goal), np.asarray(sub)
+
+
+@pytest.mark.parametrize("name", ["dwa", "mpc", "sarl", "rgl", "policy"])
+def test_every_local_planner_steers_to_the_route_s_subgoal(name):
+    command, goal, sub = _first_command(name, routed=True)
+    assert np.allclose(goal, sub) and sub[1] < -0.5  # below the wall's end, not the goal
+    if name in ("dwa", "policy"):  # these head for the goal without it; with it they turn
+        plain, plain_goal, _ = _first_command(name, routed=False)
+        assert np.allclose(plain_goal, [4.0, 0.0])
+        assert command[1] < plain[1]  # the heading change: towards the sub-goal (right)
