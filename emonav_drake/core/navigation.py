@@ -63,6 +63,9 @@ class PlannerInput:
     # (N, M, M) for lgm/ogm, float32 (N, K) for scan, uint8 (1, 3, M, M) for drlvo.
     lgm_stack: np.ndarray | None
     step: int
+    # `goal_xy` is a sub-goal along a global route that already goes round the walls and
+    # static discs (`systems/global_route_planner.py`); False: the episode's goal itself.
+    goal_is_subgoal: bool = False
 
     def goal_state(self) -> np.ndarray:
         """(distance [m], bearing [rad]) of the goal in the robot frame."""

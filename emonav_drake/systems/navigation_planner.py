@@ -163,6 +163,7 @@ class NavigationPlanner(LeafSystem):
             crowd=with_wall_discs(self._crowd.Eval(context)),
             lgm_stack=lgm,
             step=round(context.get_time() / self.step_time),
+            goal_is_subgoal=self._goal_in.HasValue(context),
         )
 
     def memory(self, context: Context) -> Any:
