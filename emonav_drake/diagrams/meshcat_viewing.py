@@ -162,7 +162,9 @@ def make_meshcat(live: bool, host: str = LOOPBACK_HOST, port: int | None = None)
     level = drake_log.level
     drake_log.setLevel(logging.WARNING)
     try:
-        return Meshcat(params)
+        meshcat = Meshcat(params)
+        set_legend_lighting(meshcat)
+        return meshcat
     except RuntimeError as e:  # "Meshcat failed to open a websocket port."
         where = f"port {port}" if port is not None else "a port from 7000"
         what = "Meshcat" if host == LOOPBACK_HOST else f"--meshcat-host {host!r}: Meshcat"
@@ -172,6 +174,22 @@ def make_meshcat(live: bool, host: str = LOOPBACK_HOST, port: int | None = None)
         ) from None
     finally:
         drake_log.setLevel(level)
+
+
+# Mostly ambient light: under Meshcat's default lights (bright point and spot lights, dim
+# ambient) an orange (neutral) pedestrian looked yellow and a vermillion (negative) one
+# orange, against the legend. With these, surfaces show nearly their own colours and keep
+# a little shading (checked in headless Chromium screenshots of replays).
+AMBIENT_INTENSITY = 2.4
+DIRECTIONAL_INTENSITY = 0.5
+_LIGHTS = ("FillLight", "PointLightNegativeX", "PointLightPositiveX", "SpotLight")
+
+
+def set_legend_lighting(meshcat: Meshcat) -> None:
+    """Light the scene so that the drawn colours match the legend's (see the constants)."""
+    meshcat.SetProperty("/Lights/AmbientLight/<object>", "intensity", AMBIENT_INTENSITY)
+    for name in _LIGHTS:
+        meshcat.SetProperty(f"/Lights/{name}/<object>", "intensity", DIRECTIONAL_INTENSITY)
 
 
 def wait_for_browser(meshcat: Meshcat, timeout: float | None = None, poll: float = 0.05) -> bool:
