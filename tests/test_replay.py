@@ -312,6 +312,13 @@ def test_replay_caption_names_planner_plant_seed_and_the_legend(lip_replay):
         assert label in overlay
     assert overlay.index("</div>") < overlay.index("</body>")
     assert "emonavFov" in overlay  # the view widens in a narrow window
+    # the clock and the controls at hand: play / pause, a time slider, "t = … s / … s",
+    # driven by Meshcat's animator (checked in headless Chromium: a click pauses and plays,
+    # the slider at 75 % shows t = 26.7 s of 35.6 s: benchmarks/results/screenshots/)
+    bar = overlay[overlay.index('<div id="emonav-playback"') :]
+    for element in ('id="emonav-play"', 'type="range"', 'id="emonav-clock"'):
+        assert element in bar
+    assert "viewer.animator" in bar and "a.seek(" in bar
 
 
 # ---------------------------------------------------------------------------------------

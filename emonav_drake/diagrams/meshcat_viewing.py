@@ -327,9 +327,60 @@ def caption_overlay(caption: ReplayCaption) -> str:
         f'<div style="font-weight:bold">{html.escape(caption.title())}</div>'
         f"<div>{html.escape(caption.outcome_line())}</div>"
         f'<div style="margin-top:4px">{rows}</div>'
-        f'<div style="margin-top:4px;color:{palette.css(palette.CAPTION_NOTE_RGB)}">'
-        "play / pause / time: Open Controls, Animations</div></div>"
+        "</div>"
     )
+
+
+def playback_bar() -> str:
+    """The replay's clock and controls at hand (fixed, bottom left): play / pause, a time
+    slider, and the simulated time "t = 12.4 s / 35.6 s" of the animation. Meshcat's
+    animator (the page's global `viewer.animator`) plays the recording; its clip time is
+    the simulated time."""
+    box = palette.css(palette.CAPTION_BOX_RGB, 0.85)
+    text = palette.css(palette.CAPTION_TEXT_RGB)
+    return (
+        '<div id="emonav-playback" style="position:fixed;bottom:10px;left:8px;z-index:10;'
+        f"background:{box};padding:6px 10px;border-radius:6px;font:13px/1.4 sans-serif;"
+        f'color:{text};display:flex;gap:8px;align-items:center">'
+        '<button id="emonav-play" style="font:inherit;min-width:4.5em">play</button>'
+        '<input id="emonav-time" type="range" min="0" max="1000" value="0" '
+        'style="width:min(46vw,520px)">'
+        '<span id="emonav-clock" style="font-variant-numeric:tabular-nums">t = 0.0 s</span>'
+        "</div>\n" + _PLAYBACK_SCRIPT
+    )
+
+
+_PLAYBACK_SCRIPT = """<script>
+(function () {
+  const btn = document.getElementById("emonav-play");
+  const slider = document.getElementById("emonav-time");
+  const clock = document.getElementById("emonav-clock");
+  let dragging = false;
+  function anim() { return window.viewer && window.viewer.animator; }
+  function now(a) { return a.actions.length ? a.actions[0].time : 0; }
+  setInterval(function () {
+    const a = anim();
+    if (!a || !a.duration) return;
+    const t = Math.min(now(a), a.duration);
+    clock.textContent = "t = " + t.toFixed(1) + " s / " + a.duration.toFixed(1) + " s";
+    if (!dragging) slider.value = Math.round(1000 * t / a.duration);
+    btn.textContent = a.playing ? "pause" : "play";
+  }, 100);
+  btn.onclick = function () {
+    const a = anim();
+    if (!a) return;
+    if (a.playing) { a.pause(); } else { a.play(); }
+  };
+  slider.onpointerdown = function () { dragging = true; };
+  slider.onpointerup = function () { dragging = false; };
+  slider.oninput = function () {
+    const a = anim();
+    if (!a || !a.duration) return;
+    a.pause();
+    a.seek(slider.value / 1000 * a.duration);
+  };
+})();
+</script>"""
 
 
 # Three.js keeps the vertical field of view when the window's shape changes, so a narrow
@@ -352,15 +403,17 @@ _FIT_VIEW_SCRIPT = """<script>
 
 
 def replay_html(meshcat: Meshcat, caption: ReplayCaption) -> str:
-    """`meshcat.StaticHtml()` with the caption overlay, and the script that keeps the
-    arena in view in narrow windows, inserted before `</body>`."""
+    """`meshcat.StaticHtml()` with the caption overlay, the playback bar (clock, play /
+    pause, time slider) and the script that keeps the arena in view in narrow windows,
+    inserted before `</body>`."""
     page = meshcat.StaticHtml()
     at = page.rfind("</body>")
     if at < 0:  # not the page layout we know: leave the replay as Drake wrote it
         log.warning("Meshcat's StaticHtml has no </body>: replay written without caption")
         return page
     script = _FIT_VIEW_SCRIPT.replace("MIN_HFOV", f"{nm.OVERVIEW_MIN_HFOV:g}")
-    return page[:at] + caption_overlay(caption) + "\n" + script + "\n" + page[at:]
+    extra = caption_overlay(caption) + "\n" + playback_bar() + "\n" + script + "\n"
+    return page[:at] + extra + page[at:]
 
 
 def write_replay_html(meshcat: Meshcat, path: str | Path, caption: ReplayCaption) -> None:
