@@ -13,3 +13,18 @@ def test_benchmark_notebook_runs_in_short_mode(monkeypatch):
     assert "re-simulated policy seed 13: timeout, as recorded" in outputs
     images = [o for c in cells for o in c.get("outputs", []) if "image/png" in o.get("data", {})]
     assert len(images) == 2  # the bar charts and the trajectories
+
+
+def test_benchmark_notebook_reads_the_user_s_run_from_any_directory(monkeypatch, tmp_path):
+    from emonav_drake.diagrams.trials import method_specs
+    from emonav_drake.evaluation.benchmark import run_benchmark
+    from emonav_drake.params import load_config
+
+    run = tmp_path / "my_run"
+    run_benchmark(run, method_specs("dwa"), "lip", 3, 12, load_config(), workers=1, progress=False)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.setenv("EMONAV_RUNS", str(run))
+    outputs, cells = run_short("benchmark.ipynb", monkeypatch, short=False, cwd=elsewhere)
+    assert "my_run: 3 trials of dwa on lip" in outputs
+    assert "Digit runs: skipped" in outputs  # the committed Digit runs are not the user's

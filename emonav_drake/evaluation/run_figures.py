@@ -10,8 +10,9 @@
   every method in every run, and, when the runs differ in their scenario family, a heat
   map of SR (methods × families).
 
-Colours from the shared palette (`core/palette.py`); figures are drawn with matplotlib's
-Agg backend (no display needed).
+Colours from the shared palette (`core/palette.py`). The backend is left as it is (a
+notebook keeps its inline one; without a display matplotlib draws with Agg), and every
+figure is closed once saved.
 """
 
 from __future__ import annotations
@@ -32,12 +33,6 @@ SUMMARY_FIGURE = "summary.png"
 SOCIAL_FIGURE = "social.png"
 REPORT_FIGURE = "report.png"
 REPORT_FILE = "report.md"
-
-
-def _agg() -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
 
 
 def _bars(ax, x, values: list[tuple[float, float]], colors, title: str, ylabel: str) -> None:  # noqa: ANN001
@@ -99,11 +94,10 @@ def plot_social(trials: Sequence[dict], methods: Sequence[str], labels: dict[str
 
 def write_run_figures(run: str | Path) -> list[Path]:
     """Draw `summary.png` and `social.png` into the run directory `run`; their paths."""
+    import matplotlib.pyplot as plt
+
     from emonav_drake.atomic_io import atomic_output
     from emonav_drake.evaluation.run_directory import load_run
-
-    _agg()
-    import matplotlib.pyplot as plt
 
     run = Path(run)
     settings, trials = load_run(run)
@@ -205,11 +199,10 @@ def plot_report(runs: Sequence[tuple[Path, dict, list[dict]]]):
 
 def write_report(runs: Sequence[str | Path], out: str | Path) -> Path:
     """`report.md` and `report.png` comparing the run directories `runs` in `out`."""
+    import matplotlib.pyplot as plt
+
     from emonav_drake.atomic_io import atomic_output, write_text_atomic
     from emonav_drake.evaluation.run_directory import load_run, method_reads_of
-
-    _agg()
-    import matplotlib.pyplot as plt
 
     out = Path(out)
     loaded = [(Path(r), *load_run(r)) for r in runs]
