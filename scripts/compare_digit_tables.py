@@ -9,7 +9,7 @@ per trial with the Wilcoxon signed-rank test on the per-seed differences).
 
 By default each method's run with the old walking timing (`PAIRS`) against
 benchmarks/results/digit_table2_v3; with `--old RUN`, every method of the new run against
-the same method in RUN. Prints a Markdown table (quoted in docs/results.md).
+the same method in RUN. Prints a Markdown table (quoted in docs/results_methods.md).
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@ Rows: every family with runs of the trained policy (`families_<plant>_mixed/F`, 
 rate [Wilson 95 % interval] (n); then McNemar exact on the seeds both ran,
 "x : y" = seeds only the trained policy passes : seeds only the other passes. With
 --write the table is also written to `families_<plant>_mixed/comparison.md`, which
-docs/results.md quotes.
+docs/results_families.md quotes.
 """
 
 from __future__ import annotations

@@ -135,7 +135,7 @@ def cmd_table(args: argparse.Namespace) -> int:
         rows.append(f"| {f} | " + " | ".join(cells) + " |")
     text = "\n".join(rows)
     print(text)
-    if args.write:  # quoted by docs/results.md (tests/test_docs_agree.py checks the quote)
+    if args.write:  # quoted by docs/results_families.md (tests/test_docs_agree.py checks the quote)
         from emonav_drake.atomic_io import write_text_atomic
 
         out = run_dir(args.plant, "", args.study) / TABLE_FILE
