@@ -36,7 +36,7 @@ from emonav_drake.core.navigation import PlannerInput
 from emonav_drake.core.observations import observation_kind, observation_kinds
 from emonav_drake.errors import UserError
 from emonav_drake.params import NUM_BEAMS, LidarParams, RobotParams
-from emonav_drake.planners import catalog
+from emonav_drake.planners.catalog import DEFAULT_POLICY as _SHIPPED_DEFAULT
 from emonav_drake.planners.networks import (
     Actor,
     CategoricalPolicy,
@@ -54,7 +54,7 @@ LIP_POLICY = _DATA / "policy_lgm.pt"
 # What `--planner policy` runs without a --checkpoint: the distilled route's Digit round 2
 # (the MPC route's student, `emobipednav_digit_mpc`, distilled with its LGM shield in the
 # calibrated world and then on Digit; data/README.md says why and with which numbers).
-DEFAULT_POLICY = catalog.DEFAULT_POLICY
+DEFAULT_POLICY = _SHIPPED_DEFAULT
 
 
 class PolicyError(UserError, ValueError):
