@@ -29,7 +29,7 @@ def _pixels_near(image, rgb, tol: int = 14) -> int:
 
 def _sim_json(tmp_path_factory, name: str, *flags: str) -> dict:
     out = tmp_path_factory.mktemp(name) / "run.json"
-    assert main(["sim", *flags, "--json", str(out)]) == 0
+    assert main(["sim", "--planner", "dwa", *flags, "--json", str(out)]) == 0
     return {"path": out, "data": json.loads(out.read_text())}
 
 

@@ -115,6 +115,12 @@ OUTCOME_RGB: dict[str, RGB] = {
     "no_route": (0.55, 0.50, 0.05),  # olive: the route layer found none left
 }
 
+# Rates in [0, 1] as a heat map (`emonav report`'s success per family): perceptually
+# uniform and readable with colour-blindness; labels on it in PAPER_RGB below RATE_LABEL_SWITCH
+# (dark cells), INK_RGB above.
+RATE_CMAP = "viridis"
+RATE_LABEL_SWITCH = 0.6
+
 # The HTML overlay of a Meshcat replay (caption and legend)
 CAPTION_BOX_RGB: RGB = PAPER_RGB
 CAPTION_TEXT_RGB: RGB = _grey(0.13)

@@ -183,14 +183,16 @@ def plot_report(runs: Sequence[tuple[Path, dict, list[dict]]]):
             dtype=float,
         )
         ax = axes[2]
-        im = ax.imshow(grid, vmin=0, vmax=1, cmap="viridis", aspect="auto")
+        im = ax.imshow(grid, vmin=0, vmax=1, cmap=palette.RATE_CMAP, aspect="auto")
         ax.set_xticks(range(len(runs)), families, rotation=30, ha="right")
         ax.set_yticks(range(len(methods)), methods)
         for i in range(len(methods)):
             for j in range(len(runs)):
                 if not math.isnan(grid[i, j]):
+                    dark = grid[i, j] < palette.RATE_LABEL_SWITCH
+                    ink = palette.PAPER_RGB if dark else INK_RGB
                     ax.text(j, i, f"{grid[i, j]:.2f}", ha="center", va="center", fontsize=8,
-                            color="white" if grid[i, j] < 0.6 else "black")  # fmt: skip
+                            color=ink)  # fmt: skip
         ax.set_title("SR per family")
         fig.colorbar(im, ax=ax, fraction=0.046)
     fig.tight_layout(rect=(0, 0, 1, 0.9))
