@@ -75,6 +75,7 @@ def planner_rows() -> list[PlannerRow]:
     from emonav_drake.planners.catalog import catalog_entry, made_by
     from emonav_drake.planners.specs import describe_spec
 
+    composite = set(MPC_STEERED) | set(SHIELDED) | {f"{n}_digit" for n in SHIELDED}
     rows = []
     for name in planner_names():
         kind = planner_kind(name)
@@ -110,26 +111,22 @@ def planner_rows() -> list[PlannerRow]:
                 spec,
                 how,
                 run,
-                _group(name, kind),
+                _group(name, kind.learned or name in composite),
             )
         )
     return rows
 
 
-def _group(name: str, kind) -> str:  # noqa: ANN001 - a PlannerKind
+def _group(name: str, learned: bool) -> str:
+    """Where the listing puts a planner (`GROUPS`); `learned`: it runs a network (a shielded
+    or MPC-steered policy included)."""
     if name == DEFAULT_POLICY_NAME:
         return GROUPS[0]
-    if not kind.learned and name not in _steered_or_shielded():
+    if not learned:
         return GROUPS[1]
     if name in _PAPER_BASELINES:
         return GROUPS[2]
     return GROUPS[3]
-
-
-def _steered_or_shielded() -> set[str]:
-    from emonav_drake.planners import MPC_STEERED, SHIELDED
-
-    return set(MPC_STEERED) | set(SHIELDED) | {f"{n}_digit" for n in SHIELDED}
 
 
 def _default_checkpoint(kind) -> Path | None:  # noqa: ANN001 - a PlannerKind

@@ -107,18 +107,12 @@ def _benchmark_trial(args: argparse.Namespace):  # noqa: ANN202 - a Trajectory
     from emonav_drake.diagrams.trials import TrialRunner
 
     runner = TrialRunner(spec_from_settings(settings))
-    request = runner.request(args.method, args.seed, trace=True)
     scenario, record, trace = runner.replay(args.method, args.seed)
     if trace is None:
         raise ConfigError(f"{run}: plant {settings['plant']} keeps no per-step trace to draw")
+    _, config, _ = runner.planner(args.method)  # the configuration the trial ran with
     return trajectory_from_trace(
-        scenario,
-        request.config,
-        record,
-        trace,
-        args.method,
-        settings["plant"],
-        request.goal_radius,
+        scenario, config, record, trace, args.method, settings["plant"], settings["goal_radius"]
     )
 
 
@@ -150,12 +144,13 @@ def cmd_plot(args: argparse.Namespace) -> int:
     from emonav_drake.evaluation.trajectory_check import check_drawable
     from emonav_drake.evaluation.trajectory_plot import render_trajectory_figure
 
-    traj = _benchmark_trial(args) if _is_benchmark_run(args.run) else None
-    if traj is None:
-        if args.method is not None or args.seed is not None:
-            raise ConfigError(
-                f"--method/--seed pick a trial of a benchmark run; {args.run} is an episode"
-            )
+    if _is_benchmark_run(args.run):
+        traj = _benchmark_trial(args)
+    elif args.method is not None or args.seed is not None:
+        raise ConfigError(
+            f"--method/--seed pick a trial of a benchmark run; {args.run} is an episode"
+        )
+    else:
         traj = load_trajectory(args.run)
     check_drawable(traj, str(args.run))  # a null/NaN/Infinity: named, nothing drawn
     if times is not None:

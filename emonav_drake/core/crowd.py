@@ -26,6 +26,7 @@ from emonav_drake.core.pedestrian_legs import gait_offsets, gait_phase
 from emonav_drake.core.pedestrian_pose import facing_headings, start_to_goal_headings
 from emonav_drake.core.pedestrian_routes import RoutePlan
 from emonav_drake.core.scenario import Scenario
+from emonav_drake.core.scenario_spec import discs_in_place
 from emonav_drake.core.walls import wall_discs
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 
@@ -264,7 +265,7 @@ class Crowd:
         """The static discs in place at time `t` [s]: centres (S', 2) [m], radii (S',) [m]."""
         if self._all_static_present:
             return self.static_centers, self.static_radii
-        here = self.static_appear_times <= t + 1e-9
+        here = discs_in_place(self.static_appear_times, t)
         return self.static_centers[here], self.static_radii[here]
 
     def snapshot(self, state: CrowdState) -> CrowdSnapshot:

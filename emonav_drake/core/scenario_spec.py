@@ -23,6 +23,8 @@ import dataclasses as dc
 import math
 from pathlib import Path
 
+import numpy as np
+
 from emonav_drake.config_fields import SEED_RANGE, WORLD_POINT, field_range, setting
 from emonav_drake.params import EMOTION_NAMES, CrowdParams, EmoNavConfig
 from emonav_drake.typed_yaml import (
@@ -315,6 +317,12 @@ def _check_route(p: PedestrianSpec, prefix: str) -> None:
         raise ConfigError(
             f"{prefix}at_goal = {short_repr(p.at_goal)} is invalid: must be one of {list(AT_GOAL)}"
         )
+
+
+def discs_in_place(appear_times: np.ndarray, t: float) -> np.ndarray:
+    """(S,) whether each static disc is in place at time `t` [s], from their
+    `StaticDiscSpec.appears_at` times [s] (a disc appears at its time, to the ns)."""
+    return np.asarray(appear_times, dtype=float) <= t + 1e-9
 
 
 def point_segment_distance(point: list[float], a: list[float], b: list[float]) -> float:

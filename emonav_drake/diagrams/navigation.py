@@ -128,7 +128,7 @@ def make_route_planner(scenario: Scenario, config: EmoNavConfig) -> GlobalRouteP
     route = GlobalRoutePlanner(
         static_map,
         np.asarray(scenario.robot_goal, float),
-        [r + m for m in rp.margins] or r,
+        [r + m for m in rp.margins],
         r,
         period=config.robot.step_time,
         lookahead=rp.lookahead,

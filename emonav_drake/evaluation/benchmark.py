@@ -430,17 +430,17 @@ def _run_missing(
     bar.close()
     rd.record_errors(errors)
     rd.write_tables(settings, all_trials, failed=len(failed))
-    _write_figures(rd.path)
+    _write_figures(rd.path, settings, all_trials)
     return all_trials, new, failed
 
 
-def _write_figures(path: Path) -> None:
+def _write_figures(path: Path, settings: dict, trials: list[dict]) -> None:
     """The run's figures beside its tables (`run_figures.write_run_figures`); a figure that
     cannot be drawn is a warning, never a lost run."""
     from emonav_drake.evaluation.run_figures import write_run_figures
 
     try:
-        write_run_figures(path)
+        write_run_figures(path, settings, trials)
     except Exception as e:  # noqa: BLE001 — the trials and tables are already safe
         log.warning("the run's figures were not drawn: %s", e)
 

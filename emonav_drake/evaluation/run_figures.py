@@ -35,6 +35,24 @@ REPORT_FIGURE = "report.png"
 REPORT_FILE = "report.md"
 
 
+def _ran(settings: dict, trials: Sequence[dict]) -> list[str]:
+    """The run's methods that have trials, in its order."""
+    present = {t["method"] for t in trials}
+    return [m for m in settings["planners"] if m in present]
+
+
+def _save(fig, path: Path) -> Path:  # noqa: ANN001 - a matplotlib Figure
+    """Write `fig` as a PNG at `path` (atomically) and close it."""
+    import matplotlib.pyplot as plt
+
+    from emonav_drake.atomic_io import atomic_output
+
+    with atomic_output(path) as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)
+    return path
+
+
 def _bars(ax, x, values: list[tuple[float, float]], colors, title: str, ylabel: str) -> None:  # noqa: ANN001
     """Bars of means with their 95 % half widths; a NaN mean (no value) drawn as "n/a"."""
     means = np.array([v[0] for v in values], dtype=float)
@@ -92,38 +110,27 @@ def plot_social(trials: Sequence[dict], methods: Sequence[str], labels: dict[str
     return fig
 
 
-def write_run_figures(run: str | Path) -> list[Path]:
-    """Draw `summary.png` and `social.png` into the run directory `run`; their paths."""
-    import matplotlib.pyplot as plt
-
-    from emonav_drake.atomic_io import atomic_output
+def write_run_figures(
+    run: str | Path, settings: dict | None = None, trials: Sequence[dict] | None = None
+) -> list[Path]:
+    """Draw `summary.png` and `social.png` into the run directory `run`; their paths. The
+    run's `settings` and `trials` when the caller holds them (else read from `run`)."""
     from emonav_drake.evaluation.run_directory import load_run
 
     run = Path(run)
-    settings, trials = load_run(run)
-    methods = [m for m in settings["planners"] if any(t["method"] == m for t in trials)]
+    if settings is None or trials is None:
+        settings, trials = load_run(run)
+    methods = _ran(settings, trials)
     if not methods:
         return []
     labels = run_labels(settings)
-    written = []
-    for name, draw in (
-        (SUMMARY_FIGURE, lambda: plot_summary(trials, methods, labels)),
-        (SOCIAL_FIGURE, lambda: plot_social(trials, methods, labels)),
-    ):
-        fig = draw()
-        with atomic_output(run / name) as tmp:
-            fig.savefig(tmp, dpi=110, format="png")
-        plt.close(fig)
-        written.append(run / name)
-    return written
+    return [
+        _save(plot_summary(trials, methods, labels), run / SUMMARY_FIGURE),
+        _save(plot_social(trials, methods, labels), run / SOCIAL_FIGURE),
+    ]
 
 
-def _run_label(settings: dict, path: Path) -> str:
-    family = tables_family(settings)
-    return f"{path.name} ({family})" if family != "paper" else path.name
-
-
-def tables_family(settings: dict) -> str:
+def run_family(settings: dict) -> str:
     """The scenario family of a run, from its recorded configuration ("paper" if none)."""
     from emonav_drake.params import ConfigError, load_config
 
@@ -141,10 +148,12 @@ def plot_report(runs: Sequence[tuple[Path, dict, list[dict]]]):
     methods: list[str] = []
     for _, s, _ in runs:
         methods += [m for m in s["planners"] if m not in methods]
-    run_names = [_run_label(s, p) for p, s, _ in runs]
-    summaries = [tables.summarize_methods(t, [m for m in s["planners"] if any(
-        x["method"] == m for x in t)]) for _, s, t in runs]  # fmt: skip
-    families = [tables_family(s) for _, s, _ in runs]
+    families = [run_family(s) for _, s, _ in runs]
+    run_names = [
+        p.name if f == "paper" else f"{p.name} ({f})"
+        for (p, _, _), f in zip(runs, families, strict=True)
+    ]
+    summaries = [tables.summarize_methods(t, _ran(s, t)) for _, s, t in runs]
     heat = len(set(families)) > 1
     fig, axes = plt.subplots(1, 3 if heat else 2, figsize=(15 if heat else 11, 4.2), squeeze=False)
     axes = axes[0]
@@ -201,22 +210,16 @@ def plot_report(runs: Sequence[tuple[Path, dict, list[dict]]]):
 
 def write_report(runs: Sequence[str | Path], out: str | Path) -> Path:
     """`report.md` and `report.png` comparing the run directories `runs` in `out`."""
-    import matplotlib.pyplot as plt
-
-    from emonav_drake.atomic_io import atomic_output, write_text_atomic
+    from emonav_drake.atomic_io import write_text_atomic
     from emonav_drake.evaluation.run_directory import load_run, method_reads_of
 
     out = Path(out)
     loaded = [(Path(r), *load_run(r)) for r in runs]
     out.mkdir(parents=True, exist_ok=True)
-    fig = plot_report(loaded)
-    with atomic_output(out / REPORT_FIGURE) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    plt.close(fig)
+    _save(plot_report(loaded), out / REPORT_FIGURE)
     lines = ["# Report", "", f"![SR and DT of every run]({REPORT_FIGURE})", ""]
     for path, settings, trials in loaded:
-        methods = [m for m in settings["planners"] if any(t["method"] == m for t in trials)]
-        summary = tables.summarize_methods(trials, methods)
+        summary = tables.summarize_methods(trials, _ran(settings, trials))
         lines += [
             f"## {path.name}",
             "",

@@ -245,8 +245,7 @@ class MpcPlanner:
         obst = self.model.obstacles(obs.crowd)
         guide, guide_key = self._guide_for(p0, goal, obs, memory)
         has_discs = len(np.asarray(obs.crowd.static_radii).reshape(-1)) > 0
-        guided = has_discs and not obs.goal_is_subgoal
-        target = self.references(p0, goal, guide if guided else None)
+        target = self.references(p0, goal, guide if has_discs else None)
         key = (obst["num_ped"], obst["num_static"])
         layout = self._layout(key)
         info = _new_info(int(obs.step))
@@ -311,15 +310,17 @@ class MpcPlanner:
         self, p0: np.ndarray, goal: np.ndarray, obs: PlannerInput, memory: MpcMemory
     ) -> tuple[GuidePath | None, tuple | None]:
         """The guide path to keep: the memory's if it was built for the same goal and
-        discs and covers the robot, else a new one; without static discs, or when the goal
-        is a global route's sub-goal (the route already goes round the walls and discs, and
-        a guide rebuilt for a sub-goal that moves every step would cost ~70 ms a step), the
-        memory's, unused (the straight line to the goal is the guide then)."""
+        discs and covers the robot, else a new one; without static discs the memory's,
+        unused (the straight line to the goal is the guide then); none for a global route's
+        sub-goal (the route already goes round the walls and discs, and a guide rebuilt
+        for a sub-goal that moves every step would cost ~70 ms a step)."""
+        if obs.goal_is_subgoal:
+            return None, None
         p, r = self.params, self.config.robot
         crowd = obs.crowd
         centers = np.asarray(crowd.static_centers, dtype=float).reshape(-1, 2)
         radii = np.asarray(crowd.static_radii, dtype=float).reshape(-1)
-        if not len(radii) or obs.goal_is_subgoal:
+        if not len(radii):
             return memory.guide, memory.guide_key
         key = (goal.tobytes(), centers.tobytes(), radii.tobytes(), float(crowd.static_discomfort))
         if memory.guide is not None and memory.guide_key == key and memory.guide.covers(p0):

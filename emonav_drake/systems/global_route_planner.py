@@ -47,6 +47,7 @@ from emonav_drake.core.global_route import (
     plan_route,
     segments_clear,
 )
+from emonav_drake.core.scenario_spec import discs_in_place
 from emonav_drake.core.walls import point_segment_distances
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
@@ -93,7 +94,7 @@ class GlobalRoutePlanner(LeafSystem):
             raise ValueError(f"need 0 < min_clearance ({min_clearance}) <= clearance ({clearance})")
         self.static_map = static_map
         self.goal = np.asarray(goal, dtype=float).reshape(2)
-        self.clearances = (*wanted, float(min_clearance))
+        self.clearances = tuple(dict.fromkeys((*wanted, float(min_clearance))))  # no repeats
         self.clearance, self.min_clearance = self.clearances[0], float(min_clearance)
         self.line_of_sight = bool(line_of_sight)
         self.lookahead, self.stray = float(lookahead), float(stray)
@@ -103,7 +104,7 @@ class GlobalRoutePlanner(LeafSystem):
             raise ValueError(f"appear_times: {n} finite times >= 0 expected, got {times!r}")
         self.appear_times = times
         self._robot_in = self.DeclareVectorInputPort("robot_state", 4)
-        empty = _Plan(np.zeros((0, 2)), tuple(bool(t <= 0) for t in times))
+        empty = _Plan(np.zeros((0, 2)), tuple(discs_in_place(times, 0.0).tolist()))
         self._plan = self.DeclareAbstractState(AbstractValue.Make(empty))
         self.DeclareVectorOutputPort(
             "subgoal",
@@ -135,7 +136,9 @@ class GlobalRoutePlanner(LeafSystem):
 
     def map_at(self, t: float) -> StaticMap:
         """The map at time `t` [s]: the walls and the discs in place by then."""
-        here = self.appear_times <= t + 1e-9
+        return self._map_of(discs_in_place(self.appear_times, t))
+
+    def _map_of(self, here: np.ndarray) -> StaticMap:
         m = self.static_map
         return StaticMap(m.walls, m.centers[here], m.radii[here])
 
@@ -146,9 +149,9 @@ class GlobalRoutePlanner(LeafSystem):
     def _replan(self, context: Context, state: State) -> None:
         xy = self._robot_xy(context)
         plan = self._state(context)
-        t = context.get_time()
-        discs = tuple(bool(v) for v in self.appear_times <= t + 1e-9)
-        static_map = self.map_at(t)
+        here = discs_in_place(self.appear_times, context.get_time())
+        discs = tuple(here.tolist())
+        static_map = self._map_of(here)
         route = plan.route
         if len(route) >= 2 and plan.found:
             seg = np.stack([route[:-1], route[1:]], axis=1)
