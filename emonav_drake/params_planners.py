@@ -115,17 +115,20 @@ class MpcParams:
 class RouteParams:
     """The global route layer: a route on the known map in scenes with walls (docs/global_route.md).
 
-    Off by default while its settings are tuned; in a scene without walls it is never
-    built, whatever `enabled` says.
+    On by default; in a scene without walls (the paper's arena) it is never built,
+    whatever `enabled` says, so results there do not depend on it. The defaults were
+    chosen on tuning seeds (benchmarks/results/route_tuning/): margins tried widest first
+    keep a route through a door to its middle, and the line-of-sight sub-goal never sends
+    the local planner across a jamb's corner.
     """
 
     enabled: bool = setting(
-        False,
+        True,
         "in a scene with walls, plan a route on the known map (walls and static discs) and "
         "give the planner a sub-goal along it",
     )
     margins: list[float] = setting(
-        [0.1],
+        [0.3, 0.2, 0.1],
         "the route's distance from walls and static discs beyond the robot's radius, tried "
         "in order (the first that gives a route wins; then the radius alone)",
         "m",
@@ -135,7 +138,7 @@ class RouteParams:
         2.0, "the sub-goal's distance along the route beyond the robot", "m", (0.2, 20.0)
     )
     line_of_sight: bool = setting(
-        False,
+        True,
         "pull the sub-goal back along the route until the straight line from the robot to "
         "it keeps the robot's radius from every wall and disc (no corner cut)",
     )

@@ -104,3 +104,19 @@ def test_the_mixed_training_family_keeps_its_scenes():
     # the buildings are not in `mixed`, so a mixed seed draws what it drew before they came
     assert not set(BUILDINGS) & set(MIXED_FAMILIES)
     assert len(MIXED_FAMILIES) == 15 and "paper" not in MIXED_FAMILIES
+
+
+def test_walled_families_are_the_families_whose_scenes_have_walls():
+    """The route layer is built only where a family's scenes have walls, and the labels
+    name it only there: `WALLED_FAMILIES` must agree with the scenes drawn (`mixed` draws
+    walled and open scenes alike, so both kinds occur among its seeds)."""
+    from emonav_drake.core.scenario_families import FAMILIES, WALLED_FAMILIES
+
+    for name in FAMILIES:
+        walled = [
+            bool(sample_family(name, seed).walls) for seed in range(40 if name == "mixed" else 3)
+        ]
+        if name == "mixed":
+            assert name in WALLED_FAMILIES and any(walled) and not all(walled)
+        else:
+            assert all(walled) == (name in WALLED_FAMILIES) and len(set(walled)) == 1, name

@@ -187,6 +187,9 @@ def test_with_a_global_route_the_planner_steers_to_the_subgoal_and_without_to_th
         goal, route_sys.GetOutputPort("subgoal").Eval(route_sys.GetMyContextFromRoot(ctx))
     )
     assert not np.allclose(goal, scenario.robot_goal)
+    default = build_navigation_diagram(scenario, cfg, make_planner("dwa", cfg))
+    assert default.diagram.HasSubsystemNamed("global_route")  # on by default where walls are
+    cfg.route.enabled = False
     plain = build_navigation_diagram(scenario, cfg, make_planner("dwa", cfg))
     assert not plain.diagram.HasSubsystemNamed("global_route")
     pctx = plain.diagram.CreateDefaultContext()
@@ -215,6 +218,9 @@ def test_a_scene_whose_goal_no_route_reaches_is_refused_when_built():
         WallSpec(start=[3, -0.6], end=[3, -1]),
     ]
     assert len(make_route_planner(Scenario(walls=door), cfg).static_map.walls) == 5
+    with pytest.raises(ConfigError, match="cannot be reached"):  # the layer is on by default
+        build_navigation_diagram(closed, cfg, make_planner("dwa", cfg))
+    cfg.route.enabled = False
     build_navigation_diagram(closed, cfg, make_planner("dwa", cfg))
 
 
@@ -249,8 +255,9 @@ def test_the_route_and_its_subgoal_are_drawn_in_meshcat():
 
 
 def test_sim_global_route_flag_builds_the_route_layer_and_says_so(tmp_path):
-    """`emonav sim --global-route` on the office floor: the route layer runs, the JSON
-    says so, and the robot walks from its room into the goal's room."""
+    """`emonav sim` on the office floor: the route layer runs by default (and with
+    `--global-route`), the JSON says so, and the robot walks from its room into the goal's
+    room; `--no-global-route` leaves it out."""
     import json
 
     from emonav_drake.cli import main
@@ -260,8 +267,11 @@ def test_sim_global_route_flag_builds_the_route_layer_and_says_so(tmp_path):
     assert main([*args, "--global-route", "--json", str(out), "--quiet"]) == 0
     rec = json.loads(out.read_text())
     assert rec["global_route"] is True and rec["outcome"] == "success"
+    default = tmp_path / "default.json"
+    assert main([*args, "--json", str(default), "--quiet"]) == 0
+    assert json.loads(default.read_text()) == rec
     plain = tmp_path / "plain.json"
-    assert main([*args, "--json", str(plain), "--quiet"]) == 0
+    assert main([*args, "--no-global-route", "--json", str(plain), "--quiet"]) == 0
     assert json.loads(plain.read_text())["global_route"] is False
 
 
@@ -325,11 +335,11 @@ def test_a_robot_whose_only_door_is_closed_ends_its_trial_with_no_route():
     from emonav_drake.planners import make_planner
 
     cfg = EmoNavConfig()
+    cfg.route.enabled = False
     scenario = _doorway_scene(appears_at=1.0)
     crowd = Crowd(scenario, cfg)
     assert len(crowd.static_discs(0.9)[1]) == 0 and len(crowd.static_discs(1.0)[1]) == 1
-    routed = EmoNavConfig()
-    routed.route.enabled = True
+    routed = EmoNavConfig()  # the route layer is on by default
     request = EpisodeRequest(scenario, routed, make_planner("dwa", routed))
     record, _ = run_navigation_episode(request, build_episode)
     # placed at 1.0 s, seen by the route layer at its update at 1.2 s, the trial ends at
@@ -340,7 +350,7 @@ def test_a_robot_whose_only_door_is_closed_ends_its_trial_with_no_route():
     assert run_navigation_episode(plain, build_episode)[0].outcome in {"timeout", "collision"}
     # placed before the scene starts, the cart makes the scene one no route solves
     with pytest.raises(ConfigError, match="cannot be reached"):
-        make_route_planner(_doorway_scene(appears_at=0.0), cfg)
+        make_route_planner(_doorway_scene(appears_at=0.0), routed)
 
 
 def test_the_closed_door_example_replans_through_the_other_door(tmp_path):
@@ -351,13 +361,13 @@ def test_the_closed_door_example_replans_through_the_other_door(tmp_path):
     from emonav_drake.cli import main
 
     outcomes = {}
-    for flags in ([], ["--global-route"]):
+    for flags in (["--no-global-route"], []):
         out = tmp_path / f"{len(flags)}.json"
         args = ["sim", "--scenario", "closed_door", "--plant", "lip", "--planner", "dwa"]
         assert main([*args, *flags, "--json", str(out), "--quiet"]) == 0
         rec = json.loads(out.read_text())
-        outcomes[bool(flags)] = rec["outcome"]
-        if flags:  # it went through the upper door (y > 1): round the cart
+        outcomes[not flags] = rec["outcome"]
+        if not flags:  # by default, with the route layer: it went through the upper door (y > 1): round the cart
             robot = np.asarray(rec["trajectory"]["robot"])
             near_wall = robot[np.abs(robot[:, 0]) < 0.3]
             assert len(near_wall) and (near_wall[:, 1] > 1.0).all()
@@ -458,3 +468,23 @@ def test_every_local_planner_steers_to_the_route_s_subgoal(name):
         plain, plain_goal, _ = _first_command(name, routed=False)
         assert np.allclose(plain_goal, [4.0, 0.0])
         assert command[1] < plain[1]  # the heading change: towards the sub-goal (right)
+
+
+def test_the_route_layer_is_on_by_default_and_never_built_without_walls():
+    """The default configuration enables the route layer, yet a scene of the paper's arena
+    (no walls) gets no `global_route` system: the planner's goal is the episode's goal."""
+    from emonav_drake.core.scenario import sample_scenario
+    from emonav_drake.diagrams.navigation import build_navigation_diagram
+    from emonav_drake.params import EmoNavConfig
+    from emonav_drake.planners import make_planner
+
+    cfg = EmoNavConfig()
+    assert cfg.route.enabled
+    for seed in range(3):
+        scenario = sample_scenario(seed, cfg)
+        assert not scenario.walls
+        nav = build_navigation_diagram(scenario, cfg, make_planner("dwa", cfg))
+        assert not nav.diagram.HasSubsystemNamed("global_route")
+        ctx = nav.diagram.CreateDefaultContext()
+        goal = nav.planner.planner_input(nav.planner.GetMyContextFromRoot(ctx)).goal_xy
+        assert np.array_equal(goal, scenario.robot_goal)

@@ -147,7 +147,7 @@ def test_a_family_benchmark_trial_replays_with_its_sim_command(tmp_path):
     argv += ["--first-seed", "5", "--family", "corridor_head_on", "--out", str(run), "--quiet"]
     assert main(argv) == 0
     settings = json.loads((run / "settings.json").read_text())
-    assert settings["setting_label"].endswith(", family corridor_head_on")
+    assert settings["setting_label"].endswith(", family corridor_head_on, global route")
     trial = json.loads((run / "trials.jsonl").read_text().splitlines()[1])
     command = rerun_command(settings, "dwa", trial["seed"])
     assert "--family corridor_head_on" in command

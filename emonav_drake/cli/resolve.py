@@ -52,12 +52,12 @@ class ResolvedConfig:
     family: str | None = None  # --family, if given (applied to `config`)
     sensor: str | None = None  # --sensor, if given (applied to `config`)
     deployable: bool = False  # --deployable was given (applied to `config`)
-    global_route: bool = False  # --global-route was given (applied to `config`)
+    global_route: bool | None = None  # --global-route / --no-global-route (applied)
 
     @property
     def source(self) -> str:
         """`origin` plus " --time-varying" / " --deployable" / " --state-source S" /
-        " --family F" / " --sensor P" / " --global-route" when given (recorded by
+        " --family F" / " --sensor P" / " --[no-]global-route" when given (recorded by
         `benchmark`, printed by `config`)."""
         flags = " --time-varying" if self.time_varying else ""
         if self.deployable:
@@ -68,8 +68,8 @@ class ResolvedConfig:
             flags += f" --family {self.family}"
         if self.sensor is not None:
             flags += f" --sensor {self.sensor}"
-        if self.global_route:
-            flags += " --global-route"
+        if self.global_route is not None:
+            flags += " --global-route" if self.global_route else " --no-global-route"
         return self.origin + flags
 
 
@@ -98,9 +98,9 @@ def resolve_config(args: argparse.Namespace) -> ResolvedConfig:
     family = getattr(args, "family", None)
     if family is not None:
         cfg.crowd.family = family
-    global_route = bool(getattr(args, "global_route", False))
-    if global_route:
-        cfg.route.enabled = True
+    global_route = getattr(args, "global_route", None)
+    if global_route is not None:
+        cfg.route.enabled = bool(global_route)
     sensor = getattr(args, "sensor", None)
     deployable = bool(getattr(args, "deployable", False))
     if deployable:
@@ -185,14 +185,15 @@ def add_family(p: argparse.ArgumentParser) -> None:
 
 
 def add_global_route(p: argparse.ArgumentParser) -> None:
-    """`--global-route` (`RouteParams.enabled`, docs/global_route.md)."""
+    """`--global-route` / `--no-global-route` (`RouteParams.enabled`, docs/global_route.md)."""
     p.add_argument(
         "--global-route",
-        action="store_true",
+        action=argparse.BooleanOptionalAction,
+        default=None,
         help="in a scene with walls, a global route on the known map (walls and static "
         "discs) gives the planner a sub-goal along it, drawn in Meshcat and replays "
-        "(the configuration's route.enabled; off by default while its settings are tuned; "
-        "no effect without walls)",
+        "(the configuration's route.enabled, on by default; --no-global-route: the "
+        "planner steers to the goal itself; no effect without walls)",
     )
 
 

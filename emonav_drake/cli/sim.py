@@ -3,7 +3,7 @@
 emonav sim  --planner dwa --plant lip --seed S [--scenario F.yaml]
             [--config F.yaml | --setting NAME] [--meshcat [--no-wait] [--meshcat-host H]]
             [--record out.html] [--json out.json] [--steps-out F.csv] [--rays] [--rates]
-            [--global-route] [--quiet]
+            [--[no-]global-route] [--quiet]
 
 A progress bar over simulated time (and the real-time factor) goes to stderr while the
 episode runs, when stderr is a terminal and --quiet is not given.

@@ -563,6 +563,13 @@ FAMILIES: dict[str, Family] = {
 
 assert tuple(FAMILIES) == SCENARIO_FAMILIES, "params.SCENARIO_FAMILIES lists the families"
 
+# The families whose scenes have walls (`mixed`: some of them), where the global route
+# layer is built; in every other family it never is (tests/test_building_families.py
+# checks this set against drawn scenes).
+WALLED_FAMILIES = frozenset(
+    {"corner_traffic", "corridor_head_on", "t_junction", "doorway", "office", "mixed"}
+)
+
 
 def sample_family(name: str, seed: int, config: EmoNavConfig | None = None) -> Scenario:
     """The scene of `seed` in family `name`, validated and with a reachable goal.

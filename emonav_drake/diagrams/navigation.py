@@ -171,7 +171,7 @@ def AddNavigationStack(
         global_route: in a scene with walls, a `GlobalRoutePlanner` (`make_route_planner`)
             gives the planner its goal, a sub-goal along the route around the walls, and
             the monitor its `has_route` (docs/global_route.md); None: as
-            `config.route.enabled` (off by default).
+            `config.route.enabled` (on by default).
         Others: as `build_navigation_diagram`.
     The caller connects the planner's `command` output to its robot: (u_v [m/s], u_Δθ
     [rad]), held for the whole walking step (u_k during step k, planned at t_k).

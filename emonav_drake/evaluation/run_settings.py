@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from emonav_drake.core.scenario import MAX_SEED
+from emonav_drake.core.scenario_families import WALLED_FAMILIES
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.diagrams.trials import (
     MAX_TRIALS,
@@ -35,6 +36,7 @@ from emonav_drake.diagrams.trials import (
 from emonav_drake.params import (
     ConfigError,
     EmoNavConfig,
+    RouteParams,
     dump_config,
     is_deployable,
     load_config,
@@ -67,11 +69,16 @@ def setting_label(config: EmoNavConfig, name: str | None) -> str:
         label += f", family {config.crowd.family}"
     if not config.sensor.is_exact() and not is_deployable(config):
         label += f", sensor {config.sensor.preset}"
-    if config.route.enabled:
+    if config.crowd.family in WALLED_FAMILIES:  # elsewhere the route layer is never built
         rp = config.route
-        margins = "/".join(f"{m:g}" for m in rp.margins) or "0"
-        label += f", global route (margin {margins} m, look-ahead {rp.lookahead:g} m"
-        label += ", line of sight)" if rp.line_of_sight else ")"
+        if not rp.enabled:
+            label += ", no global route"
+        elif dc.asdict(rp) != dc.asdict(RouteParams()):
+            margins = "/".join(f"{m:g}" for m in rp.margins) or "0"
+            label += f", global route (margin {margins} m, look-ahead {rp.lookahead:g} m"
+            label += ", line of sight)" if rp.line_of_sight else ")"
+        else:
+            label += ", global route"
     return label
 
 

@@ -10,7 +10,7 @@ radians; emotions happy | neutral | negative); see docs/scenarios.md.
 | `crossing` | three pedestrians (happy, neutral, negative) crossing the robot's path |
 | `mood_swing` | one pedestrian whose emotion changes every 2 s (the paper's §IV-F) |
 | `hallway` | walls, a group walking at the robot, a blocker from a doorway, a slow walker |
-| `closed_door` | two rooms; a cart closes the robot's door at 3 s (`--global-route` replans) |
+| `closed_door` | two rooms; a cart closes the robot's door at 3 s (the global route replans) |
 
 The scenario families (`--family`, docs/scenarios.md) sample scenes of these kinds by seed.
 """
