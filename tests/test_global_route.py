@@ -367,7 +367,7 @@ def test_the_closed_door_example_replans_through_the_other_door(tmp_path):
         assert main([*args, *flags, "--json", str(out), "--quiet"]) == 0
         rec = json.loads(out.read_text())
         outcomes[not flags] = rec["outcome"]
-        if not flags:  # by default, with the route layer: it went through the upper door (y > 1): round the cart
+        if not flags:  # by default (the route layer): through the upper door (y > 1)
             robot = np.asarray(rec["trajectory"]["robot"])
             near_wall = robot[np.abs(robot[:, 0]) < 0.3]
             assert len(near_wall) and (near_wall[:, 1] > 1.0).all()
