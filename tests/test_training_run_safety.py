@@ -265,7 +265,7 @@ def test_every_numeric_training_field_has_a_bounded_range(schema):
     # a new numeric field without a range in its `setting(...)` fails here (or without a doc)
     from emonav_drake.config_fields import field_range
     from emonav_drake.learning import config, sac_config
-    from tests.test_probe3_resources import field_problems
+    from tests.test_input_limits import field_problems
 
     cls = getattr(config, schema, None) or getattr(sac_config, schema)
     problems = field_problems(cls)
