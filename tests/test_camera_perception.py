@@ -284,8 +284,12 @@ def test_a_confusion_runs_recorded_estimate_is_unchanged_by_the_camera(tmp_path)
     the camera settings existed; the same flags must give the same text so they resume."""
     import argparse
 
-    from emonav_drake.cli.benchmark import _emotion_estimate_yaml
+    from emonav_drake.cli.benchmark import estimate_yaml
+    from emonav_drake.cli.common import emotion_estimate_of
     from emonav_drake.typed_yaml import load_typed_yaml
+
+    def _emotion_estimate_yaml(args: argparse.Namespace) -> str | None:
+        return estimate_yaml(emotion_estimate_of(args))
 
     f = tmp_path / "confusion.yaml"
     f.write_text("mode: confusion\nconfusion: [[0.8, 0.1, 0.1], [0.1, 0.8, 0.1], [0, 0.2, 0.8]]\n")

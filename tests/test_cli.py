@@ -99,6 +99,8 @@ def test_sim_with_misclassified_emotions(tmp_path):
         truth_run.pop("emotion_source") == "truth"
         and ident_run.pop("emotion_source") == "confusion"
     )
+    assert "emotion_estimate" not in truth_run.pop("spec")  # the simulator's own emotions
+    assert ident_run.pop("spec")["emotion_estimate"]["mode"] == "confusion"
     assert truth_run == ident_run
     est.write_text("mode: confusion\nconfusion: [[2.0, 0.0, 0.0], [0, 1, 0], [0, 0, 1]]\n")
     assert main(["sim", "--seed", "4", "--emotion-estimate", str(est)]) == 2

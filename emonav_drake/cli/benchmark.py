@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from emonav_drake.cli.common import (
     PLANT_HELP,
@@ -24,7 +24,9 @@ from emonav_drake.cli.resolve import (
     add_family,
     add_global_route,
     add_sensor,
+    add_spec,
     add_state_source,
+    check_spec_flags,
     resolve_config,
 )
 from emonav_drake.core.metrics import format_idt
@@ -32,6 +34,7 @@ from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.diagrams.trials import MAX_TRIALS
 
 if TYPE_CHECKING:
+    from emonav_drake.diagrams.run_spec import RunSpec
     from emonav_drake.evaluation.benchmark import BenchmarkResult
 
 DESCRIPTION = """\
@@ -110,14 +113,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "shipped policy, a variant to its shipped policy",
     )
     b.add_argument("--out", type=Path, required=True, help="run directory (created if missing)")
+    add_spec(b, "a run's settings.json")
     b.set_defaults(func=cmd_benchmark)
     return b
 
 
-def _emotion_estimate_yaml(args: argparse.Namespace) -> str | None:
-    """The validated emotion estimate of --emotion-source / --emotion-estimate as
-    canonical YAML (None: the ground truth)."""
-    params = emotion_estimate_of(args)
+def estimate_yaml(params: Any) -> str | None:
+    """An emotion estimate (`EmotionEstimateParams`, None: the ground truth) as the
+    canonical YAML a run records (None for the ground truth)."""
     if params is None:
         return None
     from emonav_drake.perception.noisy_emotions import CAMERA_MODES
@@ -146,31 +149,27 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
     check_output_dir(args.out, "--out")
     if args.workers is not None:
         check_workers(args.workers, args.ray_address)
-    estimate_yaml = _emotion_estimate_yaml(args)
-    methods = parse_methods(args.planners, args.checkpoint or [])
-    resolved = resolve_config(args)
+    spec = _benchmark_spec(args)
     workers = args.workers
     if workers is None and not args.ray_address:
         import os
 
         workers = os.cpu_count() or 1
-    from emonav_drake.planners.plugins import import_planner_modules
-
     try:
         result = run_benchmark(
             args.out,
-            methods,
-            args.plant,
-            args.trials,
-            args.first_seed,
-            resolved.config,
+            spec.methods,
+            spec.plant,
+            spec.episodes,
+            spec.first_seed,
+            spec.config,
             workers=workers,
             ray_address=args.ray_address,
-            setting=resolved.setting,
-            config_source=resolved.source,
-            emotion_estimate_yaml=estimate_yaml,
+            setting=spec.setting_name or None,
+            config_source=f"--spec {args.spec}" if args.spec else resolve_config(args).source,
+            emotion_estimate_yaml=estimate_yaml(spec.emotion_estimate),
             progress=True,  # drawn only where `emonav` allows bars (cli.main)
-            planner_modules=import_planner_modules(args.planner_modules),
+            planner_modules=spec.planner_modules,
         )
     except TrialsFailed as e:  # the others ran: their summary, then the error line
         _print_summary(e.result)
@@ -178,6 +177,31 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
         return 1
     _print_summary(result)
     return 0
+
+
+def _benchmark_spec(args: argparse.Namespace) -> RunSpec:
+    """The run spec of `--spec FILE` (a `settings.json` or a spec), else of the flags."""
+    from emonav_drake.diagrams.run_spec import RunSpec
+    from emonav_drake.evaluation.run_settings import read_run_spec
+
+    if args.spec is not None:
+        check_spec_flags(args)
+        return read_run_spec(args.spec)
+    from emonav_drake.planners.plugins import import_planner_modules
+
+    estimate = emotion_estimate_of(args)
+    methods = parse_methods(args.planners, args.checkpoint or [])
+    resolved = resolve_config(args)
+    return RunSpec(
+        plant=args.plant,
+        methods=methods,
+        first_seed=args.first_seed,
+        episodes=args.trials,
+        setting_name=resolved.setting or "",
+        emotion_estimate=estimate,
+        planner_modules=import_planner_modules(args.planner_modules),
+        config=resolved.config,
+    )
 
 
 def _print_summary(result: BenchmarkResult) -> None:

@@ -23,6 +23,8 @@ from emonav_drake.cli.resolve import (
     add_global_route,
     add_sensor,
     add_state_source,
+    resolve_config,
+    resolve_scenario,
 )
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners import is_learned, reads_crowd_state
@@ -31,7 +33,7 @@ if TYPE_CHECKING:
     import numpy as np
 
     from emonav_drake.core.episode_trace import EpisodeTrace
-    from emonav_drake.diagrams.trials import MethodSpec
+    from emonav_drake.diagrams.run_spec import MethodSpec, RunSpec
 
 
 PLANNER_HELP = (
@@ -356,3 +358,36 @@ def episode_steps_table(config: EmoNavConfig, trace: EpisodeTrace) -> np.ndarray
 
     r = config.robot
     return trace_tracking(trace, r.omega, r.step_time)
+
+
+def run_spec_from_args(
+    args: argparse.Namespace, episodes: int = 1, first_seed: int | None = None
+) -> RunSpec:
+    """The `RunSpec` of `sim`'s or `eval`'s flags (one method, `args.planner` with
+    `--checkpoint`): the configuration resolved as `resolve_config`, the fixed scene of
+    `--scenario` (in full, its changing pedestrian included), the emotion estimate,
+    the planner modules given."""
+    from emonav_drake.diagrams.run_spec import RunSpec
+    from emonav_drake.planners.plugins import import_planner_modules
+
+    resolved = resolve_config(args)
+    checkpoint = getattr(args, "checkpoint", None)
+    methods = parse_methods([args.planner], [f"{args.planner}={checkpoint}"] if checkpoint else [])
+    scene, scene_name = None, ""
+    seed = args.seed if first_seed is None else first_seed
+    if getattr(args, "scenario", None):
+        scene = resolve_scenario(args, resolved)
+        scene_name, seed = Path(args.scenario).stem, scene.seed
+    config_file = getattr(args, "config", None)
+    return RunSpec(
+        plant=args.plant,
+        setting_name=resolved.setting or (Path(config_file).stem if config_file else ""),
+        methods=methods,
+        first_seed=seed,
+        episodes=episodes,
+        scene_name=scene_name,
+        scenario=scene,
+        emotion_estimate=emotion_estimate_of(args),
+        planner_modules=import_planner_modules(getattr(args, "planner_modules", None) or []),
+        config=resolved.config,
+    )

@@ -18,11 +18,17 @@ from emonav_drake.cli.common import (
     check_outputs,
     check_planner_flags,
     check_seed_range,
-    emotion_estimate_of,
+    run_spec_from_args,
 )
 from emonav_drake.cli.planners_cmd import DEFAULT_PLANNER
-from emonav_drake.cli.resolve import resolve_config, sample
+from emonav_drake.cli.resolve import (
+    add_spec,
+    check_spec_flags,
+    resolve_config,
+)
+from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.plants import PLANTS
+from emonav_drake.diagrams.run_spec import RunSpec, load_run_spec, run_spec_plain
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners import planner_names
@@ -62,51 +68,46 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "with interrupted: true and seeds_done)",
     )
     add_episode_flags(e)
+    add_spec(e, "the --json of an earlier `emonav eval`")
     e.set_defaults(func=cmd_eval)
     return e
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
     """Evaluate over seeds; on Ctrl-C keep the finished episodes (summary, --json, exit 130)."""
-    if not 1 <= args.episodes <= MAX_EPISODES:
-        raise ConfigError(
-            f"--episodes {args.episodes}: must be in [1, {MAX_EPISODES}] (split a longer "
-            "evaluation with --first-seed)"
-        )
-    check_seed_range(args.first_seed, args.episodes, "--first-seed")
     check_outputs(args, "--json")
-    check_planner_flags(args)
-    resolved = resolve_config(args)
-    cfg = resolved.config
-    estimate = emotion_estimate_of(args)
+    spec = _eval_spec(args)
     from emonav_drake.core.metrics import format_summary, summarize
     from emonav_drake.diagrams.episode import EpisodeRequest
     from emonav_drake.diagrams.evaluation_episode import run_evaluation_episode
-    from emonav_drake.planners import configure_for, make_planner
+    from emonav_drake.diagrams.trials import TrialRunner
     from emonav_drake.progress import progress_bar
 
-    seeds = range(args.first_seed, args.first_seed + args.episodes)
+    seeds = range(spec.first_seed, spec.first_seed + spec.episodes)
     # Every scenario first (cheap): a crowd that does not fit fails now, not at episode k;
     # none is kept (each is drawn again for its episode), so memory does not grow with N.
     for seed in seeds:
-        sample(seed, resolved)
-    planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
-    cfg, grid_kind = configure_for(planner, cfg)
+        _scene(spec, seed, args)
+    name = spec.methods[0].name
+    runner = TrialRunner(spec.benchmark_spec(), device=args.device)
+    planner, cfg, grid_kind = runner.planner(name)
+    spec.methods[0].observation = runner.observation(name)  # as a benchmark records it
     if hasattr(planner, "describe"):
-        print(f"planner {args.planner}: {planner.describe()}")
-    name = resolved.setting or (Path(args.config).stem if args.config else "default")
-    sensed = _sensed(cfg, name, estimate)
+        print(f"planner {name}: {planner.describe()}")
+    setting = spec.setting_name or "default"
+    sensed = _sensed(cfg, setting, spec.emotion_estimate)
     print(f"sensed: {sensed['setting_label']}; emotions: {sensed['emotion_source']}")
+    estimate = spec.emotion_estimate
     records = []
     interrupted = False
-    with progress_bar(total=len(seeds), desc=f"{args.planner}/{args.plant}", unit="ep") as bar:
+    with progress_bar(total=len(seeds), desc=f"{name}/{spec.plant}", unit="ep") as bar:
         try:
             for seed in seeds:
-                scenario = sample(seed, resolved)
+                scenario = _scene(spec, seed, args)
                 request = EpisodeRequest(
                     scenario, cfg, planner, grid_kind, emotion_estimate=estimate
                 )
-                rec = run_evaluation_episode(args.plant, request)
+                rec = run_evaluation_episode(spec.plant, request)
                 records.append(rec)
                 bar.update(1)
         except KeyboardInterrupt:
@@ -118,14 +119,15 @@ def cmd_eval(args: argparse.Namespace) -> int:
     print(format_summary(summary))
     if args.json:
         out = {
-            "planner": args.planner,
-            "plant": args.plant,
+            "planner": name,
+            "plant": spec.plant,
             "seeds": [seeds.start, seeds.stop],
             "interrupted": interrupted,
             "seeds_done": done,
             **sensed,
             "summary": summary,
             "episodes": [r.to_json() for r in records],
+            "spec": run_spec_plain(spec),  # `emonav eval --spec` runs it again
         }
         write_json(args.json, out)
     if interrupted:
@@ -135,6 +137,39 @@ def cmd_eval(args: argparse.Namespace) -> int:
             f"{done[0]}-{done[-1]}); the summary above covers them{where}"
         )
     return 0
+
+
+def _eval_spec(args: argparse.Namespace) -> RunSpec:
+    """The run spec of `--spec FILE` (one method), else of the flags (checked first:
+    --episodes, the seed range, the planner's flags)."""
+    if args.spec is not None:
+        check_spec_flags(args)
+        spec = load_run_spec(args.spec)
+        if len(spec.methods) != 1:
+            raise ConfigError(
+                f"--spec {args.spec}: records {len(spec.methods)} methods; eval runs one "
+                "(benchmark --spec runs them all)"
+            )
+        return spec
+    if not 1 <= args.episodes <= MAX_EPISODES:
+        raise ConfigError(
+            f"--episodes {args.episodes}: must be in [1, {MAX_EPISODES}] (split a longer "
+            "evaluation with --first-seed)"
+        )
+    check_seed_range(args.first_seed, args.episodes, "--first-seed")
+    check_planner_flags(args)
+    return run_spec_from_args(args, episodes=args.episodes, first_seed=args.first_seed)
+
+
+def _scene(spec: RunSpec, seed: int, args: argparse.Namespace) -> Scenario:
+    """The scene of `seed`, a sampling error naming where the configuration came from."""
+    from emonav_drake.core.scenario import ScenarioSamplingError
+
+    try:
+        return spec.scenario_of(seed)
+    except ScenarioSamplingError as e:
+        where = f"--spec {args.spec}" if args.spec else resolve_config(args).origin
+        raise ScenarioSamplingError(f"{where}: {e}") from None
 
 
 def _sensed(cfg: EmoNavConfig, setting: str | None, estimate: object | None) -> dict:

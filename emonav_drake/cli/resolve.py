@@ -259,3 +259,62 @@ def resolve_scenario(args: argparse.Namespace, resolved: ResolvedConfig) -> Scen
             add_time_varying_emotion(sc, sc.seed, resolved.config)
         return sc
     return sample(args.seed, resolved)
+
+
+# The flags that decide a run's result, by sub-command: with `--spec` the spec gives them.
+RESULT_FLAGS = (
+    "planner",
+    "planners",
+    "plant",
+    "seed",
+    "first_seed",
+    "episodes",
+    "trials",
+    "scenario",
+    "config",
+    "setting",
+    "checkpoint",
+    "emotion_source",
+    "emotion_estimate",
+    "deployable",
+    "state_source",
+    "family",
+    "global_route",
+    "sensor",
+    "time_varying",
+)
+
+
+def add_spec(p: argparse.ArgumentParser, what: str) -> None:
+    """`--spec FILE` (`diagrams.run_spec`), and the sub-command's defaults of the flags it
+    replaces, so that `check_spec_flags` can tell which of them were given. Call it after
+    every other flag is added."""
+    p.add_argument(
+        "--spec",
+        type=Path,
+        metavar="FILE",
+        help=f"run again exactly what FILE records: {what}, or a run spec in YAML or JSON "
+        "(docs/run_spec.md); the flags that decide the result (planner, plant, seeds, "
+        "configuration, scene, emotions, sensing) come from it and may not be given",
+    )
+    flags = {
+        a.dest: (tuple(a.option_strings), a.default)
+        for a in p._actions
+        if a.dest in RESULT_FLAGS and a.option_strings
+    }
+    p.set_defaults(result_flags=flags)
+
+
+def check_spec_flags(args: argparse.Namespace) -> None:
+    """With `--spec`: refuse every flag of `RESULT_FLAGS` given (its value not the
+    sub-command's default), naming it."""
+    given = []
+    for dest, (options, default) in getattr(args, "result_flags", {}).items():
+        value = getattr(args, dest, default)
+        if value != default:  # --no-X for a boolean flag turned off
+            given.append(options[-1] if value is False and len(options) > 1 else options[0])
+    if given:
+        raise ConfigError(
+            f"--spec {args.spec}: {', '.join(given)} would change what the spec records; "
+            "the spec gives them (edit a copy of the spec to run something else)"
+        )

@@ -26,16 +26,20 @@ from emonav_drake.cli.common import (
     add_meshcat_host,
     check_outputs,
     check_planner_flags,
-    emotion_estimate_of,
     episode_steps_table,
     meshcat_host,
+    run_spec_from_args,
     write_steps_csv,
 )
 from emonav_drake.cli.planners_cmd import DEFAULT_PLANNER
-from emonav_drake.cli.resolve import resolve_config, resolve_scenario
+from emonav_drake.cli.resolve import (
+    add_spec,
+    check_spec_flags,
+)
 from emonav_drake.core.metrics import format_idt
 from emonav_drake.diagrams.episode import EpisodeRequest
 from emonav_drake.diagrams.plants import DEFAULT_PLANT, PLANTS, Plant, plant_named
+from emonav_drake.diagrams.run_spec import RunSpec, load_run_spec, run_spec_plain
 from emonav_drake.params import ConfigError, is_deployable
 from emonav_drake.planners import planner_names
 
@@ -100,6 +104,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         "system (printed, and added to --json as 'rates' and 'wall_time_share')",
     )
     add_episode_flags(s)
+    add_spec(s, "the --json of an earlier `emonav sim`")
     s.set_defaults(func=cmd_sim)
     return s
 
@@ -108,26 +113,26 @@ def cmd_sim(args: argparse.Namespace) -> int:
     """Run one episode; print its outcome and write --json / --record / --steps-out."""
     check_outputs(args, "--json", "--record", "--steps-out", "--camera-gif")
     meshcat_host(args)
-    robot = plant_named(args.plant)
+    spec = _sim_spec(args)
+    robot = plant_named(spec.plant)
     _check_plant_flags(args, robot)
-    check_planner_flags(args)
-    resolved = resolve_config(args)
-    cfg = resolved.config
-    scenario = resolve_scenario(args, resolved)
-    estimate = emotion_estimate_of(args)
+    estimate = spec.emotion_estimate
     from emonav_drake.perception.noisy_emotions import CAMERA_MODES
 
     if args.camera_gif is not None and (estimate is None or estimate.mode not in CAMERA_MODES):
         raise ConfigError(
             "--camera-gif needs the camera as the emotion source: --emotion-source camera"
         )
-    from emonav_drake.planners import configure_for, make_planner
+    from emonav_drake.diagrams.trials import TrialRunner
 
-    planner = make_planner(args.planner, cfg, checkpoint=args.checkpoint, device=args.device)
-    cfg, grid_kind = configure_for(planner, cfg)
+    name = spec.methods[0].name
+    runner = TrialRunner(spec.benchmark_spec(), device=args.device)
+    planner, cfg, grid_kind = runner.planner(name)
+    spec.methods[0].observation = runner.observation(name)  # as a benchmark records it
+    scenario = spec.scenario_of(spec.first_seed)
     if hasattr(planner, "describe"):
-        print(f"planner {args.planner}: {planner.describe()}")
-    meshcat, caption = _open_viewer(args, robot, cfg, scenario)
+        print(f"planner {name}: {planner.describe()}")
+    meshcat, caption = _open_viewer(args, spec, robot, cfg, scenario)
     rates = None
     if args.rates:
         from emonav_drake.diagrams.rates import RateMeasurement
@@ -146,7 +151,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
         progress=True,  # drawn only where `emonav` allows bars: a terminal, no --quiet
         camera_frames=[] if args.camera_gif is not None else None,
         trace=bool(args.json or args.steps_out),
-        scene=_scene_label(args, cfg, scenario.seed, caption=True),
+        scene=_scene_label(spec, scenario.seed, caption=True),
     )
     t0 = time.perf_counter()
     record, trace = _run_sim_episode(args, robot, request)
@@ -162,7 +167,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
         out.update(rates.report.to_json())
         print(_format_rates(rates.report))
     print(
-        f"{_scene_label(args, cfg, scenario.seed)}, {args.planner} on {robot.caption_name}: "
+        f"{_scene_label(spec, scenario.seed)}, {name} on {robot.caption_name}: "
         f"{outcome_words(record)} after {record.steps} steps "
         f"({record.nav_time:.1f} s simulated, {wall:.2f} s wall), path "
         f"{record.path_length:.2f} m, min pedestrian distance "
@@ -178,7 +183,8 @@ def cmd_sim(args: argparse.Namespace) -> int:
         with atomic_output(args.camera_gif) as path:
             n = write_camera_gif(request.camera_frames, path)
         print(f"camera: {n} classified images written to {Path(args.camera_gif).resolve()}")
-    _write_sim_outputs(args, request, record, trace, out)
+    out["spec"] = run_spec_plain(spec)  # `emonav sim --spec` runs it again
+    _write_sim_outputs(args, spec, request, record, trace, out)
     if caption is not None:  # live: the outcome in Meshcat, served until Ctrl-C
         from emonav_drake.diagrams.meshcat_viewing import finish_live_view
 
@@ -206,7 +212,7 @@ def _check_plant_flags(args: argparse.Namespace, robot: Plant) -> None:
 
 
 def _open_viewer(
-    args: argparse.Namespace, robot: Plant, cfg: Any, scenario: Any
+    args: argparse.Namespace, spec: RunSpec, robot: Plant, cfg: Any, scenario: Any
 ) -> tuple[Any, Any]:
     """The Meshcat of --meshcat / --record (None without them) and, live, its caption
     (started, and waiting for a browser unless --no-wait); (None, None) without a viewer."""
@@ -224,14 +230,14 @@ def _open_viewer(
         set_overview_camera(meshcat, cfg)
         if args.meshcat:
             caption = ReplayCaption(
-                args.planner,
+                spec.methods[0].name,
                 robot.caption_name,
                 scenario.seed,
                 rays=args.rays,
                 footsteps=robot.footsteps,
                 tracks=cfg.perception.state_source == "lidar",
                 route=bool(cfg.route.enabled and scenario.walls),
-                scene=_scene_label(args, cfg, scenario.seed, caption=True),
+                scene=_scene_label(spec, scenario.seed, caption=True),
             )
             start_live_view(meshcat, wait=not args.no_wait, caption=caption)
     return meshcat, caption
@@ -249,7 +255,12 @@ def _run_sim_episode(
 
 
 def _write_sim_outputs(
-    args: argparse.Namespace, request: EpisodeRequest, record: Any, trace: Any, out: dict
+    args: argparse.Namespace,
+    spec: RunSpec,
+    request: EpisodeRequest,
+    record: Any,
+    trace: Any,
+    out: dict,
 ) -> None:
     """Write --json (`out`, with the trajectory when the plant gave the trace) and
     --steps-out of a finished episode, from its `EpisodeTrace` on either plant."""
@@ -259,12 +270,12 @@ def _write_sim_outputs(
 
         if trace is not None:
             out["trajectory"] = trajectory_from_trace(
-                scenario, cfg, record, trace, args.planner, args.plant, request.goal_radius
+                scenario, cfg, record, trace, spec.methods[0].name, spec.plant, request.goal_radius
             ).to_json()
         write_json(args.json, out)
     if args.steps_out:  # per planner step: the planner's LIP step vs the robot
         if trace is None:
-            raise ConfigError(f"--steps-out: --plant {args.plant} gave no per-step trace")
+            raise ConfigError(f"--steps-out: --plant {spec.plant} gave no per-step trace")
         n = write_steps_csv(args.steps_out, episode_steps_table(cfg, trace))
         print(f"{n} steps written to {args.steps_out}")
 
@@ -283,18 +294,34 @@ def outcome_words(record: Any) -> str:
     return record.outcome
 
 
-def _scene_label(args: argparse.Namespace, config: Any, seed: int, caption: bool = False) -> str:
-    """Which scene ran, for the summary line: "scenario crossing (seed 0)" for --scenario
-    (for a replay's `caption`: "scenario crossing", its seed only with --time-varying, which
-    it picks the changing pedestrian by), "family blocker, seed 3" for a family, else "seed
-    7" (the paper's arena)."""
-    if getattr(args, "scenario", None):
-        name = f"scenario {Path(args.scenario).stem}"
-        if caption and not getattr(args, "time_varying", False):
+def _scene_label(spec: RunSpec, seed: int, caption: bool = False) -> str:
+    """Which scene ran, for the summary line: "scenario crossing (seed 0)" for a fixed
+    scene (for a replay's `caption`: "scenario crossing", its seed only with time-varying
+    emotions, which it picks the changing pedestrian by), "family blocker, seed 3" for a
+    family, else "seed 7" (the paper's arena)."""
+    if spec.scenario is not None:
+        name = f"scenario {spec.scene_name or 'file'}"
+        if caption and not spec.config.crowd.time_varying_emotions:
             return name
         return f"{name} (seed {seed})"
-    family = config.crowd.family
+    family = spec.config.crowd.family
     return f"seed {seed}" if family == "paper" else f"family {family}, seed {seed}"
+
+
+def _sim_spec(args: argparse.Namespace) -> RunSpec:
+    """The run spec of `--spec FILE` (one episode of one method), else of the flags."""
+    if args.spec is None:
+        check_planner_flags(args)
+        return run_spec_from_args(args)
+    check_spec_flags(args)
+    spec = load_run_spec(args.spec)
+    if len(spec.methods) != 1 or spec.episodes != 1:
+        raise ConfigError(
+            f"--spec {args.spec}: records {len(spec.methods)} method(s) over {spec.episodes} "
+            "episode(s); sim runs one episode of one method (eval or benchmark --spec run "
+            "more)"
+        )
+    return spec
 
 
 def _format_rates(report: Any) -> str:

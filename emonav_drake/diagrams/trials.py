@@ -22,7 +22,6 @@ for calibration, the Digit DAgger rounds):
 from __future__ import annotations
 
 import copy
-import dataclasses as dc
 import tempfile
 import time
 import traceback
@@ -31,6 +30,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from emonav_drake.atomic_io import json_safe
+from emonav_drake.diagrams.run_spec import BenchmarkSpec, MethodSpec
 from emonav_drake.errors import RunInterrupted, did_you_mean
 from emonav_drake.parallel import Worker, run_tasks
 from emonav_drake.params import ConfigError, EmoNavConfig, load_config
@@ -46,36 +46,6 @@ if TYPE_CHECKING:
 # --trials at most (per method): every scenario is sampled (~0.2 ms per seed, ~20 s at the
 # maximum) and every (method, seed) task listed before the first trial.
 MAX_TRIALS = 100_000
-
-
-@dc.dataclass
-class MethodSpec:
-    """One compared method: a planner kind and, for learned policies, the checkpoint."""
-
-    name: str
-    planner: str  # the kind that builds it: dwa | mpc | policy | sarl (`PlannerKind.runs_as`)
-    checkpoint: str | None = None  # path of a learned policy's checkpoint
-    checkpoint_sha256: str | None = None
-    observation: str = "state"  # what the method sees: "state" (DWA, MPC) or the grid kind
-
-
-@dc.dataclass
-class BenchmarkSpec:
-    """What a worker needs to run any trial of the benchmark."""
-
-    methods: list[MethodSpec]
-    plant: str
-    config_yaml: str
-    emotion_estimate_yaml: str | None = None
-    # planner modules from outside the package (`planners/plugins.py`): each worker imports
-    # them before building a planner
-    planner_modules: list[str] = dc.field(default_factory=list)
-
-    def method(self, name: str) -> MethodSpec:
-        for m in self.methods:
-            if m.name == name:
-                return m
-        raise KeyError(name)
 
 
 class MethodError(ConfigError):
@@ -218,9 +188,12 @@ class TrialRunner:
         spec: the benchmark (methods, plant, configuration YAML, emotion estimate).
         blobs: checkpoint bytes by method name, used where the checkpoint's path does not
             exist here (a worker on another machine) or holds another file.
+        device: the torch device of the learned planners ("cpu", "cuda", "cuda:N").
     """
 
-    def __init__(self, spec: BenchmarkSpec, blobs: dict[str, bytes] | None = None) -> None:
+    def __init__(
+        self, spec: BenchmarkSpec, blobs: dict[str, bytes] | None = None, device: str = "cpu"
+    ) -> None:
         from emonav_drake.planners.plugins import import_planner_modules
 
         self.spec = spec
@@ -235,6 +208,7 @@ class TrialRunner:
                 EmotionEstimateParams, data=spec.emotion_estimate_yaml
             ).validate()
         self._blobs = blobs or {}
+        self.device = device
         self._tmp: tempfile.TemporaryDirectory | None = None
         self._planners: dict[str, tuple[Any, EmoNavConfig, str]] = {}
 
@@ -260,7 +234,9 @@ class TrialRunner:
             m = self.spec.method(name)
             cfg = copy.deepcopy(self.config)  # a policy adapts the grid-map settings
             kind = planner_of(m.planner)
-            planner = make_planner(kind, cfg, checkpoint=self._checkpoint_path(m))
+            planner = make_planner(
+                kind, cfg, checkpoint=self._checkpoint_path(m), device=self.device
+            )
             cfg, grid_kind = configure_for(planner, cfg)
             self._planners[name] = (planner, cfg, grid_kind)
         return self._planners[name]

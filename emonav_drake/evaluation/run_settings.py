@@ -28,6 +28,7 @@ from typing import Any
 from emonav_drake.core.scenario import MAX_SEED
 from emonav_drake.core.scenario_families import WALLED_FAMILIES
 from emonav_drake.diagrams.plants import PLANTS
+from emonav_drake.diagrams.run_spec import RunSpec
 from emonav_drake.diagrams.trials import (
     MAX_TRIALS,
     BenchmarkSpec,
@@ -368,3 +369,43 @@ def config_difference(a: str, b: str, labels: tuple[str, str] = ("there", "here"
             there, here = (x.split(":", 1)[-1].strip() for x in (la, lb))
             return f"{section}.{key}: {there} {labels[0]}, {here} {labels[1]}"
     return "the dumps differ in length"
+
+
+def run_spec_of_settings(settings: dict, where: str) -> RunSpec:
+    """The `RunSpec` of a benchmark's `settings.json` (checked first: `check_settings`):
+    its methods in the run's order with their checkpoints and hashes, plant, trials, first
+    seed, configuration, emotion estimate and planner modules. Runs of any date read."""
+    from emonav_drake.diagrams.run_spec import RunSpec
+
+    config = check_settings(settings, where)
+    estimate = None
+    if settings["emotion_estimate_yaml"] is not None:
+        from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+        from emonav_drake.typed_yaml import load_typed_yaml
+
+        estimate = load_typed_yaml(EmotionEstimateParams, data=settings["emotion_estimate_yaml"])
+    bench = spec_from_settings(settings)
+    return RunSpec(
+        plant=bench.plant,
+        methods=bench.methods,
+        first_seed=settings["first_seed"],
+        episodes=settings["trials"],
+        setting_name=settings.get("setting") or "",
+        emotion_estimate=estimate,
+        planner_modules=bench.planner_modules,
+        config=config,
+    ).check(where)
+
+
+def read_run_spec(path: str | Path) -> RunSpec:
+    """The `RunSpec` of `--spec FILE`: a benchmark's `settings.json` (or its run
+    directory), a sim's or eval's `--json`, or a spec file (`diagrams.run_spec`)."""
+    from emonav_drake.diagrams.run_spec import load_run_spec, looks_like_settings
+    from emonav_drake.json_input import read_json
+
+    path = Path(path)
+    if path.is_dir() and (path / "settings.json").is_file():
+        path = path / "settings.json"
+    if looks_like_settings(path):
+        return run_spec_of_settings(read_json(path), f"--spec {path}")
+    return load_run_spec(path)
