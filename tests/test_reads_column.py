@@ -34,3 +34,10 @@ def test_a_benchmark_table_says_what_each_row_reads(tmp_path, capsys):
     }
     assert rows["dwa"].endswith("tracks in the vlp16 scan — deployable |")
     assert rows["policy"].endswith("LiDAR grid maps of the vlp16 scan — deployable |")
+    table3 = md.split("## Table III")[1].split("\n## ")[0]
+    assert READS_HEADER in table3
+    rows3 = {
+        line.split(" | ")[0].strip("| "): line for line in table3.splitlines() if "(n=1)" in line
+    }
+    assert rows3["dwa"].endswith("tracks in the vlp16 scan — deployable |")
+    assert rows3["policy"].endswith("LiDAR grid maps of the vlp16 scan — deployable |")

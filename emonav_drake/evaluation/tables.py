@@ -238,15 +238,25 @@ def table2_rows(summary: dict, reads: dict | None = None) -> tuple[list[str], li
 
 
 def table3_rows(
-    summary: dict, setting: str, plant: str, observations: dict | None = None
+    summary: dict,
+    setting: str,
+    plant: str,
+    observations: dict | None = None,
+    reads: dict | None = None,
 ) -> tuple[list[str], list[list[object]]]:
-    """Table III style: Method | DD (setting) | Test plant | Obs | IDT | SR."""
+    """Table III style: Method | DD (setting) | Test plant | Obs | IDT | SR (| what each
+    method reads and whether a robot could run it, given `reads` by method: the paper's
+    Obs column names the observation's kind only)."""
     header = ["Method", "DD (setting)", "Test", "Obs", "IDT [static; happy, neutral, negative]"]
     header.append("SR [95% CI] (n)")
     obs = observations or {}
     rows = [
         [m, setting, plant, obs.get(m, "state"), format_idt(s), _sr(s)] for m, s in summary.items()
     ]
+    if reads:
+        header.append(READS_HEADER)
+        for row in rows:
+            row.append(reads.get(row[0], "?"))
     return header, rows
 
 
@@ -415,7 +425,7 @@ def render_markdown(
     reads: dict | None = None,
 ) -> str:
     """All tables as one Markdown document (`reads`: what each method reads and whether a
-    robot could run it, `method_reads`, as a column of Table II)."""
+    robot could run it, `method_reads`, as a column of Tables II and III)."""
     summary = summarize_methods(trials, methods)
     pairs = pairwise_comparisons(trials, methods)
     parts = [f"# {title}", ""]
@@ -435,7 +445,7 @@ def render_markdown(
         "IDT: walking steps inside the discomfort zone of a static disc and of happy, neutral "
         "and negative pedestrians, summed over the trials.",
         "",
-        markdown_table(*table3_rows(summary, setting, plant, observations)),
+        markdown_table(*table3_rows(summary, setting, plant, observations, reads)),
         "",
         "## Social metrics",
         "",
