@@ -35,6 +35,8 @@ RUNS = (  # (label, run directory)
     ("camera, kept per track (BlazeFace)", "digit_deployable_tracks"),
 )
 TABLE_FILE = "emotion_source_table.md"
+# what each method's crowd input is in these deployable runs (`evaluation.tables.method_reads`)
+CROWD_READ = {"policy": "LiDAR grid maps of the vlp16 scan", "mpc": "tracks in the vlp16 scan"}
 TABLE_SECTION = "Table II with perceived emotions"  # the sections docs/results.md quotes
 GAIN_SECTION = "What keeping emotions per track buys"
 
@@ -48,16 +50,20 @@ def table(num_seeds: int) -> str:
     rows = [
         "| method | emotions | SR [95 % CI] (n) | DT / trial | IDT / trial: happy / neutral / "
         "negative | vs the simulator's emotions: success only this : only truth, McNemar; "
-        "negative-zone steps signed-rank |",
-        "|---|---|---|---|---|---|",
+        "negative-zone steps signed-rank | reads — could a robot run it? |",
+        "|---|---|---|---|---|---|---|",
     ]
     for m in METHODS:
         base = sst.records(RUNS[0][1], m)
         for label, run in RUNS:
             recs = sst.records(run, m)
             seeds = [s for s in seeds_all if s in recs]
+            if run == RUNS[0][1]:  # the simulator's emotions: no robot has them
+                reads = f"{CROWD_READ[m]} + the simulator's emotions — privileged"
+            else:
+                reads = f"{CROWD_READ[m]} + the head camera's emotions — deployable"
             if not seeds:
-                rows.append(f"| {m} | {label} | no trials yet | | | |")
+                rows.append(f"| {m} | {label} | no trials yet | | | | {reads} |")
                 continue
             rs = [recs[s] for s in seeds]
             versus = "—"
@@ -73,7 +79,9 @@ def table(num_seeds: int) -> str:
                 versus += f"negative p {sst._p(neg)} (n = {len(both)})"
             dt = np.mean([r["discomfort_steps"] for r in rs])
             idt = " / ".join(f"{_idt(rs, k):.2f}" for k in (1, 2, 3))
-            rows.append(f"| {m} | {label} | {sst._sr(rs)} | {dt:.2f} | {idt} | {versus} |")
+            rows.append(
+                f"| {m} | {label} | {sst._sr(rs)} | {dt:.2f} | {idt} | {versus} | {reads} |"
+            )
     return "\n".join(rows)
 
 

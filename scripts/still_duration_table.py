@@ -19,6 +19,7 @@ writes `benchmarks/results/still_duration_<plant>/table.md`, which docs/results.
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 
 import numpy as np
@@ -27,9 +28,11 @@ from emonav_drake.evaluation.run_directory import read_trials
 from emonav_drake.evaluation.tables import (
     format_p,
     mcnemar_exact,
+    method_reads,
     signed_rank_p,
     wilson_interval,
 )
+from emonav_drake.params import load_config
 
 RESULTS = Path(__file__).resolve().parent.parent / "benchmarks" / "results"
 SETTINGS = ("no_emotion", "var_dd")
@@ -43,7 +46,14 @@ def _trials(runs: Path, name: str, planner: str) -> dict[int, dict]:
     return {t["seed"]: t["record"] for t in rows if t["method"] == planner}
 
 
-def _row(planner: str, source: str, runs: dict[str, dict[int, dict]]) -> str:
+def _reads(run: Path) -> str:
+    """What the run's crowd-state planners read and whether a robot could run them."""
+    settings = json.loads((run / "settings.json").read_text())
+    config = load_config(data=settings["config_yaml"])
+    return method_reads("state", config.perception.state_source, config.sensor.preset)
+
+
+def _row(planner: str, source: str, runs: dict[str, dict[int, dict]], reads: str) -> str:
     recs = runs[source]
     seeds = sorted(recs)
     ok = [recs[s]["outcome"] == "success" for s in seeds]
@@ -52,7 +62,7 @@ def _row(planner: str, source: str, runs: dict[str, dict[int, dict]]) -> str:
     static = [recs[s]["idt"][0] for s in seeds]
     cells = [
         planner,
-        SOURCES[source],
+        f"{SOURCES[source]}: {reads}",
         f"{np.mean(ok):.3f} [{lo:.3f}, {hi:.3f}] ({len(ok)})",
         f"{np.mean(dt):.2f}",
         f"{sum(static)}",
@@ -94,13 +104,15 @@ def table(plant: str) -> str:
         out += [
             f"## {setting} ({LABELS[plant]}, seeds {seeds[0]}-{seeds[-1]})",
             "",
-            "| planner | crowd read | SR [95 % CI] (n) | DT / trial | static IDT (sum) "
+            "| planner | crowd read — could a robot run it? | SR [95 % CI] (n) | DT / trial "
+            "| static IDT (sum) "
             "| vs truth (wins:losses) | vs tracks, 2 s |",
             "|---|---|---|---|---|---|---|",
         ]
         for planner in planners:
             runs = {src: _trials(runs_dir, f"{setting}_{src}", planner) for src in SOURCES}
-            out += [_row(planner, src, runs) for src in SOURCES]
+            reads = {src: _reads(runs_dir / f"{setting}_{src}") for src in SOURCES}
+            out += [_row(planner, src, runs, reads[src]) for src in SOURCES]
         out.append("")
     return "\n".join(out)
 
