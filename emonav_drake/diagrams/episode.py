@@ -228,6 +228,62 @@ def simulate_episode(
     return record, log
 
 
+class EpisodeStepper:
+    """Walks a built navigation diagram one walking step at a time: the one loop of every
+    navigation episode (`simulate_episode`, the `EmoNavDigit-v0` environment, the camera
+    study's episodes).
+
+    Walking step k ends at t_k = k·T exactly (`AdvanceTo(k·T)`: summing T would drift off
+    the planner's instants in the last bits). `outcome` says, at t_k, whether the episode
+    has ended — a fall first (the plant's check, `EpisodeSystems.fall`), then the episode
+    monitor — and with which record; `advance` walks to t_{k+1} and, on a plant that can
+    fall, turns a `RuntimeError` of the simulator into the record of a fall (the contact
+    solver gives up only on a robot in a heap).
+
+    Args:
+        sim: the simulator of `systems.diagram`, initialized.
+        systems: what the loop reads of the diagram.
+        step_time: T [s], the planner's period (`robot.step_time`).
+    """
+
+    def __init__(self, sim: Simulator, systems: EpisodeSystems, step_time: float) -> None:
+        self.sim, self.systems, self.step_time = sim, systems, step_time
+        self.context = sim.get_mutable_context()
+        self._status = systems.monitor.GetOutputPort("status")
+        self._monitor_context = systems.monitor.GetMyContextFromRoot(self.context)
+        self.k = round(self.context.get_time() / step_time)
+
+    def status(self) -> Any:
+        """The episode monitor's status now (record, done, the last step's evaluation)."""
+        return self._status.Eval(self._monitor_context)
+
+    def outcome(self, status: Any = None) -> EpisodeRecord | None:
+        """The episode's record if it has ended at the current instant (a fall, or the
+        monitor's verdict), else None; `status`: `status()` if already read."""
+        from emonav_drake.systems.fall_monitor import FALL
+
+        status = self.status() if status is None else status
+        reason = None if self.systems.fall is None else self.systems.fall(self.context)
+        if reason is not None:  # a copy: the status is the monitor's cached value
+            return dc.replace(status.record, outcome=FALL, fall_reason=reason)
+        return status.record if status.done else None
+
+    def advance(self) -> EpisodeRecord | None:
+        """Walk to the next instant t_{k+1}; None, or the record of a fall if the simulator
+        gave up on a plant that can fall (a `RuntimeError` elsewhere is raised)."""
+        from emonav_drake.systems.fall_monitor import FALL
+
+        self.k += 1
+        try:
+            self.sim.AdvanceTo(self.k * self.step_time)
+        except RuntimeError as e:
+            if self.systems.fall is None:
+                raise
+            reason = f"simulation stopped: {e}"
+            return dc.replace(self.status().record, outcome=FALL, fall_reason=reason)
+        return None
+
+
 def _walk(
     sim: Simulator,
     systems: EpisodeSystems,
@@ -236,36 +292,17 @@ def _walk(
     bar: Any,
 ) -> EpisodeRecord:
     """The loop of `simulate_episode`: one `AdvanceTo` per walking step."""
-    from emonav_drake.systems.fall_monitor import FALL
-
-    ctx = sim.get_mutable_context()
-    status_port = systems.monitor.GetOutputPort("status")
-
-    def status_now():
-        return status_port.Eval(systems.monitor.GetMyContextFromRoot(ctx))
-
-    k = round(ctx.get_time() / T)
+    stepper = EpisodeStepper(sim, systems, T)
     while True:
-        status = status_now()
+        status = stepper.status()
         if log is not None:
-            _log_instant(systems, ctx, k, status, log)
-        reason = None if systems.fall is None else systems.fall(ctx)
-        if reason is not None:
-            record = status.record
-            record.outcome, record.fall_reason = FALL, reason
+            _log_instant(systems, stepper.context, stepper.k, status, log)
+        record = stepper.outcome(status)
+        if record is None:
+            record = stepper.advance()
+        if record is not None:
             return record
-        if status.done:
-            return status.record
-        k += 1
-        try:
-            sim.AdvanceTo(k * T)
-        except RuntimeError as e:  # a plant that can fall: the contact solver gave up
-            if systems.fall is None:
-                raise
-            record = status_now().record
-            record.outcome, record.fall_reason = FALL, f"simulation stopped: {e}"
-            return record
-        bar.update(ctx.get_time())
+        bar.update(stepper.context.get_time())
 
 
 def _log_instant(

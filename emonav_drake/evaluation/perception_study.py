@@ -38,6 +38,7 @@ from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
 from emonav_drake.core.crowd import CrowdSnapshot
 from emonav_drake.core.pedestrian_pose import bearing_and_facing
 from emonav_drake.core.scenario import PedestrianSpec, Scenario
+from emonav_drake.diagrams.episode import EpisodeStepper
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 
@@ -287,10 +288,9 @@ def episode_samples(
     bodies = d.GetSubsystemByName("pedestrian_bodies")
     cam_pose = d.GetSubsystemByName("head_camera_pose")
     T, P = config.robot.step_time, params.period
-    status = nav.monitor.GetOutputPort("status")
+    stepper = EpisodeStepper(sim, nav.systems(), T)
     samples: list[dict] = []
     pending: list[dict] = []
-    k = 0
     while True:
         t = ctx.get_time()
         if pending:  # the classification of the previous instant is in the state now
@@ -301,13 +301,12 @@ def episode_samples(
                 s["detected"] = bool((est.face_pedestrian == p).any())
             samples += pending
             pending = []
-        if status.Eval(nav.monitor.GetMyContextFromRoot(ctx)).done:
-            break
+        record = stepper.outcome()
+        if record is not None:
+            return record, samples
         if abs(t / P - round(t / P)) < 1e-9:  # a classification instant
             pending = _geometry(ctx, t, nav, bodies, cam_pose, scenario.seed)
-        k += 1
-        sim.AdvanceTo(k * T)
-    return status.Eval(nav.monitor.GetMyContextFromRoot(ctx)).record, samples
+        stepper.advance()  # the LIP cannot fall: a simulator error is raised
 
 
 def _geometry(ctx, t, nav, bodies, cam_pose, seed) -> list[dict]:

@@ -38,6 +38,7 @@ from pydrake.systems.framework import Context
 
 from emonav_drake.core.navigation import check_command, scenario_from_plain
 from emonav_drake.core.scenario import Scenario, sample_scenario
+from emonav_drake.diagrams.episode import EpisodeStepper
 from emonav_drake.learning.env import np_random_state, set_np_random_state, set_task
 from emonav_drake.params import EmoNavConfig
 
@@ -66,6 +67,7 @@ class EmoNavDigitEnv(DrakeGymEnv):
         self._reset_seed: int | None = None
         self._commands: list[list[float]] = []  # this episode's commands (for state_dict)
         self.navigation = None  # the episode's `DigitNavigationDiagram`
+        self._stepper: EpisodeStepper | None = None  # walks it (`diagrams.episode`)
         super().__init__(
             simulator=self._make_simulator,
             time_step=self.config.robot.step_time,
@@ -91,16 +93,12 @@ class EmoNavDigitEnv(DrakeGymEnv):
         # `DrakeGymEnv.reset` initialised, then set the default context (Digit standing at
         # the start): initialise again from it, as a plain `Simulator` run does
         simulator.Initialize()
-
-    def _status(self):
-        nd = self.navigation
-        ctx = self.simulator.get_context()
-        status = nd.monitor.GetOutputPort("status").Eval(nd.monitor.GetMyContextFromRoot(ctx))
-        fall = nd.station.GetOutputPort("fall").Eval(nd.station.GetMyContextFromRoot(ctx))
-        return status, fall
+        self._stepper = EpisodeStepper(
+            simulator, self.navigation.systems(), self.config.robot.step_time
+        )
 
     def _reward(self, system, context: Context) -> float:
-        status, _ = self._status()
+        status = self._stepper.status()
         return 0.0 if status.last_step is None else float(status.last_step.reward)
 
     def reset(
@@ -122,26 +120,24 @@ class EmoNavDigitEnv(DrakeGymEnv):
     def step(self, action: np.ndarray) -> tuple[dict, float, bool, bool, dict]:
         if self.navigation is None:
             raise RuntimeError("call reset() before step()")
-        status, fall = self._status()
-        if status.done or fall.fallen or self._fallen:
+        stepper = self._stepper
+        if self._fallen or stepper.outcome() is not None:
             raise RuntimeError("the episode has ended: call reset()")
         command, _ = check_command(np.asarray(action, dtype=float), self.config.robot)
         self._commands.append([float(c) for c in command])
-        # `DrakeGymEnv.step` advances to t + T; summing T drifts off the planner's instants
-        # k·T in the last bits (and a 1 ms plant step with it): advance to k·T exactly
-        context = self.simulator.get_mutable_context()
-        T = self.config.robot.step_time
-        k = round(context.get_time() / T) + 1
-        self.action_port.FixValue(context, command)
-        try:
-            self.simulator.AdvanceTo(k * T)
-        except RuntimeError as e:  # the contact solver gives up only on a robot in a heap
-            return self._stopped(f"simulation stopped: {e}")
-        observation = self.observation_port.Eval(context)
-        status, fall = self._status()
+        # `DrakeGymEnv.step` advances to t + T; the stepper advances to k·T exactly
+        self.action_port.FixValue(stepper.context, command)
+        fell = stepper.advance()
+        if fell is not None:  # the simulator gave up: a fall (an outcome, not a crash)
+            self._fallen = True
+            observation = self.observation_port.Eval(stepper.context)
+            info = {"outcome": fell.outcome, "episode_record": fell.to_json()}
+            return observation, 0.0, True, False, info
+        observation = self.observation_port.Eval(stepper.context)
+        status = stepper.status()
         reward = 0.0 if status.last_step is None else float(status.last_step.reward)
-        record = status.record
-        outcome = "fall" if fall.fallen else (record.outcome if status.done else None)
+        record = stepper.outcome(status)
+        outcome = None if record is None else record.outcome
         info: dict[str, Any] = {"outcome": outcome}
         if status.last_step is not None:
             ev = status.last_step
@@ -151,23 +147,11 @@ class EmoNavDigitEnv(DrakeGymEnv):
                 "in_discomfort": ev.in_discomfort,
                 "idt": ev.idt,
             }
-        if outcome is not None:
-            rec = record.to_json()
-            if fall.fallen:
-                rec["outcome"], rec["fall_reason"] = "fall", fall.reason
-            info["episode_record"] = rec
+        if record is not None:
+            info["episode_record"] = record.to_json()
         terminated = outcome in ("success", "collision", "fall")
         truncated = outcome == "timeout"
         return observation, reward, terminated, truncated, info
-
-    def _stopped(self, reason: str) -> tuple[dict, float, bool, bool, dict]:
-        """The step after the simulation failed: a fall (an outcome, not a crash)."""
-        status, _ = self._status()
-        rec = status.record.to_json()
-        rec["outcome"], rec["fall_reason"] = "fall", reason
-        self._fallen = True
-        observation = self.observation_port.Eval(self.simulator.get_context())
-        return observation, 0.0, True, False, {"outcome": "fall", "episode_record": rec}
 
     def state_dict(self) -> dict:
         """The running episode as plain data (see the module): map kind, goal radius, the
@@ -193,8 +177,7 @@ class EmoNavDigitEnv(DrakeGymEnv):
             scenario = scenario_from_plain(state["scenario"])
             self.reset(seed=state["reset_seed"], options={"scenario": scenario})
             for k, command in enumerate(state["commands"]):
-                status, fall = self._status()
-                if status.done or fall.fallen or self._fallen:
+                if self._fallen or self._stepper.outcome() is not None:
                     raise ValueError(f"the saved episode ended before its command {k}")
                 self.step(np.asarray(command, dtype=float))
         set_np_random_state(self, state)
