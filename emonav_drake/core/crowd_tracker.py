@@ -46,6 +46,7 @@ import math
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from emonav_drake.config_fields import setting
 from emonav_drake.core.crowd import CrowdSnapshot
 from emonav_drake.core.lidar_objects import Detections
 from emonav_drake.params import EmoNavConfig
@@ -59,20 +60,24 @@ _IMPOSSIBLE = 1e9
 class TrackerParams:
     """Parameters of `CrowdTracker` (SI units)."""
 
-    accel_std: float = 2.0  # process noise: white acceleration std [m/s²]
-    measurement_std: float = 0.03  # std of a detected centre, per axis [m]
-    initial_speed_std: float = 1.5  # velocity std of a new track, per axis [m/s]
-    gate: float = 13.8  # chi-square gate on d², 2 dof (13.8 ≈ 99.9 %)
-    confirm_hits: int = 3  # hits (consecutive: a tentative track dies at a miss) to confirm
-    max_coast: float = 1.5  # a confirmed track unseen for longer is deleted [s]
-    still_speed: float = 0.1  # a track slower than this is still [m/s]
-    still_duration: float = 2.0  # still for this long: a static obstacle [s]
-    emotion_gate: float = 0.5  # an emotion report farther from a track is not its own [m]
-    # A track once matched to a fixed detection (`Detections.walls`) stays fixed while it
-    # is slower than `still_speed` (the leg detector's discs: a fit that fails at one scan
-    # does not make the object a pedestrian again). Off: fixed only while its last
-    # detection is.
-    sticky_fixed: bool = False
+    accel_std: float = setting(2.0, "process noise: white acceleration std", "m/s²")
+    measurement_std: float = setting(0.03, "std of a detected centre, per axis", "m")
+    initial_speed_std: float = setting(1.5, "velocity std of a new track, per axis", "m/s")
+    gate: float = setting(13.8, "chi-square gate on d², 2 dof (13.8 ≈ 99.9 %)")
+    confirm_hits: int = setting(
+        3, "hits (consecutive: a tentative track dies at a miss) to confirm"
+    )
+    max_coast: float = setting(1.5, "a confirmed track unseen for longer is deleted", "s")
+    still_speed: float = setting(0.1, "a track slower than this is still", "m/s")
+    still_duration: float = setting(2.0, "still for this long: a static obstacle", "s")
+    emotion_gate: float = setting(0.5, "an emotion report farther from a track is not its own", "m")
+    sticky_fixed: bool = setting(
+        False,
+        "a track once matched to a fixed detection (`Detections.walls`) stays fixed while it "
+        "is slower than `still_speed` (the leg detector's discs: a fit that fails at one scan "
+        "does not make the object a pedestrian again); off: fixed only while its last "
+        "detection is",
+    )
 
     def validate(self) -> TrackerParams:
         """Raise ValueError naming the field if a value is out of range; returns self."""

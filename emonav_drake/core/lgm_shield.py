@@ -39,6 +39,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from emonav_drake.config_fields import setting
 from emonav_drake.core.grid_maps import COLLISION_VALUE, check_beams_per_sector
 from emonav_drake.core.lidar import beam_table
 from emonav_drake.core.nearby_labels import restricted_softmax
@@ -67,14 +68,52 @@ class ShieldParams:
             Needs `static_margin` (the still/moving split).
     """
 
-    margin: float = 0.2
-    brake_steps: int = 1
-    static_margin: float | None = 0.0
-    static_match: float = 0.12
-    body: float = 0.25
-    predict_motion: bool = False
-    max_body_speed: float = 1.5
-    comfort_weight: float = 0.0
+    margin: float = setting(
+        0.2,
+        "clearance kept beyond the robot's radius from every seen LiDAR hit along the predicted "
+        "path [m]; covers the pedestrians' motion during it",
+        "m",
+    )
+    brake_steps: int = setting(
+        1,
+        "walking steps of (u_v, u_Δθ) = (0, 0) after the command's step in the prediction (the "
+        "robot must be able to stop clear)",
+    )
+    static_margin: float | None = setting(
+        0.0,
+        "None: `margin` for every point; else the clearance [m] kept from points seen still since"
+        " the previous walking step",
+        "m",
+    )
+    static_match: float = setting(
+        0.12,
+        "a point within this distance [m] of one of the previous frame's (world frame) counts as "
+        "still; covers the LGM's cell size",
+        "m",
+    )
+    body: float = setting(
+        0.25,
+        "points closer than this [m] to a moving point move with it (one body)",
+        "m",
+    )
+    predict_motion: bool = setting(
+        False,
+        "move each moving body's points along the path's samples at the body's measured velocity "
+        "(`body_velocities`) instead of holding them still",
+    )
+    max_body_speed: float = setting(
+        1.5,
+        "the fastest a body may have moved between two frames [m/s] to be matched with one of the"
+        " previous frame",
+        "m/s",
+    )
+    comfort_weight: float = setting(
+        0.0,
+        "score penalty [1/m] per metre the predicted path reaches into the discomfort zone of "
+        "still points (radius r_robot + d_static around each); 0: off. Needs `static_margin` (the"
+        " still/moving split)",
+        "1/m",
+    )
 
     def __post_init__(self) -> None:
         if self.comfort_weight and self.static_margin is None:

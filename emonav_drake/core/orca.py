@@ -63,6 +63,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from emonav_drake.config_fields import setting
 from emonav_drake.core.orca_lines import neighbour_table, orca_lines
 from emonav_drake.core.orca_lp import Line, solve_linear_programs
 from emonav_drake.core.orca_walls import segment_lines
@@ -81,10 +82,20 @@ class OrcaParams:
         time_horizon_obst: Time horizon (s) of the velocity obstacles of static discs.
     """
 
-    neighbor_dist: float = 10.0
-    max_neighbors: int = 10
-    time_horizon: float = 5.0
-    time_horizon_obst: float = 5.0
+    neighbor_dist: float = setting(
+        10.0,
+        "Only agents whose centres are closer than this (m) are neighbours",
+        "m",
+    )
+    max_neighbors: int = setting(10, "At most this many nearest neighbours are taken into account")
+    time_horizon: float = setting(
+        5.0, "Time horizon (s) of the agent-agent velocity obstacles", "s"
+    )
+    time_horizon_obst: float = setting(
+        5.0,
+        "Time horizon (s) of the velocity obstacles of static discs",
+        "s",
+    )
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.neighbor_dist) and self.neighbor_dist >= 0.0):

@@ -28,6 +28,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from emonav_drake.config_fields import setting
+
 INPUT = 128  # the network's input side [px]
 MODEL_FILE = "modules/face_detection/face_detection_short_range.tflite"
 
@@ -63,11 +65,13 @@ def anchors() -> np.ndarray:
 class BlazeFaceParams:
     """The detector's settings."""
 
-    score_threshold: float = 0.5  # MediaPipe's default
-    nms_threshold: float = 0.3  # IoU above which the weaker of two boxes is dropped
-    tile: int = 128  # side of the square tiles the frame is cut into [px]
-    overlap: int = 40  # how much neighbouring tiles overlap [px]
-    min_face_size: int = 12  # boxes with a smaller side are dropped [px]
+    score_threshold: float = setting(
+        0.5, "a box's score must reach this (0.5: MediaPipe's default)"
+    )
+    nms_threshold: float = setting(0.3, "IoU above which the weaker of two boxes is dropped")
+    tile: int = setting(128, "side of the square tiles the frame is cut into", "px")
+    overlap: int = setting(40, "how much neighbouring tiles overlap", "px")
+    min_face_size: int = setting(12, "boxes with a smaller side are dropped", "px")
 
     def __post_init__(self) -> None:
         if not 0.0 < self.score_threshold < 1.0:

@@ -37,6 +37,7 @@ import cv2
 import numpy as np
 import torch
 
+from emonav_drake.config_fields import setting
 from emonav_drake.params import EMOTION_NAMES, HAPPY, NEGATIVE, NEUTRAL
 from emonav_drake.perception.image_io import ImageReadError, to_gray
 from emonav_drake.perception.mini_xception import (
@@ -67,12 +68,18 @@ class DetectorParams:
             about 3–4× faster (the 20 Hz budget, docs/facts.md) with boxes within a few pixels.
     """
 
-    scale_factor: float = 1.1
-    min_neighbors: int = 5
-    min_face_size: int = 50
-    padding: int = 40
-    margin: int = 10
-    detection_scale: float = 1.0
+    scale_factor: float = setting(1.1, "Haar pyramid scale step (> 1)")
+    min_neighbors: int = setting(5, "Haar detections needed to accept a face")
+    min_face_size: int = setting(50, "smallest face side", "px")
+    padding: int = setting(40, "border added around the gray image before cropping", "px")
+    margin: int = setting(10, "margin added around the squared face box", "px")
+    detection_scale: float = setting(
+        1.0,
+        "the Haar cascade runs on the image resized by this factor (≤ 1; `min_face_size` scales "
+        "with it) and boxes are scaled back; crops are always taken at full resolution. 1.0 is "
+        "`fer`'s behaviour; 0.5 detects about 3–4× faster (the 20 Hz budget, docs/facts.md) with "
+        "boxes within a few pixels",
+    )
 
     def __post_init__(self) -> None:
         if not self.scale_factor > 1.0:

@@ -25,6 +25,7 @@ import math
 
 import numpy as np
 
+from emonav_drake.config_fields import setting
 from emonav_drake.params import NEUTRAL
 from emonav_drake.perception.face_assignment import assign_faces
 
@@ -35,15 +36,19 @@ NUM_EMOTIONS = 3  # HAPPY 0, NEUTRAL 1, NEGATIVE 2 (`params.EMOTION_NAMES`)
 class TrackEmotionParams:
     """How faces are assigned to tracks and how long a track remembers its emotion."""
 
-    decay_time: float = (
-        10.0  # a track's emotion falls back to neutral this long after its last face [s]
+    decay_time: float = setting(
+        10.0, "a track's emotion falls back to neutral this long after its last face", "s"
     )
-    window: int = 5  # the running average weighs the last `window` sightings (a mean until then)
-    bearing_tolerance: float = math.radians(3.0)  # added to a track's angular radius [rad]
-    range_tolerance: float = 0.4  # |face range − track range| ≤ this × track range
-    pedestrian_radius: float = 0.3  # a track's radius for its angular size [m]
-    zero_weight_face_px: float = 32.0  # a face this tall or smaller adds nothing [px]
-    full_weight_face_px: float = 48.0  # a face this tall or taller counts fully [px]
+    window: int = setting(
+        5, "the running average weighs the last `window` sightings (a mean until then)"
+    )
+    bearing_tolerance: float = setting(
+        math.radians(3.0), "added to a track's angular radius", "rad"
+    )
+    range_tolerance: float = setting(0.4, "|face range − track range| ≤ this × track range")
+    pedestrian_radius: float = setting(0.3, "a track's radius for its angular size", "m")
+    zero_weight_face_px: float = setting(32.0, "a face this tall or smaller adds nothing", "px")
+    full_weight_face_px: float = setting(48.0, "a face this tall or taller counts fully", "px")
 
     def validate(self) -> TrackEmotionParams:
         """Raise ValueError naming the field if a value is out of range; returns self."""
