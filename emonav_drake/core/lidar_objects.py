@@ -64,6 +64,7 @@ import math
 
 import numpy as np
 
+from emonav_drake.config_fields import setting
 from emonav_drake.core.lidar import as_point, beam_table
 
 
@@ -71,31 +72,49 @@ from emonav_drake.core.lidar import as_point, beam_table
 class DetectionParams:
     """Segmentation and circle fitting of `detect_objects` (metres, beams)."""
 
-    jump_distance: float = 0.1  # points farther apart start a new cluster [m] …
-    jump_ratio: float = 0.01  # … plus this times the nearer of their ranges [m/m]
-    min_points: int = 5  # clusters with fewer beams are dropped (slivers: no reliable centre)
-    min_fit_points: int = 5  # fewer beams: no fit, the fallback circle
-    min_radius: float = 0.1  # smallest accepted fitted radius [m]
-    max_radius: float = 0.7  # largest accepted fitted radius [m]
-    prior_radius: float = 0.3  # fallback radius (a pedestrian's) [m]
-    fit_tolerance: float = 0.03  # largest accepted RMS residual of a fit [m]
-    gauss_newton_iterations: int = 10  # most geometric refinement steps after the algebraic fit
-    convergence: float = 1e-6  # refinement stops once no centre or radius moves more [m]
-    wall_min_length: float = 1.0  # a straight run of points at least this long is a wall [m]
-    wall_tolerance: float = 0.03  # a straight run's points lie within this of its chord [m]
-    wall_piece_length: float = 0.5  # walls are reported as pieces this long [m]
-    # People as legs (`core/leg_detection.py`; on for a sensor that sees legs): clusters
-    # are legs, paired into people; a well-fitted disc larger than a leg is a fixed object.
-    legs: bool = False
-    max_missing_beams: int = 0  # beams lost inside a cluster that do not end it
-    # A lone return between two neighbours that agree with each other (within the jump
-    # limit) and not with it is a speckle (a spurious return): taken as a lost beam.
-    despeckle: bool = False
-    leg_min_points: int = 3  # a leg cluster has at least this many beams
-    leg_max_width: float = 0.25  # a cluster at most this wide (end to end) is one leg [m]
-    leg_notch: float = 0.03  # a wider cluster with a dip this deep is two legs [m]
-    leg_radius: float = 0.07  # a leg's centre lies this far behind its points [m]
-    leg_pair_distance: float = 0.55  # two legs at most this far apart are one person [m]
+    jump_distance: float = setting(
+        0.1,
+        "points farther apart start a new cluster (plus jump_ratio times the nearer range)",
+        "m",
+    )
+    jump_ratio: float = setting(
+        0.01, "added to jump_distance: this times the nearer of the two ranges", "m/m"
+    )
+    min_points: int = setting(
+        5, "clusters with fewer beams are dropped (slivers: no reliable centre)"
+    )
+    min_fit_points: int = setting(5, "fewer beams: no fit, the fallback circle")
+    min_radius: float = setting(0.1, "smallest accepted fitted radius", "m")
+    max_radius: float = setting(0.7, "largest accepted fitted radius", "m")
+    prior_radius: float = setting(0.3, "fallback radius (a pedestrian's)", "m")
+    fit_tolerance: float = setting(0.03, "largest accepted RMS residual of a fit", "m")
+    gauss_newton_iterations: int = setting(
+        10, "most geometric refinement steps after the algebraic fit"
+    )
+    convergence: float = setting(1e-06, "refinement stops once no centre or radius moves more", "m")
+    wall_min_length: float = setting(
+        1.0, "a straight run of points at least this long is a wall", "m"
+    )
+    wall_tolerance: float = setting(
+        0.03, "a straight run's points lie within this of its chord", "m"
+    )
+    wall_piece_length: float = setting(0.5, "walls are reported as pieces this long", "m")
+    legs: bool = setting(
+        False,
+        "people as legs (core/leg_detection.py; on for a sensor that sees legs): clusters are "
+        "legs, paired into people; a well-fitted disc larger than a leg is a fixed object",
+    )
+    max_missing_beams: int = setting(0, "beams lost inside a cluster that do not end it")
+    despeckle: bool = setting(
+        False,
+        "a lone return between two neighbours that agree with each other (within the jump limit) "
+        "and not with it is a speckle (a spurious return): taken as a lost beam",
+    )
+    leg_min_points: int = setting(3, "a leg cluster has at least this many beams")
+    leg_max_width: float = setting(0.25, "a cluster at most this wide (end to end) is one leg", "m")
+    leg_notch: float = setting(0.03, "a wider cluster with a dip this deep is two legs", "m")
+    leg_radius: float = setting(0.07, "a leg's centre lies this far behind its points", "m")
+    leg_pair_distance: float = setting(0.55, "two legs at most this far apart are one person", "m")
 
     def validate(self) -> DetectionParams:
         """Raise ValueError naming the field if a value is out of range; returns self."""
