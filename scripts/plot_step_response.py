@@ -27,8 +27,8 @@ from emonav_drake.core.palette import (  # noqa: E402
     LIP_RGB,
     MEASURED_RGB,
 )
-from emonav_drake.evaluation.method_names import method_label  # noqa: E402
 from emonav_drake.params import EmoNavConfig  # noqa: E402
+from emonav_drake.planners.legacy import method_label  # noqa: E402
 from emonav_drake.planners.model_aware import DIGIT_RESPONSE, read_response  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from emonav_drake.core import palette
-from emonav_drake.evaluation.method_names import method_label
+from emonav_drake.planners.legacy import method_label
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGE = ROOT / "emonav_drake"

@@ -35,6 +35,7 @@ from emonav_drake.errors import RunInterrupted, did_you_mean
 from emonav_drake.parallel import Worker, run_tasks
 from emonav_drake.params import ConfigError, EmoNavConfig, load_config
 from emonav_drake.planners import is_registered, planner_kind, planner_names
+from emonav_drake.planners.legacy import planner_of
 from emonav_drake.provenance import sha256_file
 
 if TYPE_CHECKING:
@@ -172,13 +173,6 @@ def _check_sac_actor(path: str | Path) -> None:
             path=path,
             what=describe_policy(meta),
         )
-
-
-def planner_of(recorded: str) -> str:
-    """The planner kind that builds a method recorded as `recorded` (`MethodSpec.planner`):
-    itself, except "sac", which runs before the planner rename wrote for the shipped policy
-    (a policy file)."""
-    return "policy" if recorded == "sac" else recorded
 
 
 class TrialRunner:

@@ -34,8 +34,8 @@ from emonav_drake.core.palette import (
     STATIC_RGB,
 )
 from emonav_drake.evaluation import tables
-from emonav_drake.evaluation.method_names import method_label
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
+from emonav_drake.planners.legacy import method_label
 
 EMOTION_COLORS = dict(zip(EMOTION_NAMES, EMOTION_RGB, strict=True))  # the shared palette
 IDT_LABELS = ("static", "happy", "neutral", "negative")

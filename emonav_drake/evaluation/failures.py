@@ -137,7 +137,7 @@ def _planner_flags(method: dict) -> list[str]:
             same = False
         if same:
             return ["--planner", name]
-    from emonav_drake.diagrams.trials import planner_of
+    from emonav_drake.planners.legacy import planner_of
 
     kind = planner_of(method["planner"])
     return ["--planner", kind, "--checkpoint", _shown_path(method["checkpoint"])]

@@ -34,13 +34,13 @@ from emonav_drake.learning.config_common import (
     check_observation,
     check_sensor,
 )
-from emonav_drake.learning.teacher import (
+from emonav_drake.learning.teacher import expert_for_route
+from emonav_drake.params import SCENARIO_FAMILIES, EpisodeParams
+from emonav_drake.planners.legacy import (
     LEGACY_EXPERT_FIELDS,
-    expert_for_route,
     expert_from_legacy,
     named_expert_from_legacy,
 )
-from emonav_drake.params import SCENARIO_FAMILIES, EpisodeParams
 from emonav_drake.planners.specs import (
     EXPERT_SPECS,
     DwaSpec,

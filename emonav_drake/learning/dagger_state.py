@@ -29,8 +29,8 @@ from emonav_drake.learning.run_state import (
     set_rng_state,
     write_run_state,
 )
-from emonav_drake.learning.teacher import LEGACY_EXPERT_FIELDS
 from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.planners.legacy import LEGACY_EXPERT_FIELDS
 from emonav_drake.typed_yaml import to_plain
 
 STATE_FILE = "dagger_state.pt"

@@ -1,12 +1,10 @@
-"""The expert of a training route as one planner spec, and its earlier flat form.
+"""The expert of a training route as one planner spec.
 
 A DAgger route, the Digit rounds and SARL's imitation take their expert as one field, a
 typed planner spec (`planners/specs.py`). `expert_for_route` checks it where the route is
 configured and fills in what the route supplies (a shield or MPC-nearby expert without a
-checkpoint wraps the route's `init_policy`). Runs saved by earlier versions kept the
-expert as a name plus flat `expert_*` fields; `expert_from_legacy` turns such a saved
-configuration into the spec it meant, so those runs still resume and their Digit rounds
-still run.
+checkpoint wraps the route's `init_policy`). The expert's flat form of earlier versions
+is read by `planners/legacy.py`.
 """
 
 import dataclasses as dc
@@ -15,22 +13,9 @@ from emonav_drake.params import ConfigError
 from emonav_drake.planners.registry import runs_checkpoint
 from emonav_drake.planners.specs import (
     EXPERT_SPECS,
-    DwaSpec,
-    MpcNearbySpec,
-    MpcSpec,
     PlannerSpec,
-    ShieldSpec,
     describe_spec,
     is_soft,
-)
-
-# The flat expert fields of earlier versions (a name in `expert` and these).
-LEGACY_EXPERT_FIELDS = (
-    "expert_margin",
-    "expert_clearance",
-    "expert_policy",
-    "expert_cells",
-    "expert_shield",
 )
 
 
@@ -72,58 +57,3 @@ def expert_for_route(spec: object, init_policy: str, planner_modules: list[str])
                 f"expert = {describe_spec(spec)}: planner {spec.name!r} runs no checkpoint"
             )
     return spec
-
-
-def named_expert_from_legacy(saved: dict) -> dict:
-    """A saved SARL configuration of an earlier version (the expert a registered name,
-    "mpc" or "dwa") with that planner's spec instead; any other unchanged."""
-    name = saved.get("expert")
-    if not isinstance(name, str):
-        return saved
-    from emonav_drake.planners import planner_kind
-
-    spec = planner_kind(name).spec
-    return saved | {"expert": _tagged(spec)}
-
-
-def expert_from_legacy(saved: dict) -> dict:
-    """A saved configuration with an earlier version's flat expert (a name in `expert`,
-    `expert_margin`, …) turned into one with the spec it meant (tagged plain data, as
-    `typed_yaml.to_plain` writes it); any other configuration unchanged.
-
-    The names meant: "dwa" = DWA with `expert_margin` planning with the route's
-    `response`; "mpc" = the MPC on the LIP widened by `expert_clearance`; "shield" =
-    `expert_policy` behind the LGM shield predicting with `response`; "mpc_nearby" =
-    `expert_policy` within `expert_cells` of the MPC planning with `response`, widened by
-    `expert_clearance`, shielded with `expert_shield`; another name = that registered
-    planner."""
-    name = saved.get("expert")
-    if not isinstance(name, str):
-        return saved
-    out = {k: v for k, v in saved.items() if k not in LEGACY_EXPERT_FIELDS}
-    response = str(saved.get("response", ""))
-    policy = str(saved.get("expert_policy", ""))
-    clearance = float(saved.get("expert_clearance", 0.0))
-    if name == "dwa":
-        spec = DwaSpec(margin=float(saved.get("expert_margin", 0.05)), response=response)
-    elif name == "mpc":
-        spec = MpcSpec(clearance=clearance)
-    elif name == "shield":
-        spec = ShieldSpec(checkpoint=policy, response=response)
-    elif name == "mpc_nearby":
-        spec = MpcNearbySpec(
-            checkpoint=policy,
-            response=response,
-            clearance=clearance,
-            cells=int(saved.get("expert_cells", 1)),
-            shielded=bool(saved.get("expert_shield", False)),
-        )
-    else:
-        spec = PlannerSpec(name=name)
-    out["expert"] = _tagged(spec)
-    return out
-
-
-def _tagged(spec: object) -> dict:
-    """A spec as tagged plain data, as `typed_yaml.to_plain` writes a union's value."""
-    return dc.asdict(spec) | {"_tag": f"!{type(spec).__name__}"}
