@@ -49,7 +49,7 @@ from scipy.optimize import linear_sum_assignment
 from emonav_drake.config_fields import setting
 from emonav_drake.core.crowd import CrowdSnapshot
 from emonav_drake.core.lidar_objects import Detections
-from emonav_drake.params import EmoNavConfig
+from emonav_drake.params import EmoNavConfig, PerceptionParams
 
 # Cost of a pair outside the gate: far above any gated cost (d² ≤ gate, |ln det S| ≲ 50),
 # so the assignment never trades a gated pair for an impossible one.
@@ -69,7 +69,12 @@ class TrackerParams:
     )
     max_coast: float = setting(1.5, "a confirmed track unseen for longer is deleted", "s")
     still_speed: float = setting(0.1, "a track slower than this is still", "m/s")
-    still_duration: float = setting(2.0, "still for this long: a static obstacle", "s")
+    still_duration: float = setting(
+        PerceptionParams().still_duration,
+        "still for this long: a static obstacle (the configuration's "
+        "`perception.still_duration`, described there; `tracker_params` passes it)",
+        "s",
+    )
     emotion_gate: float = setting(0.5, "an emotion report farther from a track is not its own", "m")
     sticky_fixed: bool = setting(
         False,
