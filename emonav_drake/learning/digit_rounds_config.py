@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses as dc
 
+from emonav_drake.config_fields import setting
 from emonav_drake.params import ConfigError
 from emonav_drake.planners.specs import ExpertSpec, describe_spec
 
@@ -17,21 +18,27 @@ from emonav_drake.planners.specs import ExpertSpec, describe_spec
 class DigitRoundsConfig:
     """Settings of the Digit rounds (the command line's)."""
 
-    rounds: int = 2
-    episodes: int = 60  # Digit episodes per round
-    first_seed: int = 4_000_000
-    beta: float = 0.25  # the expert acts with this probability (halved every round)
-    grad_steps: int = 1500
-    batch_size: int = 64
-    digit_fraction: float = 0.5  # of every batch from Digit samples
-    seed: int = 0
-    # The labelling expert, a planner spec (`planners/specs.py`): `run_digit_rounds` sets it
-    # to the calibrated run's (`DaggerConfig.teacher()`), so both kinds of demonstrations
-    # have one teacher. None until then.
-    expert: ExpertSpec | None = None
-    # The calibrated run's planner modules from outside the package (`planner_modules`):
-    # every worker imports them, so an expert of the user's own labels on Digit too.
-    planner_modules: list[str] = dc.field(default_factory=list)
+    rounds: int = setting(2, "DAgger rounds on Digit (--rounds)")
+    episodes: int = setting(60, "Digit episodes per round (--episodes)")
+    first_seed: int = setting(4_000_000, "the rounds' seeds start here (--first-seed)")
+    beta: float = setting(
+        0.25, "the expert acts with this probability in round 1, halved every round (--beta)"
+    )
+    grad_steps: int = setting(1500, "gradient steps after each round (--grad-steps)")
+    batch_size: int = setting(64, "labelled states per gradient step")
+    digit_fraction: float = setting(0.5, "the share of every batch drawn from Digit samples")
+    seed: int = setting(0, "the rounds' seed (sampling, network updates)")
+    expert: ExpertSpec | None = setting(
+        None,
+        "the labelling expert, a planner spec (`planners/specs.py`): `run_digit_rounds` sets "
+        "it to the calibrated run's (`DaggerConfig.teacher()`), so both kinds of "
+        "demonstrations have one teacher; None until then",
+    )
+    planner_modules: list[str] = setting(
+        [],
+        "the calibrated run's planner modules from outside the package: every worker imports "
+        "them, so an expert of the user's own labels on Digit too",
+    )
 
     def validate(self) -> DigitRoundsConfig:
         """Raise `ConfigError` naming the flag (or field) of a value out of range."""
