@@ -372,7 +372,7 @@ def run_spec_from_args(
 
     resolved = resolve_config(args)
     checkpoint = getattr(args, "checkpoint", None)
-    methods = parse_methods([args.planner], [f"{args.planner}={checkpoint}"] if checkpoint else [])
+    methods = _sim_methods(args.planner, checkpoint, resolved.config)
     scene, scene_name = None, ""
     seed = args.seed if first_seed is None else first_seed
     if getattr(args, "scenario", None):
@@ -391,3 +391,20 @@ def run_spec_from_args(
         planner_modules=import_planner_modules(getattr(args, "planner_modules", None) or []),
         config=resolved.config,
     )
+
+
+def _sim_methods(planner: str, checkpoint: Path | None, config: EmoNavConfig) -> list[MethodSpec]:
+    """The one method of `sim` / `eval`: `--planner` with `--checkpoint`. A refusal says
+    what the planner itself says when built (worded for `--planner`, e.g. `sac` without a
+    SAC actor), not the benchmark's `--planners` wording."""
+    from emonav_drake.diagrams.trials import MethodError, method_specs
+
+    try:
+        return method_specs([planner], [f"{planner}={checkpoint}"] if checkpoint else [])
+    except MethodError as e:
+        from emonav_drake.planners import make_planner
+
+        make_planner(planner, config, checkpoint=checkpoint)  # its own message, if it has one
+        raise ConfigError(
+            e.worded({"planners": "--planner", "checkpoint": "--checkpoint"})
+        ) from None
