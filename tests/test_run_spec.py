@@ -9,6 +9,7 @@ import pytest
 
 from emonav_drake.cli import main
 from emonav_drake.diagrams.run_spec import MethodSpec, RunSpec, load_run_spec
+from emonav_drake.params import ConfigError
 from emonav_drake.typed_yaml import dump_typed_yaml
 from tests.cli_errors import assert_user_error, run
 
@@ -141,7 +142,7 @@ def test_a_changed_checkpoint_is_refused_naming_it(tmp_path, capsys):
     _sim(tmp_path, "a", "--plant", "lip", "--checkpoint", str(ckpt), "--seed", "2")
     ckpt.write_bytes(ckpt.read_bytes() + b"\0")
     assert_user_error(*run(capsys, "sim", "--spec", tmp_path / "a.json"), "has changed since")
-    with pytest.raises(Exception, match="has changed"):
+    with pytest.raises(ConfigError, match="has changed"):
         load_run_spec(tmp_path / "a.json")
 
 

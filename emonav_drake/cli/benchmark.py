@@ -15,8 +15,8 @@ from emonav_drake.cli.common import (
     SeedArg,
     add_emotion_flags,
     check_workers,
-    emotion_estimate_of,
     parse_methods,
+    run_spec_from_args,
 )
 from emonav_drake.cli.resolve import (
     add_config_choice,
@@ -149,7 +149,7 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
     check_output_dir(args.out, "--out")
     if args.workers is not None:
         check_workers(args.workers, args.ray_address)
-    spec = _benchmark_spec(args)
+    spec, setting, config_source = _benchmark_spec(args)
     workers = args.workers
     if workers is None and not args.ray_address:
         import os
@@ -165,8 +165,8 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
             spec.config,
             workers=workers,
             ray_address=args.ray_address,
-            setting=spec.setting_name or None,
-            config_source=f"--spec {args.spec}" if args.spec else resolve_config(args).source,
+            setting=setting,
+            config_source=config_source,
             emotion_estimate_yaml=estimate_yaml(spec.emotion_estimate),
             progress=True,  # drawn only where `emonav` allows bars (cli.main)
             planner_modules=spec.planner_modules,
@@ -179,29 +179,22 @@ def cmd_benchmark(args: argparse.Namespace) -> int:
     return 0
 
 
-def _benchmark_spec(args: argparse.Namespace) -> RunSpec:
-    """The run spec of `--spec FILE` (a `settings.json` or a spec), else of the flags."""
-    from emonav_drake.diagrams.run_spec import RunSpec
-    from emonav_drake.evaluation.run_settings import read_run_spec
-
+def _benchmark_spec(args: argparse.Namespace) -> tuple[RunSpec, str | None, str]:
+    """The run spec of `--spec FILE` (a `settings.json` or a spec), else of the flags;
+    with the `--setting` name and where the configuration came from, as the run records
+    them."""
     if args.spec is not None:
-        check_spec_flags(args)
-        return read_run_spec(args.spec)
-    from emonav_drake.planners.plugins import import_planner_modules
+        from emonav_drake.evaluation.run_settings import read_run_spec
 
-    estimate = emotion_estimate_of(args)
+        check_spec_flags(args)
+        spec = read_run_spec(args.spec)
+        return spec, spec.setting_name or None, f"--spec {args.spec}"
     methods = parse_methods(args.planners, args.checkpoint or [])
     resolved = resolve_config(args)
-    return RunSpec(
-        plant=args.plant,
-        methods=methods,
-        first_seed=args.first_seed,
-        episodes=args.trials,
-        setting_name=resolved.setting or "",
-        emotion_estimate=estimate,
-        planner_modules=import_planner_modules(args.planner_modules),
-        config=resolved.config,
+    spec = run_spec_from_args(
+        args, resolved, methods, episodes=args.trials, first_seed=args.first_seed
     )
+    return spec, resolved.setting, resolved.source
 
 
 def _print_summary(result: BenchmarkResult) -> None:

@@ -23,7 +23,6 @@ from emonav_drake.cli.resolve import (
     add_global_route,
     add_sensor,
     add_state_source,
-    resolve_config,
     resolve_scenario,
 )
 from emonav_drake.params import ConfigError, EmoNavConfig
@@ -32,6 +31,7 @@ from emonav_drake.planners import is_learned, reads_crowd_state
 if TYPE_CHECKING:
     import numpy as np
 
+    from emonav_drake.cli.resolve import ResolvedConfig
     from emonav_drake.core.episode_trace import EpisodeTrace
     from emonav_drake.diagrams.run_spec import MethodSpec, RunSpec
 
@@ -361,18 +361,21 @@ def episode_steps_table(config: EmoNavConfig, trace: EpisodeTrace) -> np.ndarray
 
 
 def run_spec_from_args(
-    args: argparse.Namespace, episodes: int = 1, first_seed: int | None = None
+    args: argparse.Namespace,
+    resolved: ResolvedConfig,
+    methods: list[MethodSpec] | None = None,
+    episodes: int = 1,
+    first_seed: int | None = None,
 ) -> RunSpec:
-    """The `RunSpec` of `sim`'s or `eval`'s flags (one method, `args.planner` with
-    `--checkpoint`): the configuration resolved as `resolve_config`, the fixed scene of
-    `--scenario` (in full, its changing pedestrian included), the emotion estimate,
-    the planner modules given."""
+    """The `RunSpec` of a sub-command's flags, its configuration `resolved` (by
+    `resolve_config`): `methods` (default: `sim`'s or `eval`'s one, `--planner` with
+    `--checkpoint`), the seeds (default: `--seed`), the fixed scene of `--scenario` (in
+    full, its changing pedestrian included), the emotion estimate, the planner modules."""
     from emonav_drake.diagrams.run_spec import RunSpec
     from emonav_drake.planners.plugins import import_planner_modules
 
-    resolved = resolve_config(args)
-    checkpoint = getattr(args, "checkpoint", None)
-    methods = _sim_methods(args.planner, checkpoint, resolved.config)
+    if methods is None:
+        methods = _sim_methods(args.planner, getattr(args, "checkpoint", None), resolved.config)
     scene, scene_name = None, ""
     seed = args.seed if first_seed is None else first_seed
     if getattr(args, "scenario", None):

@@ -158,7 +158,8 @@ def _eval_spec(args: argparse.Namespace) -> RunSpec:
         )
     check_seed_range(args.first_seed, args.episodes, "--first-seed")
     check_planner_flags(args)
-    return run_spec_from_args(args, episodes=args.episodes, first_seed=args.first_seed)
+    resolved = resolve_config(args)
+    return run_spec_from_args(args, resolved, episodes=args.episodes, first_seed=args.first_seed)
 
 
 def _scene(spec: RunSpec, seed: int, args: argparse.Namespace) -> Scenario:

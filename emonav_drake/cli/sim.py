@@ -32,10 +32,7 @@ from emonav_drake.cli.common import (
     write_steps_csv,
 )
 from emonav_drake.cli.planners_cmd import DEFAULT_PLANNER
-from emonav_drake.cli.resolve import (
-    add_spec,
-    check_spec_flags,
-)
+from emonav_drake.cli.resolve import add_spec, check_spec_flags, resolve_config
 from emonav_drake.core.metrics import format_idt
 from emonav_drake.diagrams.episode import EpisodeRequest
 from emonav_drake.diagrams.plants import DEFAULT_PLANT, PLANTS, Plant, plant_named
@@ -312,7 +309,7 @@ def _sim_spec(args: argparse.Namespace) -> RunSpec:
     """The run spec of `--spec FILE` (one episode of one method), else of the flags."""
     if args.spec is None:
         check_planner_flags(args)
-        return run_spec_from_args(args)
+        return run_spec_from_args(args, resolve_config(args))
     check_spec_flags(args)
     spec = load_run_spec(args.spec)
     if len(spec.methods) != 1 or spec.episodes != 1:

@@ -252,16 +252,20 @@ class EpisodeStepper:
         self._status = systems.monitor.GetOutputPort("status")
         self._monitor_context = systems.monitor.GetMyContextFromRoot(self.context)
         self.k = round(self.context.get_time() / step_time)
+        self._stopped: EpisodeRecord | None = None  # the fall of a simulator that gave up
 
     def status(self) -> Any:
         """The episode monitor's status now (record, done, the last step's evaluation)."""
         return self._status.Eval(self._monitor_context)
 
     def outcome(self, status: Any = None) -> EpisodeRecord | None:
-        """The episode's record if it has ended at the current instant (a fall, or the
-        monitor's verdict), else None; `status`: `status()` if already read."""
+        """The episode's record if it has ended at the current instant (the simulator
+        gave up, a fall, or the monitor's verdict), else None; `status`: `status()` if
+        already read."""
         from emonav_drake.systems.fall_monitor import FALL
 
+        if self._stopped is not None:
+            return self._stopped
         status = self.status() if status is None else status
         reason = None if self.systems.fall is None else self.systems.fall(self.context)
         if reason is not None:  # a copy: the status is the monitor's cached value
@@ -280,7 +284,8 @@ class EpisodeStepper:
             if self.systems.fall is None:
                 raise
             reason = f"simulation stopped: {e}"
-            return dc.replace(self.status().record, outcome=FALL, fall_reason=reason)
+            self._stopped = dc.replace(self.status().record, outcome=FALL, fall_reason=reason)
+            return self._stopped
         return None
 
 

@@ -21,7 +21,6 @@ module): Drake's YAML loader reads them.
 """
 
 import dataclasses as dc
-import json
 from pathlib import Path
 
 from emonav_drake.config_fields import setting
@@ -33,7 +32,8 @@ from emonav_drake.provenance import sha256_file
 from emonav_drake.typed_yaml import dump_typed_yaml, from_plain, load_typed_yaml, to_plain
 
 FORMAT = 1
-MAX_SPEC_BYTES = 1_000_000  # a spec is a few kB; a sim's --json with its trajectory more
+# a spec is a few kB, a sim's --json with its trajectory a few MB; a larger file is no record
+MAX_RECORD_BYTES = 100_000_000
 
 
 @dc.dataclass
@@ -133,11 +133,11 @@ class RunSpec:
                 path = Path(m.checkpoint)
                 if not path.is_file():
                     raise refuse(f"the checkpoint of {m.name}, {path}, is not here")
-                if m.checkpoint_sha256 is not None and sha256_file(path) != m.checkpoint_sha256:
+                now = sha256_file(path) if m.checkpoint_sha256 is not None else None
+                if now != m.checkpoint_sha256:
                     raise refuse(
                         f"the checkpoint of {m.name}, {path}, has changed since the run "
-                        f"(sha256 {m.checkpoint_sha256[:12]}… then, "
-                        f"{sha256_file(path)[:12]}… now)"
+                        f"(sha256 {m.checkpoint_sha256[:12]}… then, {now[:12]}… now)"
                     )
         try:
             self.config.validate()
@@ -152,70 +152,63 @@ class RunSpec:
         return self
 
 
-def _is_settings(data: dict) -> bool:
+def is_settings(data: dict) -> bool:
+    """Whether a JSON object has a benchmark's `settings.json` fields."""
     return {"format", "planners", "methods", "config_yaml"} <= set(data)
 
 
-def looks_like_settings(path: str | Path) -> bool:
-    """Whether `path` is a JSON object with a benchmark's settings' fields (read cheaply:
-    a file of at most `MAX_SPEC_BYTES`)."""
-    path = Path(path)
-    if not path.is_file() or path.stat().st_size > MAX_SPEC_BYTES:
-        return False
-    try:
-        data = json.loads(path.read_text())
-    except (ValueError, UnicodeDecodeError):
-        return False
-    return isinstance(data, dict) and _is_settings(data)
-
-
 def run_spec_plain(spec: RunSpec) -> dict:
-    """The spec as plain data (JSON-ready): the "spec" of a record or `settings.json`."""
+    """The spec as plain data (JSON-ready): the "spec" of a record."""
     return to_plain(spec)
+
+
+def read_record(path: Path, where: str) -> dict | None:
+    """The JSON object of the file `path` (read once), or None when the file is not JSON
+    (a YAML spec); `ConfigError` naming `where` for a file that is no record."""
+    if not path.is_file():
+        return None  # the YAML loader names what is missing
+    if path.stat().st_size > MAX_RECORD_BYTES:
+        raise ConfigError(f"{where}: {path.stat().st_size} bytes; not a run's record")
+    raw = path.read_bytes()
+    if not raw.lstrip().startswith(b"{"):
+        return None
+    from emonav_drake.json_input import parse_json
+
+    return parse_json(raw, where)
+
+
+def spec_from_record(data: dict, where: str) -> RunSpec:
+    """The `RunSpec` of a JSON object: a record's "spec" (`sim --json`, `eval --json`) or
+    a spec itself; checked (`RunSpec.check`). A benchmark's settings are refused here,
+    naming the command that reads them."""
+    if is_settings(data):
+        raise ConfigError(
+            f"{where}: a benchmark's settings.json; `emonav benchmark --spec "
+            f"{where.removeprefix('--spec ')} --out DIR` runs it again"
+        )
+    data = data.get("spec", data)
+    if not isinstance(data, dict):
+        raise ConfigError(f'{where}: its "spec" is not a mapping')
+    try:
+        spec = from_plain(RunSpec, data)
+    except ConfigError as e:
+        raise ConfigError(f"{where}: {e}") from None
+    return spec.check(where)
 
 
 def load_run_spec(path: str | Path) -> RunSpec:
     """The `RunSpec` of `path` (checked: `RunSpec.check`): a JSON object with a "spec"
-    (`emonav sim --json`, `emonav eval --json`, a benchmark's `settings.json`), or a spec
-    alone in JSON or YAML. `ConfigError` naming the file and field otherwise."""
+    (`emonav sim --json`, `emonav eval --json`), or a spec alone in JSON or YAML.
+    `ConfigError` naming the file and field otherwise."""
     path = Path(path)
     where = f"--spec {path}"
-    if path.is_file() and path.stat().st_size > MAX_SPEC_BYTES * 100:
-        raise ConfigError(f"{where}: {path.stat().st_size} bytes; not a run's record")
-    text = None
-    if path.is_file():
-        try:
-            text = path.read_text()
-        except UnicodeDecodeError:
-            raise ConfigError(f"{where}: not a text (JSON or YAML) file") from None
-    data = None
-    if text is not None and text.lstrip().startswith("{"):
-        from emonav_drake.json_input import parse_json
-
-        data = parse_json(text, where)
+    data = read_record(path, where)
+    if data is not None:
         if not isinstance(data, dict):
             raise ConfigError(f"{where}: expected a JSON object")
-        if "spec" in data:
-            data = data["spec"]
-        elif _is_settings(data):
-            raise ConfigError(
-                f"{where}: a benchmark's settings.json; `emonav benchmark --spec {path} "
-                "--out DIR` runs it again"
-            )
-        if not isinstance(data, dict):
-            raise ConfigError(f'{where}: its "spec" is not a mapping')
-        try:
-            spec = from_plain(RunSpec, data)
-        except ConfigError as e:
-            raise ConfigError(f"{where}: {e}") from None
-    else:
-        try:
-            spec = load_typed_yaml(RunSpec, path=path)  # its errors name the file
-        except ConfigError as e:
-            raise ConfigError(f"--spec: {e}") from None
+        return spec_from_record(data, where)
+    try:
+        spec = load_typed_yaml(RunSpec, path=path)  # its errors name the file
+    except ConfigError as e:
+        raise ConfigError(f"--spec: {e}") from None
     return spec.check(where)
-
-
-def dump_run_spec(spec: RunSpec) -> str:
-    """The spec as JSON text (what `load_run_spec` reads)."""
-    return json.dumps(run_spec_plain(spec), indent=1)

@@ -399,13 +399,22 @@ def run_spec_of_settings(settings: dict, where: str) -> RunSpec:
 
 def read_run_spec(path: str | Path) -> RunSpec:
     """The `RunSpec` of `--spec FILE`: a benchmark's `settings.json` (or its run
-    directory), a sim's or eval's `--json`, or a spec file (`diagrams.run_spec`)."""
-    from emonav_drake.diagrams.run_spec import load_run_spec, looks_like_settings
-    from emonav_drake.json_input import read_json
+    directory), a sim's or eval's `--json`, or a spec file (`diagrams.run_spec`); the
+    file is read once."""
+    from emonav_drake.diagrams.run_spec import (
+        is_settings,
+        load_run_spec,
+        read_record,
+        spec_from_record,
+    )
 
     path = Path(path)
     if path.is_dir() and (path / "settings.json").is_file():
         path = path / "settings.json"
-    if looks_like_settings(path):
-        return run_spec_of_settings(read_json(path), f"--spec {path}")
-    return load_run_spec(path)
+    where = f"--spec {path}"
+    data = read_record(path, where)
+    if not isinstance(data, dict):
+        return load_run_spec(path)  # YAML, or the refusal of what is no JSON object
+    if is_settings(data):
+        return run_spec_of_settings(data, where)
+    return spec_from_record(data, where)

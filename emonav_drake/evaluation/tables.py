@@ -230,6 +230,14 @@ def table2_rows(summary: dict, reads: dict | None = None) -> tuple[list[str], li
     rows = [
         [m, _sr(s), format_nt(s), s["DT"], f"{s['DT_per_trial']:.2f}"] for m, s in summary.items()
     ]
+    return _with_reads(header, rows, reads)
+
+
+def _with_reads(
+    header: list[str], rows: list[list[object]], reads: dict | None
+) -> tuple[list[str], list[list[object]]]:
+    """The table with the reads column appended (`READS_HEADER`; a row by its method, the
+    first cell), or as it is without `reads`."""
     if reads:
         header.append(READS_HEADER)
         for row in rows:
@@ -253,11 +261,7 @@ def table3_rows(
     rows = [
         [m, setting, plant, obs.get(m, "state"), format_idt(s), _sr(s)] for m, s in summary.items()
     ]
-    if reads:
-        header.append(READS_HEADER)
-        for row in rows:
-            row.append(reads.get(row[0], "?"))
-    return header, rows
+    return _with_reads(header, rows, reads)
 
 
 def social_rows(summary: dict, plant: str) -> tuple[list[str], list[list[object]]]:

@@ -63,7 +63,6 @@ class EmoNavDigitEnv(DrakeGymEnv):
         set_task(self, config, grid_kind, goal_radius)
         observation_space, action_space = self.observation_space, self.action_space
         self._scenario: Scenario | None = None
-        self._fallen = False
         self._reset_seed: int | None = None
         self._commands: list[list[float]] = []  # this episode's commands (for state_dict)
         self.navigation = None  # the episode's `DigitNavigationDiagram`
@@ -112,7 +111,6 @@ class EmoNavDigitEnv(DrakeGymEnv):
         elif not isinstance(scenario, Scenario):
             raise TypeError(f"options['scenario'] must be a Scenario, got {type(scenario)}")
         self._scenario = scenario.validate()
-        self._fallen = False
         self._reset_seed, self._commands = seed, []
         observation, info = super().reset(seed=seed)
         return observation, {**info, "scenario_seed": scenario.seed}
@@ -121,7 +119,7 @@ class EmoNavDigitEnv(DrakeGymEnv):
         if self.navigation is None:
             raise RuntimeError("call reset() before step()")
         stepper = self._stepper
-        if self._fallen or stepper.outcome() is not None:
+        if stepper.outcome() is not None:
             raise RuntimeError("the episode has ended: call reset()")
         command, _ = check_command(np.asarray(action, dtype=float), self.config.robot)
         self._commands.append([float(c) for c in command])
@@ -129,7 +127,6 @@ class EmoNavDigitEnv(DrakeGymEnv):
         self.action_port.FixValue(stepper.context, command)
         fell = stepper.advance()
         if fell is not None:  # the simulator gave up: a fall (an outcome, not a crash)
-            self._fallen = True
             observation = self.observation_port.Eval(stepper.context)
             info = {"outcome": fell.outcome, "episode_record": fell.to_json()}
             return observation, 0.0, True, False, info
@@ -177,7 +174,7 @@ class EmoNavDigitEnv(DrakeGymEnv):
             scenario = scenario_from_plain(state["scenario"])
             self.reset(seed=state["reset_seed"], options={"scenario": scenario})
             for k, command in enumerate(state["commands"]):
-                if self._fallen or self._stepper.outcome() is not None:
+                if self._stepper.outcome() is not None:
                     raise ValueError(f"the saved episode ended before its command {k}")
                 self.step(np.asarray(command, dtype=float))
         set_np_random_state(self, state)
