@@ -25,11 +25,11 @@ import time
 from pathlib import Path
 
 from emonav_drake.configs import CONFIG_DIR
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.diagrams.navigation_digit import run_digit_episode
 from emonav_drake.diagrams.walking import run_walk
 from emonav_drake.params import load_config
 from emonav_drake.planners.dwa import DwaPlanner
+from emonav_drake.scenarios.scenario import sample_scenario
 
 
 def main() -> None:

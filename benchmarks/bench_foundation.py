@@ -26,10 +26,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchmarks.reference.lgm_reference import lgm_frame_reference  # noqa: E402
 from benchmarks.reference.orca_reference import orca_velocities_reference  # noqa: E402
-from emonav_drake.core import crowd as crowd_module  # noqa: E402
-from emonav_drake.core.grid_maps import lgm_frame  # noqa: E402
-from emonav_drake.core.orca import OrcaParams, orca_velocities  # noqa: E402
+from emonav_drake.crowd import crowd as crowd_module  # noqa: E402
+from emonav_drake.crowd.orca import OrcaParams, orca_velocities  # noqa: E402
 from emonav_drake.learning.env import EmoNavLIPEnv  # noqa: E402
+from emonav_drake.sensing.grid_maps import lgm_frame  # noqa: E402
 
 
 def median_time(fn, args_list, repeat: int) -> float:
@@ -91,7 +91,7 @@ def env_steps_per_second(steps: int, reference: bool) -> float:
         crowd_module.orca_velocities = lambda *a, check_inputs=True, **k: orca_velocities_reference(
             *a, **k
         )
-        import emonav_drake.core.navigation as nav
+        import emonav_drake.navigation.lip_world as nav
 
         saved_frame = nav.lgm_frame
         nav.lgm_frame = lambda *a, **k: lgm_frame_reference(*a[:5], kind=k.get("kind", "lgm"))

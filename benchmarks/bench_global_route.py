@@ -1,5 +1,5 @@
 """Global route planning time (one core): the visibility-graph planner of
-`core/global_route.py` on three maps, against the 50 ms budget for a 3-room floor, and
+`scenarios/global_route.py` on three maps, against the 50 ms budget for a 3-room floor, and
 Drake's Graph of Convex Sets on the same floor (`--gcs`): IRIS regions of the free space
 (seeded from a 0.5 m grid of free points until every one is covered; built once per map)
 and `GcsTrajectoryOptimization` with piecewise-linear segments, the path-length cost and
@@ -25,7 +25,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from emonav_drake.core.global_route import StaticMap, plan_route, route_length  # noqa: E402
+from emonav_drake.scenarios.global_route import StaticMap, plan_route, route_length  # noqa: E402
 
 BUDGET_MS = 50.0
 CLEARANCE = 0.35
@@ -95,7 +95,7 @@ def gcs_floor(m: StaticMap, start: list[float], goal: list[float], repeats: int)
     )
     from pydrake.planning import GcsTrajectoryOptimization
 
-    from emonav_drake.core.global_route import _free
+    from emonav_drake.scenarios.global_route import _free
 
     logging.getLogger("drake").setLevel(logging.WARNING)
     obstacles = []

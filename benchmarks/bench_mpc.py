@@ -32,10 +32,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from emonav_drake.core.navigation import NavigationWorld  # noqa: E402
-from emonav_drake.core.scenario import sample_scenario  # noqa: E402
+from emonav_drake.navigation.lip_world import NavigationWorld  # noqa: E402
 from emonav_drake.params import EmoNavConfig, load_config  # noqa: E402
 from emonav_drake.planners.mpc import MpcPlanner  # noqa: E402
+from emonav_drake.scenarios.scenario import sample_scenario  # noqa: E402
 
 BUDGET_MS = 5.0
 

@@ -20,11 +20,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from emonav_drake.core.lgm_shield import lgm_hit_points  # noqa: E402
-from emonav_drake.core.navigation import NavigationWorld  # noqa: E402
-from emonav_drake.core.scenario import sample_scenario  # noqa: E402
+from emonav_drake.navigation.lip_world import NavigationWorld  # noqa: E402
 from emonav_drake.params import EmoNavConfig  # noqa: E402
 from emonav_drake.planners import configure_for, make_planner  # noqa: E402
+from emonav_drake.planning.lgm_shield import lgm_hit_points  # noqa: E402
+from emonav_drake.scenarios.scenario import sample_scenario  # noqa: E402
 
 
 def main() -> None:

@@ -15,7 +15,7 @@ from emonav_drake.config_fields import setting
 HAPPY, NEUTRAL, NEGATIVE = 0, 1, 2
 EMOTION_NAMES = ("happy", "neutral", "negative")
 
-# The named scenario samplers (`CrowdParams.family`, core/scenario_families.py).
+# The named scenario samplers (`CrowdParams.family`, scenarios/scenario_families.py).
 SCENARIO_FAMILIES = (
     "paper",
     "circle_crossing",
@@ -94,7 +94,7 @@ class CrowdParams:
         2.0, "time-varying mode: period of the changes", "s", (0.1, 100.0)
     )
     family: str = setting(
-        "paper", 'the scenario sampler (core/scenario_families.py): "paper" is §IV-B\'s arena'
+        "paper", 'the scenario sampler (scenarios/scenario_families.py): "paper" is §IV-B\'s arena'
     )
 
 

@@ -71,7 +71,7 @@ class PerceptionParams:
     what the state-based planners (DWA, MPC, SARL, RGL) read: "truth", the simulator's
     exact crowd (privileged: every pedestrian, also hidden ones), or "lidar", the
     pedestrians and obstacles detected in the 1800-beam scan and tracked at the scan's
-    rate (`core/lidar_objects.py`, `core/crowd_tracker.py`): what a robot can run.
+    rate (`sensing/lidar_objects.py`, `sensing/crowd_tracker.py`): what a robot can run.
     """
 
     state_source: str = setting("truth", '"truth" (the simulator\'s crowd) or "lidar" (tracked)')
@@ -117,7 +117,7 @@ class SensorParams:
     people_as: str = setting(
         "disc",
         '"disc" (a pedestrian is one disc of crowd.pedestrian_radius) or "legs" (two leg '
-        "discs that swing with the gait, core/pedestrian_legs.py); only the real scan",
+        "discs that swing with the gait, crowd/pedestrian_legs.py); only the real scan",
     )
     angular_resolution_deg: float = setting(
         0.0,

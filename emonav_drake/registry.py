@@ -1,6 +1,6 @@
 """A named registry: what the package lets a user add by name without editing a list.
 
-Planners (`planners.registry`), observation kinds (`core.observations`) and plants
+Planners (`planners.registry`), observation kinds (`navigation.observations`) and plants
 (`diagrams.plants`) are each a `Registry`: a read-only mapping name → entry, in
 registration order, that only `add` and `remove` change.
 """

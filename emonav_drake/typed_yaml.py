@@ -7,7 +7,7 @@ that every mistake raises `ConfigError` naming the dotted field; the dump back t
 and the check of a dataclass's values against the ranges its fields declare
 (`validate_fields`; the fields' doc, unit and range are `config_fields.setting`'s). It
 knows no particular configuration: `params.py` holds the project's (`EmoNavConfig`,
-`load_config`, `dump_config`), `learning/config.py` the training ones, `core/scenario.py`
+`load_config`, `dump_config`), `learning/config.py` the training ones, `scenarios/scenario.py`
 the scenarios; all of them load and check through here.
 
 Every YAML text is checked before any loader builds it (`check_yaml_text`): at most

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from emonav_drake.core.navigation import PlannerInput
+from emonav_drake.navigation.lip_world import PlannerInput
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners import PlannerKind, register
 

@@ -81,10 +81,10 @@ def _decisions(path: Path) -> dict:
     (numpy only, the same on any machine)."""
     import numpy as np
 
-    from emonav_drake.core.navigation import NavigationWorld
-    from emonav_drake.core.scenario import sample_scenario
+    from emonav_drake.navigation.lip_world import NavigationWorld
     from emonav_drake.params import EmoNavConfig
     from emonav_drake.planners.policy import PolicyPlanner
+    from emonav_drake.scenarios.scenario import sample_scenario
 
     student = PolicyPlanner(path)
     cfg = EmoNavConfig()

@@ -13,7 +13,7 @@ imitated the planner perfectly would do). Learned planners run their default che
 (`--checkpoint NAME=PATH`: another policy file) on the observation it reads;
 `--shield-margin`, `--brake-steps`, `--static-margin`, `--uniform`, `--predict-motion`
 and `--comfort-weight` set the LGM shield's parameters of the shielded ones
-(`core/lgm_shield.py`), whose line also counts the steps where no command passed the
+(`planning/lgm_shield.py`), whose line also counts the steps where no command passed the
 shield. Prints SR, collision and timeout counts, NT and DT per planner, and the failing
 seeds. Use tuning seeds (e.g. 700 000+), never the evaluation seeds 0–499.
 """
@@ -23,14 +23,14 @@ from __future__ import annotations
 import argparse
 import dataclasses as dc
 
-from emonav_drake.core.metrics import summarize
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.learning.demonstrations import command_index
+from emonav_drake.navigation.lip_world import NavigationWorld
+from emonav_drake.navigation.metrics import summarize
 from emonav_drake.params import EmoNavConfig, EpisodeParams
 from emonav_drake.planners import configure_for, make_planner
 from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.model_aware import load_response
+from emonav_drake.scenarios.scenario import sample_scenario
 
 
 def main() -> None:

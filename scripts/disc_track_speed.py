@@ -18,9 +18,9 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 
 from emonav_drake.configs import load_setting
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.diagrams.navigation import build_navigation_diagram
 from emonav_drake.planners import make_planner
+from emonav_drake.scenarios.scenario import sample_scenario
 
 
 def main() -> None:

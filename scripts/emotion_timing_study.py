@@ -90,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
 def summarise(results: list[dict], families: list[str], variants: list[str]) -> dict:
     """Per (family, variant) and per variant over all families: `summarise_approaches` of
     the samples, the episodes, and the negative-zone steps per episode."""
-    from emonav_drake.core.emotion_timing import summarise_approaches
+    from emonav_drake.navigation.emotion_timing import summarise_approaches
 
     def block(rows: list[dict]) -> dict:
         samples = [s for r in rows for s in r["samples"]]

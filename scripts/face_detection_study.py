@@ -145,7 +145,7 @@ def plot(summary: dict, png) -> None:
     import matplotlib.pyplot as plt
     from matplotlib.colors import LinearSegmentedColormap
 
-    from emonav_drake.core import palette
+    from emonav_drake import palette
 
     # the share found, from paper (none) to the data colour (all)
     cmap = LinearSegmentedColormap.from_list("found", [palette.PAPER_RGB, palette.DATA_RGB])

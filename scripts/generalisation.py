@@ -29,9 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
-from emonav_drake.core.palette import INK_RGB, PAPER_RGB
 from emonav_drake.evaluation.run_directory import read_trials
 from emonav_drake.evaluation.tables import wilson_interval
+from emonav_drake.palette import INK_RGB, PAPER_RGB
 from emonav_drake.params import SCENARIO_FAMILIES
 
 ROOT = Path(__file__).resolve().parent.parent

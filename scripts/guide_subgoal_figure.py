@@ -1,4 +1,4 @@
-"""Draw what the "guide" goal input shows a policy (`core/goal_input.py`).
+"""Draw what the "guide" goal input shows a policy (`navigation/goal_input.py`).
 
     python scripts/guide_subgoal_figure.py [--seeds 600003 600017] [--out FILE.png]
 
@@ -19,9 +19,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from emonav_drake.core.goal_input import guide_subgoal  # noqa: E402
-from emonav_drake.core.navigation import NavigationWorld  # noqa: E402
-from emonav_drake.core.palette import (  # noqa: E402
+from emonav_drake.navigation.goal_input import guide_subgoal  # noqa: E402
+from emonav_drake.navigation.lip_world import NavigationWorld  # noqa: E402
+from emonav_drake.palette import (  # noqa: E402
     GOAL_RGB,
     OKABE_ITO,
     REFERENCE_RGB,
@@ -29,9 +29,9 @@ from emonav_drake.core.palette import (  # noqa: E402
     STATIC_RGB,
     ZONE_EDGE_RGB,
 )
-from emonav_drake.core.scenario import sample_scenario  # noqa: E402
 from emonav_drake.params import EmoNavConfig  # noqa: E402
 from emonav_drake.planners.mpc import MpcPlanner  # noqa: E402
+from emonav_drake.scenarios.scenario import sample_scenario  # noqa: E402
 
 GUIDE_RGB = OKABE_ITO["reddish_purple"]  # the guide sub-goal's bearing
 

@@ -98,9 +98,9 @@ def run_episodes(
 ) -> tuple[list[dict], list, float]:
     from tqdm import tqdm
 
-    from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.params import EmoNavConfig
     from emonav_drake.planners import make_planner
+    from emonav_drake.scenarios.scenario import sample_scenario
 
     path, rec_path = out / "episodes.jsonl", out / "episode_records.jsonl"
     if path.is_file() and rec_path.is_file():
@@ -181,7 +181,7 @@ def plot(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from emonav_drake.core.palette import EMOTION_RGB, SERIES_RGB
+    from emonav_drake.palette import EMOTION_RGB, SERIES_RGB
 
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.3))
     ax = axes[0]
@@ -214,7 +214,7 @@ def plot(
     frac = c / np.maximum(c.sum(axis=1, keepdims=True), 1)
     from matplotlib.colors import LinearSegmentedColormap
 
-    from emonav_drake.core.palette import INK_RGB, PAPER_RGB
+    from emonav_drake.palette import INK_RGB, PAPER_RGB
 
     shade = LinearSegmentedColormap.from_list("paper_to_ink", [PAPER_RGB, INK_RGB])
     ax.imshow(frac, cmap=shade, vmin=0, vmax=1)

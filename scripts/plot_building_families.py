@@ -1,9 +1,9 @@
-"""Draw one scene of each building family (`core/scenario_families.py`).
+"""Draw one scene of each building family (`scenarios/scenario_families.py`).
 
     python scripts/plot_building_families.py [--seed 0] [--out FILE.png]
 
 For `t_junction`, `doorway` and `office`: the walls, the robot's start (its disc and
-heading) and goal, its shortest route round the walls (`core/global_route.py`, the
+heading) and goal, its shortest route round the walls (`scenarios/global_route.py`, the
 clearance the navigation stack plans with), and every pedestrian's start disc and its
 walked polyline start → waypoints → goal, in the colour of its emotion. World frame,
 metres.
@@ -21,16 +21,16 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from emonav_drake.core.global_route import StaticMap, plan_route  # noqa: E402
-from emonav_drake.core.palette import (  # noqa: E402
+from emonav_drake.diagrams.navigation import ROUTE_MARGIN  # noqa: E402
+from emonav_drake.palette import (  # noqa: E402
     EMOTION_RGB,
     GOAL_RGB,
     INK_RGB,
     ROBOT_RGB,
 )
-from emonav_drake.core.scenario_families import sample_family  # noqa: E402
-from emonav_drake.diagrams.navigation import ROUTE_MARGIN  # noqa: E402
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig  # noqa: E402
+from emonav_drake.scenarios.global_route import StaticMap, plan_route  # noqa: E402
+from emonav_drake.scenarios.scenario_families import sample_family  # noqa: E402
 
 BUILDINGS = ("t_junction", "doorway", "office")
 

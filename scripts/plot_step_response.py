@@ -3,7 +3,7 @@ predict, on the held-out episodes of the shipped calibration (docs/learning.md).
 
     python scripts/plot_step_response.py [--traces F] [--model M] [--out PNG]
 
-Colours: `core/palette.py` (Digit black, the LIP reddish purple, the fitted model blue,
+Colours: `palette.py` (Digit black, the LIP reddish purple, the fitted model blue,
 commands grey); a trace's method is named as in every figure (`method_label`).
 """
 
@@ -19,8 +19,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from emonav_drake.core import step_response as sr  # noqa: E402
-from emonav_drake.core.palette import (  # noqa: E402
+from emonav_drake.palette import (  # noqa: E402
     COMMAND_RGB,
     FITTED_RGB,
     LIP_DELAYED_RGB,
@@ -30,6 +29,7 @@ from emonav_drake.core.palette import (  # noqa: E402
 from emonav_drake.params import EmoNavConfig  # noqa: E402
 from emonav_drake.planners.legacy import method_label  # noqa: E402
 from emonav_drake.planners.model_aware import DIGIT_RESPONSE, read_response  # noqa: E402
+from emonav_drake.robot import step_response as sr  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 

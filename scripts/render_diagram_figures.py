@@ -9,12 +9,12 @@ from __future__ import annotations
 import subprocess
 from pathlib import Path
 
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.diagrams.digit_station import DigitStation
 from emonav_drake.diagrams.navigation import build_navigation_diagram
 from emonav_drake.diagrams.navigation_digit import build_digit_navigation_diagram
 from emonav_drake.params import load_config
 from emonav_drake.planners.dwa import DwaPlanner
+from emonav_drake.scenarios.scenario import sample_scenario
 
 OUT = Path(__file__).resolve().parent.parent / "docs" / "figures"
 

@@ -43,7 +43,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from emonav_drake.core import palette  # noqa: E402
+from emonav_drake import palette  # noqa: E402
 from emonav_drake.evaluation.tables import wilson_interval  # noqa: E402
 
 

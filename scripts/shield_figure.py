@@ -1,4 +1,4 @@
-"""Draw one walking step of the LGM shield (`core/lgm_shield.py`) in the robot frame.
+"""Draw one walking step of the LGM shield (`planning/lgm_shield.py`) in the robot frame.
 
     python scripts/shield_figure.py [--seed 700089] [--planner policy_shield] \\
         [--out docs/figures/shield_step.png]
@@ -23,9 +23,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from emonav_drake.core.lgm_shield import lgm_hit_points, path_gaps  # noqa: E402
-from emonav_drake.core.navigation import NavigationWorld  # noqa: E402
-from emonav_drake.core.palette import (  # noqa: E402
+from emonav_drake.navigation.lip_world import NavigationWorld  # noqa: E402
+from emonav_drake.palette import (  # noqa: E402
     EMOTION_RGB,
     GOAL_RGB,
     INK_RGB,
@@ -35,9 +34,10 @@ from emonav_drake.core.palette import (  # noqa: E402
     SHADE_RGB,
     STATIC_RGB,
 )
-from emonav_drake.core.scenario import sample_scenario  # noqa: E402
 from emonav_drake.params import EmoNavConfig, EpisodeParams  # noqa: E402
 from emonav_drake.planners import configure_for, make_planner  # noqa: E402
+from emonav_drake.planning.lgm_shield import lgm_hit_points, path_gaps  # noqa: E402
+from emonav_drake.scenarios.scenario import sample_scenario  # noqa: E402
 
 MOVING_RGB = OKABE_ITO["vermillion"]
 BLOCKED_RGB = SHADE_RGB  # a blocked command's path

@@ -1,11 +1,11 @@
-"""ALIP prediction and foot placement (core/alip.py) against hand-computed cases."""
+"""ALIP prediction and foot placement (robot/alip.py) against hand-computed cases."""
 
 import math
 
 import numpy as np
 import pytest
 
-from emonav_drake.core.alip import (
+from emonav_drake.robot.alip import (
     alip_predict,
     foot_placement,
     lateral_momentum_target,
@@ -13,7 +13,7 @@ from emonav_drake.core.alip import (
     swing_height,
     swing_horizontal,
 )
-from emonav_drake.core.lip import foot_offset
+from emonav_drake.robot.lip import foot_offset
 
 M, H, G, T = 46.0, 0.89, 9.81, 0.4
 

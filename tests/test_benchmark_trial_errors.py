@@ -23,13 +23,13 @@ from pathlib import Path
 import pytest
 
 from emonav_drake.cli import main
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.evaluation.benchmark import run_benchmark
 from emonav_drake.evaluation.run_directory import comparable, read_trials
 from emonav_drake.evaluation.run_settings import BenchmarkSettingsError
 from emonav_drake.params import EmoNavConfig, load_config
 from emonav_drake.planners import unregister
+from emonav_drake.scenarios.scenario import sample_scenario
 
 FIRST, TRIALS = 4, 3  # seeds 4, 5, 6
 BAD = 5  # the seed whose scene the plug-in misbehaves on

@@ -5,11 +5,11 @@ walk those routes through the doors in the crowd simulation."""
 import numpy as np
 import pytest
 
-from emonav_drake.core.crowd import Crowd
-from emonav_drake.core.global_route import StaticMap, clearance_violations, plan_route
-from emonav_drake.core.scenario import dump_scenario
-from emonav_drake.core.scenario_families import MIXED_FAMILIES, _crosses, sample_family
+from emonav_drake.crowd.crowd import Crowd
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.scenarios.global_route import StaticMap, clearance_violations, plan_route
+from emonav_drake.scenarios.scenario import dump_scenario
+from emonav_drake.scenarios.scenario_families import MIXED_FAMILIES, _crosses, sample_family
 
 CFG = EmoNavConfig()
 BUILDINGS = ("t_junction", "doorway", "office")
@@ -110,7 +110,7 @@ def test_walled_families_are_the_families_whose_scenes_have_walls():
     """The route layer is built only where a family's scenes have walls, and the labels
     name it only there: `WALLED_FAMILIES` must agree with the scenes drawn (`mixed` draws
     walled and open scenes alike, so both kinds occur among its seeds)."""
-    from emonav_drake.core.scenario_families import FAMILIES, WALLED_FAMILIES
+    from emonav_drake.scenarios.scenario_families import FAMILIES, WALLED_FAMILIES
 
     for name in FAMILIES:
         walled = [

@@ -11,11 +11,11 @@ import json
 import numpy as np
 import pytest
 
-from emonav_drake.core import step_response as sr
-from emonav_drake.core.lip import LipState
 from emonav_drake.learning.calibration import collect_traces, fit_response
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.model_aware import DIGIT_RESPONSE, load_response, read_response
+from emonav_drake.robot import step_response as sr
+from emonav_drake.robot.lip import LipState
 
 
 def _short(steps: int) -> EmoNavConfig:

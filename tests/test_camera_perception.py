@@ -13,17 +13,17 @@ from pydrake.math import RigidTransform
 from pydrake.systems.analysis import Simulator
 
 from emonav_drake.cli import main
-from emonav_drake.core.pedestrian_pose import (
+from emonav_drake.crowd.pedestrian_pose import (
     HIDDEN_DEPTH,
     PedestrianBody,
     bearing_and_facing,
     facing_headings,
 )
-from emonav_drake.core.scenario import PedestrianSpec, Scenario, sample_scenario
 from emonav_drake.diagrams.navigation import build_navigation_diagram
 from emonav_drake.params import EMOTION_NAMES, HAPPY, NEGATIVE, NEUTRAL, EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams, HeadCameraParams
 from emonav_drake.planners import make_planner
+from emonav_drake.scenarios.scenario import PedestrianSpec, Scenario, sample_scenario
 from emonav_drake.systems.pedestrian_bodies import FACES_DIR
 from tests.cli_errors import assert_user_error, run
 
@@ -337,7 +337,7 @@ def test_the_default_camera_is_the_zed2_at_hd720_and_640x480_stays_selectable(tm
 def test_a_wall_hides_a_face_from_the_camera():
     """The face 2 m ahead is found; with a wall 1 m ahead across the view it is not (the
     camera renders the scenario's walls)."""
-    from emonav_drake.core.scenario import WallSpec
+    from emonav_drake.scenarios.scenario import WallSpec
 
     seen = _one_pedestrian("happy", facing_robot=True)
     estimate, _, _, _ = _first_frame(seen, VGA)

@@ -108,8 +108,8 @@ def test_sim_with_misclassified_emotions(tmp_path):
 
 def test_shipped_example_scenarios_load_and_run_by_name(tmp_path, capsys):
     """Every example scenario is valid and runs by its name; a bad name lists them."""
-    from emonav_drake.core.scenario import load_scenario
     from emonav_drake.scenarios import EXAMPLES, scenario_path
+    from emonav_drake.scenarios.scenario import load_scenario
 
     for name in EXAMPLES:
         sc = load_scenario(scenario_path(name))
@@ -174,10 +174,10 @@ def test_the_progress_bar_changes_no_lip_episode(capsys):
 
     import numpy as np
 
-    from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation import run_episode
     from emonav_drake.params import load_config
     from emonav_drake.planners import make_planner
+    from emonav_drake.scenarios.scenario import sample_scenario
 
     cfg = load_config()
     runs = []

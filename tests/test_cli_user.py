@@ -7,7 +7,7 @@ import sys
 import pytest
 
 from emonav_drake.cli import build_parser, main, package_version
-from emonav_drake.core.metrics import format_idt
+from emonav_drake.navigation.metrics import format_idt
 
 
 def test_version_is_the_installed_package(capsys):
@@ -101,10 +101,10 @@ def test_config_list_descriptions_are_whole_sentences(capsys):
 def test_replay_caption_names_the_planner_and_a_file_only_if_chosen(tmp_path):
     import shutil
 
-    from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.meshcat_viewing import ReplayCaption
     from emonav_drake.params import EmoNavConfig
     from emonav_drake.planners import make_planner, planner_kind
+    from emonav_drake.scenarios.scenario import sample_scenario
 
     cfg = EmoNavConfig()
     scenario = sample_scenario(3, cfg)

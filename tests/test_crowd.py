@@ -1,8 +1,13 @@
 import numpy as np
 
-from emonav_drake.core.crowd import Crowd
-from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec, sample_scenario
+from emonav_drake.crowd.crowd import Crowd
 from emonav_drake.params import NEGATIVE, NEUTRAL, EmoNavConfig
+from emonav_drake.scenarios.scenario import (
+    PedestrianSpec,
+    Scenario,
+    StaticDiscSpec,
+    sample_scenario,
+)
 
 CFG = EmoNavConfig()
 FAR = np.array([100.0, 100.0])

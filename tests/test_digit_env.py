@@ -11,13 +11,13 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import emonav_drake  # noqa: F401  (registers the environments)
-from emonav_drake.core.navigation import CommandError
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.diagrams.navigation_digit import run_digit_episode
 from emonav_drake.learning.digit_env import EmoNavDigitEnv
 from emonav_drake.learning.env import EmoNavLIPEnv
+from emonav_drake.navigation.lip_world import CommandError
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.replay import ReplayPlanner
+from emonav_drake.scenarios.scenario import sample_scenario
 
 
 def _short(steps: int) -> EmoNavConfig:

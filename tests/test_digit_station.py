@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from emonav_drake.core.walking_targets import DOUBLE_SUPPORT, WalkingTargets
 from emonav_drake.diagrams.digit_station import DigitStation
 from emonav_drake.diagrams.walking import build_walking_diagram, run_walk
 from emonav_drake.params import ConfigError, load_config
+from emonav_drake.robot.walking_targets import DOUBLE_SUPPORT, WalkingTargets
 from emonav_drake.systems.digit_plant import standing_state
 from emonav_drake.systems.fall_monitor import FallStatus
 from emonav_drake.systems.walking_command_source import command_sequence

@@ -47,8 +47,8 @@ def test_no_link_is_left_unresolved(built):
 
 def test_an_api_page_is_rendered_from_the_docstrings(built):
     _, site = built
-    page = (site / "api" / "core" / "index.html").read_text()
-    assert 'id="emonav_drake.core.lip.lip_step"' in page  # a function of core/lip.py
+    page = (site / "api" / "maths" / "index.html").read_text()
+    assert 'id="emonav_drake.robot.lip.lip_step"' in page  # a function of robot/lip.py
     assert "One walking step of the LIP model" in page  # and its docstring
 
 

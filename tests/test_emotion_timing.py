@@ -1,5 +1,5 @@
-"""Emotion known when it matters (`core/emotion_timing.py`) and the trace's perceived
-column (`core/episode_trace.py::perceived_emotions`, filled by the episode loop)."""
+"""Emotion known when it matters (`navigation/emotion_timing.py`) and the trace's perceived
+column (`navigation/episode_trace.py::perceived_emotions`, filled by the episode loop)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.core.emotion_timing import CameraView, approach_samples, summarise_approaches
-from emonav_drake.core.episode_trace import EpisodeTrace, perceived_emotions
+from emonav_drake.navigation.emotion_timing import (
+    CameraView,
+    approach_samples,
+    summarise_approaches,
+)
+from emonav_drake.navigation.episode_trace import EpisodeTrace, perceived_emotions
 
 DIST = np.array([0.2, 0.35, 0.5])  # happy, neutral, negative
 R_PED, R_ROBOT = 0.3, 0.3
@@ -72,11 +76,11 @@ def test_a_trace_without_perceived_emotions_is_refused():
 def test_a_lip_episode_records_what_the_planner_perceived():
     """The episode loop fills the column: with the simulator's crowd every pedestrian is
     perceived with its true emotion at every instant."""
-    from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.episode import EpisodeRequest
     from emonav_drake.diagrams.plants import plant_named
     from emonav_drake.params import EmoNavConfig
     from emonav_drake.planners import make_planner
+    from emonav_drake.scenarios.scenario import sample_scenario
 
     cfg = EmoNavConfig()
     cfg.episode.max_steps = 20

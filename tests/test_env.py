@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from emonav_drake.core.navigation import CommandError
 from emonav_drake.learning.env import EmoNavLIPEnv
+from emonav_drake.navigation.lip_world import CommandError
 from emonav_drake.planners.dwa import DwaPlanner
 
 

@@ -16,16 +16,16 @@ import numpy as np
 import pytest
 
 from emonav_drake.cli import main
-from emonav_drake.core.navigation import PlannerInput
-from emonav_drake.core.observations import (
+from emonav_drake.diagrams.plants import PLANTS, Plant, register_plant, unregister_plant
+from emonav_drake.diagrams.trials import method_specs
+from emonav_drake.navigation.lip_world import PlannerInput
+from emonav_drake.navigation.observations import (
     ObservationKind,
     ScanStack,
     observation_frame,
     register_observation,
     unregister_observation,
 )
-from emonav_drake.diagrams.plants import PLANTS, Plant, register_plant, unregister_plant
-from emonav_drake.diagrams.trials import method_specs
 from emonav_drake.planners import PlannerKind, register, unregister
 
 SECTORS = 8

@@ -13,9 +13,6 @@ import pytest
 import torch
 
 from emonav_drake.cli import main
-from emonav_drake.core.metrics import summarize
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning import finetune as finetune_mod
 from emonav_drake.learning.finetune import train_finetune
@@ -28,6 +25,8 @@ from emonav_drake.learning.finetune_state import (
 from emonav_drake.learning.replay import FrameReplayBuffer
 from emonav_drake.learning.run_state import read_run_state
 from emonav_drake.learning.sac_config import FinetuneConfig
+from emonav_drake.navigation.lip_world import NavigationWorld
+from emonav_drake.navigation.metrics import summarize
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.networks import Actor, CategoricalPolicy, LgmEncoder, ScanEncoder
 from emonav_drake.planners.policy import (
@@ -38,6 +37,7 @@ from emonav_drake.planners.policy import (
     vector_state,
 )
 from emonav_drake.planners.variants import VARIANTS
+from emonav_drake.scenarios.scenario import sample_scenario
 from tests.cli_errors import assert_user_error, run
 from tests.state_equality import assert_equal_state
 

@@ -21,10 +21,10 @@ import numpy as np
 import pytest
 
 from emonav_drake.cli import main
-from emonav_drake.core.metrics import EpisodeRecord
-from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec
 from emonav_drake.evaluation.trajectory import build_trajectory
+from emonav_drake.navigation.metrics import EpisodeRecord
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.scenarios.scenario import PedestrianSpec, Scenario, StaticDiscSpec
 from tests.cli_errors import assert_user_error, run
 from tests.small_disk import run_on_small_disk
 

@@ -1,4 +1,4 @@
-"""The route on the known static map (`core/global_route.py`): checked against the geometry."""
+"""The route on the known static map (`scenarios/global_route.py`): checked against the geometry."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.core.global_route import (
+from emonav_drake.scenarios.global_route import (
     NoRouteError,
     StaticMap,
     _segment_distances,
@@ -15,7 +15,7 @@ from emonav_drake.core.global_route import (
     plan_route,
     route_length,
 )
-from emonav_drake.core.walls import point_segment_distances
+from emonav_drake.scenarios.walls import point_segment_distances
 
 CLEARANCE = 0.35
 
@@ -155,10 +155,10 @@ def test_the_route_planner_system_plans_gives_the_subgoal_and_replans_when_stray
 def test_with_a_global_route_the_planner_steers_to_the_subgoal_and_without_to_the_goal():
     from pydrake.systems.framework import DiagramBuilder
 
-    from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation import AddNavigationStack, build_navigation_diagram
     from emonav_drake.params import EmoNavConfig
     from emonav_drake.planners import make_planner
+    from emonav_drake.scenarios.scenario import sample_scenario
     from emonav_drake.systems.lip_robot_plant import LipRobotPlant
 
     cfg = EmoNavConfig()
@@ -200,10 +200,10 @@ def test_with_a_global_route_the_planner_steers_to_the_subgoal_and_without_to_th
 
 
 def test_a_scene_whose_goal_no_route_reaches_is_refused_when_built():
-    from emonav_drake.core.scenario import Scenario, WallSpec
     from emonav_drake.diagrams.navigation import build_navigation_diagram, make_route_planner
     from emonav_drake.params import ConfigError, EmoNavConfig
     from emonav_drake.planners import make_planner
+    from emonav_drake.scenarios.scenario import Scenario, WallSpec
 
     cfg = EmoNavConfig()
     box = [[3, -1], [5, -1], [5, 1], [3, 1], [3, -1]]  # a closed room round the goal (4, 0)
@@ -228,11 +228,11 @@ def test_the_route_and_its_subgoal_are_drawn_in_meshcat():
     from pydrake.systems.analysis import Simulator
     from pydrake.systems.framework import DiagramBuilder
 
-    from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.meshcat_viewing import make_meshcat
     from emonav_drake.diagrams.navigation import AddNavigationStack, AddNavigationVisualizer
     from emonav_drake.params import EmoNavConfig
     from emonav_drake.planners import make_planner
+    from emonav_drake.scenarios.scenario import sample_scenario
     from emonav_drake.systems.lip_robot_plant import LipRobotPlant
 
     cfg = EmoNavConfig()
@@ -317,7 +317,7 @@ def test_a_disc_put_in_a_doorway_replans_through_the_other_door_then_leaves_no_r
 
 
 def _doorway_scene(appears_at: float):
-    from emonav_drake.core.scenario import Scenario, StaticDiscSpec, WallSpec
+    from emonav_drake.scenarios.scenario import Scenario, StaticDiscSpec, WallSpec
 
     walls = [WallSpec(start=a, end=b) for a, b in two_doors()[:5]]  # the lower door only
     walls.append(WallSpec(start=[4, 1.6], end=[4, 4]))
@@ -328,7 +328,7 @@ def _doorway_scene(appears_at: float):
 
 
 def test_a_robot_whose_only_door_is_closed_ends_its_trial_with_no_route():
-    from emonav_drake.core.crowd import Crowd
+    from emonav_drake.crowd.crowd import Crowd
     from emonav_drake.diagrams.episode import EpisodeRequest, run_navigation_episode
     from emonav_drake.diagrams.navigation import build_episode, make_route_planner
     from emonav_drake.params import ConfigError, EmoNavConfig
@@ -398,7 +398,7 @@ def test_widest_clearance_first_keeps_to_the_middle_of_a_door():
 
 
 def test_the_line_of_sight_subgoal_never_sends_the_robot_across_a_corner():
-    from emonav_drake.core.global_route import segments_clear
+    from emonav_drake.scenarios.global_route import segments_clear
     from emonav_drake.systems.global_route_planner import GlobalRoutePlanner
 
     m = office()
@@ -430,10 +430,10 @@ def _first_command(name: str, routed: bool) -> tuple[np.ndarray, np.ndarray, np.
     the goal) in a room whose wall stands across the straight line to the goal."""
     from pydrake.systems.analysis import Simulator
 
-    from emonav_drake.core.scenario import Scenario, WallSpec
     from emonav_drake.diagrams.navigation import build_navigation_diagram
     from emonav_drake.params import EmoNavConfig
     from emonav_drake.planners import configure_for, make_planner
+    from emonav_drake.scenarios.scenario import Scenario, WallSpec
 
     cfg = EmoNavConfig()
     cfg.route.enabled = routed
@@ -473,10 +473,10 @@ def test_every_local_planner_steers_to_the_route_s_subgoal(name):
 def test_the_route_layer_is_on_by_default_and_never_built_without_walls():
     """The default configuration enables the route layer, yet a scene of the paper's arena
     (no walls) gets no `global_route` system: the planner's goal is the episode's goal."""
-    from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation import build_navigation_diagram
     from emonav_drake.params import EmoNavConfig
     from emonav_drake.planners import make_planner
+    from emonav_drake.scenarios.scenario import sample_scenario
 
     cfg = EmoNavConfig()
     assert cfg.route.enabled

@@ -1,15 +1,15 @@
 """The goal a policy reads: the goal itself, or the bearing of a guide sub-goal around the
-static discs (`core/goal_input.py`), through the planner and the DAgger route."""
+static discs (`navigation/goal_input.py`), through the planner and the DAgger route."""
 
 import math
 
 import numpy as np
 import pytest
 
-from emonav_drake.core import goal_input as gi
-from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.core.lip import LipState
-from emonav_drake.core.mpc_guide import GuidePath
+from emonav_drake.crowd.crowd import CrowdSnapshot
+from emonav_drake.navigation import goal_input as gi
+from emonav_drake.planning.mpc_guide import GuidePath
+from emonav_drake.robot.lip import LipState
 
 R = 0.3  # robot radius [m]
 
@@ -97,11 +97,11 @@ def test_unknown_goal_input_is_refused():
 def test_a_guide_policy_reads_the_guide_and_an_old_checkpoint_the_goal(tmp_path):
     import torch
 
-    from emonav_drake.core.navigation import NavigationWorld
-    from emonav_drake.core.scenario import sample_scenario
+    from emonav_drake.navigation.lip_world import NavigationWorld
     from emonav_drake.params import EmoNavConfig
     from emonav_drake.planners.policy import PolicyPlanner, describe_policy
     from emonav_drake.planners.variants import VARIANTS
+    from emonav_drake.scenarios.scenario import sample_scenario
 
     src = VARIANTS["emobipednav_digit_mpc"].checkpoint
     ckpt = torch.load(src, map_location="cpu", weights_only=False)

@@ -29,7 +29,11 @@ import numpy as np
 import pytest
 
 from emonav_drake.config_fields import SEED_RANGE, WORLD_POINT, field_range
-from emonav_drake.core.scenario import (
+from emonav_drake.params import EmoNavConfig, load_config
+from emonav_drake.perception.image_io import HARD_MAX_PIXELS, image_header_size
+from emonav_drake.perception.noisy_emotions import EmotionEstimateParams, HeadCameraParams
+from emonav_drake.planners.specs import EXPERT_SPECS
+from emonav_drake.scenarios.scenario import (
     MAX_SCHEDULE,
     PedestrianSpec,
     Scenario,
@@ -37,10 +41,6 @@ from emonav_drake.core.scenario import (
     WallSpec,
     load_scenario,
 )
-from emonav_drake.params import EmoNavConfig, load_config
-from emonav_drake.perception.image_io import HARD_MAX_PIXELS, image_header_size
-from emonav_drake.perception.noisy_emotions import EmotionEstimateParams, HeadCameraParams
-from emonav_drake.planners.specs import EXPERT_SPECS
 from emonav_drake.typed_yaml import MAX_YAML_BYTES, MAX_YAML_VALUES, ConfigError
 from tests.cli_errors import assert_user_error, run
 

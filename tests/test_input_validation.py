@@ -263,8 +263,8 @@ def test_scenarios_that_cannot_start_an_episode_are_refused(tmp_path, capsys, ya
 
 def test_the_sampler_never_draws_a_refused_scenario():
     """Seeds 0-999 of the default configuration pass every check of a scenario file."""
-    from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.params import load_config
+    from emonav_drake.scenarios.scenario import sample_scenario
 
     cfg = load_config()
     goal_radius = max(cfg.episode.goal_radius, cfg.episode.eval_goal_radius)
@@ -312,7 +312,7 @@ def test_the_last_seed_of_a_range_must_fit_too(tmp_path, capsys):
 
 def test_the_largest_seed_is_accepted():
     from emonav_drake.cli.common import parse_seed
-    from emonav_drake.core.scenario import sample_scenario
+    from emonav_drake.scenarios.scenario import sample_scenario
 
     assert parse_seed(str(2**64 - 1), "--seed") == 2**64 - 1
     assert sample_scenario(2**64 - 1).seed == 2**64 - 1

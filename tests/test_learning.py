@@ -4,8 +4,6 @@ import numpy as np
 import pytest
 import torch
 
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.dagger_rollouts import run_episode_collect
 from emonav_drake.learning.dagger_student import Student
@@ -13,6 +11,7 @@ from emonav_drake.learning.demonstrations import Demonstrations, FrameStore, com
 from emonav_drake.learning.sac import SacAgent
 from emonav_drake.learning.sac_config import SacConfig
 from emonav_drake.learning.sac_trainer import train_sac
+from emonav_drake.navigation.lip_world import NavigationWorld
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.model_aware import load_response
@@ -20,6 +19,7 @@ from emonav_drake.planners.mpc import MpcPlanner
 from emonav_drake.planners.networks import Actor, Critic, LgmEncoder
 from emonav_drake.planners.policy import PolicyError, PolicyPlanner, load_policy, save_policy
 from emonav_drake.planners.specs import MpcNearbySpec, MpcSpec, ShieldSpec
+from emonav_drake.scenarios.scenario import sample_scenario
 
 
 def n_params(m):
@@ -228,7 +228,7 @@ def test_torchscript_export_matches_the_checkpoint(tmp_path):
 
 
 def test_drlvo_variant_observation_and_training(tmp_path):
-    from emonav_drake.core.kinematic_maps import pedestrian_velocity_map
+    from emonav_drake.sensing.kinematic_maps import pedestrian_velocity_map
 
     # A pedestrian 2 m ahead walking to the robot's left at 1 m/s (robot heading +90°).
     vmap = pedestrian_velocity_map(
@@ -430,7 +430,7 @@ def test_an_mpc_nearby_expert_walks_the_policys_best_command_next_to_the_mpcs():
     grid step of the MPC's in both components, it is the policy's best-scored such command,
     and the soft label is the policy's softmax renormalised on exactly those commands; with
     a reach wider than the grid the expert is the bare policy."""
-    from emonav_drake.core.nearby_labels import nearby_mask
+    from emonav_drake.planning.nearby_labels import nearby_mask
 
     env_cfg = EmoNavConfig()
     response = load_response("digit")
@@ -461,8 +461,8 @@ def test_an_mpc_nearby_expert_walks_the_policys_best_command_next_to_the_mpcs():
 
 
 def test_nearby_labels_reject_what_they_cannot_use():
-    from emonav_drake.core.nearby_labels import grid_steps, nearby_mask, restricted_softmax
     from emonav_drake.params import ConfigError
+    from emonav_drake.planning.nearby_labels import grid_steps, nearby_mask, restricted_softmax
 
     grid = np.array([[0.0, -0.1], [0.0, 0.0], [0.2, 0.0], [0.4, 0.1]])
     np.testing.assert_allclose(grid_steps(grid), [0.2, 0.1])
@@ -485,8 +485,8 @@ def test_a_shielded_mpc_nearby_expert_chooses_only_what_the_shield_admits():
     """`MpcNearbySpec.shielded`: the MPC's neighbourhood is cut to the commands the policy's own LGM
     shield admits; the label is the policy's softmax on what is left (or, where nothing is,
     the shield's distribution), and on seed 10⁶ + 34 the shield removes nearby commands."""
-    from emonav_drake.core.lgm_shield import shield_distribution
-    from emonav_drake.core.nearby_labels import nearby_mask
+    from emonav_drake.planning.lgm_shield import shield_distribution
+    from emonav_drake.planning.nearby_labels import nearby_mask
 
     env_cfg = EmoNavConfig()
     response = load_response("digit")

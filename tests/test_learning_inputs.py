@@ -17,7 +17,6 @@ import pytest
 import torch
 
 from emonav_drake.cli import main
-from emonav_drake.core.navigation import NavigationWorld
 from emonav_drake.learning import dagger as dagger_mod
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.dagger import train_dagger
@@ -35,6 +34,7 @@ from emonav_drake.learning.run_state import (
 )
 from emonav_drake.learning.sac_config import SacConfig
 from emonav_drake.learning.sac_trainer import train_sac
+from emonav_drake.navigation.lip_world import NavigationWorld
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import PolicyError, load_policy
 from emonav_drake.planners.specs import DwaSpec

@@ -1,8 +1,8 @@
 """People as legs in a noisy scan: the leg detector and the tracker on it (issue 47 item 3).
 
-Real components throughout: the sensor model's scan (`core/lidar_sensor.py`, the vlp16
+Real components throughout: the sensor model's scan (`sensing/lidar_sensor.py`, the vlp16
 preset: noise, dropouts, mixed pixels, spurious returns, two legs per walking person),
-the detector (`core/lidar_objects.py` + `core/leg_detection.py`), the tracker.
+the detector (`sensing/lidar_objects.py` + `sensing/leg_detection.py`), the tracker.
 """
 
 from __future__ import annotations
@@ -12,13 +12,13 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.core.crowd_tracker import CrowdTracker, tracker_params
-from emonav_drake.core.leg_detection import detect_scan, detection_params
-from emonav_drake.core.lidar_objects import DetectionParams, detect_objects
-from emonav_drake.core.lidar_sensor import sensed_ranges
-from emonav_drake.core.pedestrian_legs import GAIT_CYCLE_LENGTH
+from emonav_drake.crowd.crowd import CrowdSnapshot
+from emonav_drake.crowd.pedestrian_legs import GAIT_CYCLE_LENGTH
 from emonav_drake.params import EmoNavConfig, apply_sensor_preset
+from emonav_drake.sensing.crowd_tracker import CrowdTracker, tracker_params
+from emonav_drake.sensing.leg_detection import detect_scan, detection_params
+from emonav_drake.sensing.lidar_objects import DetectionParams, detect_objects
+from emonav_drake.sensing.lidar_sensor import sensed_ranges
 
 ROBOT = np.zeros(2)
 

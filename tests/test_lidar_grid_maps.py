@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from benchmarks.reference.lgm_reference import ranges_per_beam
-from emonav_drake.core.grid_maps import FrameStack, lgm_frame, lgm_from_ranges, ogm_from_ranges
-from emonav_drake.core.grid_resolution import (
+from emonav_drake.sensing.grid_maps import FrameStack, lgm_frame, lgm_from_ranges, ogm_from_ranges
+from emonav_drake.sensing.grid_resolution import (
     lgm_cell_area,
     lgm_mean_resolution,
     lgm_resolution,
@@ -20,7 +20,7 @@ from emonav_drake.core.grid_resolution import (
     ogm_ring_circle_cell_counts,
     resolution_crossing_rings,
 )
-from emonav_drake.core.lidar import (
+from emonav_drake.sensing.lidar import (
     AUTHORS_BEAM_STEP,
     beam_angles,
     beam_step,

@@ -1,7 +1,7 @@
 """The LiDAR as a real sensor (issue 47, items 1 and 2): the fault model's statistics, the
 exact "ideal" path, pedestrians as legs, seeding, env = diagram, errors and the CLI.
 
-Real components throughout: scans are cast by `core/lidar_sensor.py::sensed_ranges` on
+Real components throughout: scans are cast by `sensing/lidar_sensor.py::sensed_ranges` on
 `CrowdSnapshot`s built here or by the `Crowd`, the diagram is the navigation diagram.
 Statistical tolerances are stated with each check (binomial counts: 5 standard
 deviations; moments: 5 % as the issue asks, far above their sampling error).
@@ -19,17 +19,11 @@ from cli_errors import assert_user_error, run
 from pydrake.systems.analysis import Simulator
 
 from emonav_drake.cli import main
-from emonav_drake.core.crowd import Crowd, CrowdSnapshot, obstacle_discs
-from emonav_drake.core.grid_maps import lgm_frame
-from emonav_drake.core.kinematic_maps import drlvo_image
-from emonav_drake.core.lidar import beam_step, cast_robot_frame, scan_discs
-from emonav_drake.core.lidar_faults import edge_partners, incidence_cosines
-from emonav_drake.core.lidar_sensor import grid_beam_sources, sensed_ranges, sensor_beam_count
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.observations import observation_frame
-from emonav_drake.core.pedestrian_legs import GAIT_CYCLE_LENGTH, HIP_HALF_WIDTH, STRIDE_AMPLITUDE
-from emonav_drake.core.scenario import PedestrianSpec, Scenario, sample_scenario
+from emonav_drake.crowd.crowd import Crowd, CrowdSnapshot, obstacle_discs
+from emonav_drake.crowd.pedestrian_legs import GAIT_CYCLE_LENGTH, HIP_HALF_WIDTH, STRIDE_AMPLITUDE
 from emonav_drake.diagrams.navigation import build_navigation_diagram
+from emonav_drake.navigation.lip_world import NavigationWorld
+from emonav_drake.navigation.observations import observation_frame
 from emonav_drake.params import (
     SENSOR_PRESETS,
     EmoNavConfig,
@@ -37,6 +31,12 @@ from emonav_drake.params import (
     load_config,
 )
 from emonav_drake.planners.dwa import DwaPlanner
+from emonav_drake.scenarios.scenario import PedestrianSpec, Scenario, sample_scenario
+from emonav_drake.sensing.grid_maps import lgm_frame
+from emonav_drake.sensing.kinematic_maps import drlvo_image
+from emonav_drake.sensing.lidar import beam_step, cast_robot_frame, scan_discs
+from emonav_drake.sensing.lidar_faults import edge_partners, incidence_cosines
+from emonav_drake.sensing.lidar_sensor import grid_beam_sources, sensed_ranges, sensor_beam_count
 from emonav_drake.systems.episode_monitor import episode_monitor_callback
 
 REAL = ("vlp16", "ust10lx")
@@ -392,7 +392,7 @@ def test_a_walking_person_shows_two_legs_whose_separation_swings_with_the_gait()
     assert np.allclose(step, 2 * np.pi * walked / GAIT_CYCLE_LENGTH, rtol=0.05)
     # the inflated (127) layer is the 0.3 m disc + its margin, as with the ideal sensor
     ideal = EmoNavConfig()
-    from emonav_drake.core.lidar_sensor import inflated_ranges
+    from emonav_drake.sensing.lidar_sensor import inflated_ranges
 
     assert np.array_equal(
         inflated_ranges(ORIGIN, 0.0, snap, cfg), inflated_ranges(ORIGIN, 0.0, snap, ideal)

@@ -1,6 +1,6 @@
 """Objects detected in the real 1800-beam LiDAR scan, and tracked across scans.
 
-Every scan here is `core.lidar.scan_discs`; crowds are the real ORCA `Crowd` where the
+Every scan here is `sensing.lidar.scan_discs`; crowds are the real ORCA `Crowd` where the
 pedestrians' motion matters, scripted constant-velocity walks where the test needs an
 exact straight line (a crossing, a velocity truth).
 """
@@ -13,12 +13,17 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.core.crowd import Crowd
-from emonav_drake.core.crowd_tracker import CrowdTracker, Track, TrackerParams
-from emonav_drake.core.lidar import scan_discs
-from emonav_drake.core.lidar_objects import DetectionParams, Detections, detect_objects
-from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec, sample_scenario
+from emonav_drake.crowd.crowd import Crowd
 from emonav_drake.params import HAPPY, NEGATIVE, NEUTRAL, EmoNavConfig
+from emonav_drake.scenarios.scenario import (
+    PedestrianSpec,
+    Scenario,
+    StaticDiscSpec,
+    sample_scenario,
+)
+from emonav_drake.sensing.crowd_tracker import CrowdTracker, Track, TrackerParams
+from emonav_drake.sensing.lidar import scan_discs
+from emonav_drake.sensing.lidar_objects import DetectionParams, Detections, detect_objects
 
 CFG = EmoNavConfig()
 L = CFG.lidar.max_range
@@ -333,7 +338,7 @@ def test_bad_inputs_are_refused():
 
 
 def _one(center, fixed: bool, radius: float = 0.3):
-    from emonav_drake.core.lidar_objects import Detections
+    from emonav_drake.sensing.lidar_objects import Detections
 
     return Detections(
         np.array([center], dtype=float), np.array([radius]), np.array([12]), np.array([fixed])
@@ -345,8 +350,8 @@ def test_a_fixed_object_neither_drifts_while_unseen_nor_takes_a_neighbours_detec
     noisy centres is a static object; hidden for 1.2 s it stays where it was (a tracker
     that predicts it with its noise-born velocity drifted and, its gate widened, took the
     detection of the disc beside it: a static obstacle where there is none)."""
-    from emonav_drake.core.crowd_tracker import CrowdTracker, tracker_params
     from emonav_drake.params import apply_sensor_preset
+    from emonav_drake.sensing.crowd_tracker import CrowdTracker, tracker_params
 
     cfg = EmoNavConfig()
     apply_sensor_preset(cfg, "vlp16")
@@ -371,8 +376,8 @@ def test_a_fixed_object_neither_drifts_while_unseen_nor_takes_a_neighbours_detec
 
 
 def test_a_walking_person_with_one_disc_like_scan_keeps_walking():
-    from emonav_drake.core.crowd_tracker import CrowdTracker, tracker_params
     from emonav_drake.params import apply_sensor_preset
+    from emonav_drake.sensing.crowd_tracker import CrowdTracker, tracker_params
 
     cfg = EmoNavConfig()
     apply_sensor_preset(cfg, "vlp16")

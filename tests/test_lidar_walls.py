@@ -5,7 +5,7 @@ not a circle, and never crashes the fit.
 lidar` stopped with "Singular matrix": a piece of wall cut off by the corner (153 beams on
 y = −1 and one on the next wall, 1.4 mm off the line) passed the algebraic fit's
 conditioning test, and Gauss-Newton, chasing a circle of ever larger radius, solved a
-singular normal matrix. Now such a cluster is a line (`core/lidar_objects.py`, step 3): it
+singular normal matrix. Now such a cluster is a line (`sensing/lidar_objects.py`, step 3): it
 leaves the refinement and takes the fallback disc; no matrix is solved unchecked.
 
 The second half runs every scene family × every planner that reads the crowd state with
@@ -19,14 +19,14 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.core import lidar_objects
-from emonav_drake.core.lidar import beam_table, scan_discs
-from emonav_drake.core.lidar_objects import DetectionParams, _fit_circles, detect_objects
-from emonav_drake.core.metrics import COLLISION, FALL, SUCCESS, TIMEOUT
-from emonav_drake.core.scenario_families import FAMILIES, sample_family
 from emonav_drake.diagrams.trials import BenchmarkSpec, TrialRunner, method_specs
+from emonav_drake.navigation.metrics import COLLISION, FALL, SUCCESS, TIMEOUT
 from emonav_drake.params import EmoNavConfig, dump_config
 from emonav_drake.planners import planner_names, reads_crowd_state
+from emonav_drake.scenarios.scenario_families import FAMILIES, sample_family
+from emonav_drake.sensing import lidar_objects
+from emonav_drake.sensing.lidar import beam_table, scan_discs
+from emonav_drake.sensing.lidar_objects import DetectionParams, _fit_circles, detect_objects
 
 PARAMS = DetectionParams()
 # The LiDAR position of the scan that crashed (corner_traffic, seed 6001, DWA, 27.9 s).

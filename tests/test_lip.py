@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.core.lip import LipState, lip_in_step, lip_step, lip_velocity, wrap_angle
+from emonav_drake.robot.lip import LipState, lip_in_step, lip_step, lip_velocity, wrap_angle
 
 OMEGA = math.sqrt(9.81 / 1.02)
 T = 0.4

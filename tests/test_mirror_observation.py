@@ -10,11 +10,11 @@ import dataclasses as dc
 import numpy as np
 import pytest
 
-from emonav_drake.core.lip import LipState
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.observations import mirror_observation, observation_frame
-from emonav_drake.core.scenario import sample_scenario
+from emonav_drake.navigation.lip_world import NavigationWorld
+from emonav_drake.navigation.observations import mirror_observation, observation_frame
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.robot.lip import LipState
+from emonav_drake.scenarios.scenario import sample_scenario
 
 
 def _reflect(points: np.ndarray, origin: np.ndarray, heading: float) -> np.ndarray:

@@ -6,15 +6,20 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.core.lip import LipState, lip_step
-from emonav_drake.core.navigation import NavigationWorld, PlannerInput
-from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec, sample_scenario
+from emonav_drake.crowd.crowd import CrowdSnapshot
 from emonav_drake.diagrams.navigation import run_episode
 from emonav_drake.learning.env import EmoNavLIPEnv
+from emonav_drake.navigation.lip_world import NavigationWorld, PlannerInput
 from emonav_drake.params import ConfigError, EmoNavConfig, load_config
 from emonav_drake.planners import make_planner
 from emonav_drake.planners.mpc import MpcPlanner
+from emonav_drake.robot.lip import LipState, lip_step
+from emonav_drake.scenarios.scenario import (
+    PedestrianSpec,
+    Scenario,
+    StaticDiscSpec,
+    sample_scenario,
+)
 
 
 def _snapshot(ped_pos=(), ped_vel=(), emotions=(), static=(), radii=()) -> CrowdSnapshot:

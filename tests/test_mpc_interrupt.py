@@ -33,8 +33,8 @@ import numpy as np
 _DRIVER = """
 import signal, sys
 import numpy as np
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.scenario import sample_scenario
+from emonav_drake.navigation.lip_world import NavigationWorld
+from emonav_drake.scenarios.scenario import sample_scenario
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.mpc import MpcPlanner
 

@@ -1,4 +1,4 @@
-"""The MPC planning with a fitted step-response model (`mpc_digit`, core/mpc_response.py)."""
+"""The MPC planning with a fitted step-response model (`mpc_digit`, planning/mpc_response.py)."""
 
 import copy
 import json
@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 
 from emonav_drake.cli import main
-from emonav_drake.core.lip import LipState
-from emonav_drake.core.mpc_response import ResponseHorizonModel
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.scenario import sample_scenario
+from emonav_drake.navigation.lip_world import NavigationWorld
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners import make_planner
 from emonav_drake.planners.model_aware import load_response
 from emonav_drake.planners.mpc import MpcPlanner
+from emonav_drake.planning.mpc_response import ResponseHorizonModel
+from emonav_drake.robot.lip import LipState
+from emonav_drake.scenarios.scenario import sample_scenario
 
 
 def test_the_rollout_walks_the_response_model_and_the_jacobian_is_its_derivative():

@@ -4,16 +4,16 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from emonav_drake.core.navigation import CommandError
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.diagrams.navigation import (
     build_navigation_diagram,
     run_episode,
 )
 from emonav_drake.learning.env import EmoNavLIPEnv
+from emonav_drake.navigation.lip_world import CommandError
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.replay import ReplayPlanner
+from emonav_drake.scenarios.scenario import sample_scenario
 from emonav_drake.systems.episode_monitor import episode_monitor_callback
 
 

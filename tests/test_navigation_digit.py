@@ -7,11 +7,11 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 
 from emonav_drake.cli import main
-from emonav_drake.core.scenario import Scenario, StaticDiscSpec, sample_scenario
 from emonav_drake.diagrams.episode import simulate_episode
 from emonav_drake.diagrams.navigation_digit import build_digit_navigation_diagram
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner
+from emonav_drake.scenarios.scenario import Scenario, StaticDiscSpec, sample_scenario
 from tests.test_digit_station import kneeling_positions
 
 
@@ -152,9 +152,9 @@ def test_both_plants_give_the_same_trace_of_one_row_per_planner_instant():
     k = 0 … steps at t_k = kT, robot (4,), held (2,), pedestrians (P, 2), emotions (P,),
     rewards of the steps (NaN at k = 0); its path, rewards and end agree with the record
     (which keeps no final position: its path length and total reward)."""
-    from emonav_drake.core.episode_trace import EpisodeTrace
     from emonav_drake.diagrams.episode import EpisodeRequest
     from emonav_drake.diagrams.plants import PLANTS
+    from emonav_drake.navigation.episode_trace import EpisodeTrace
 
     cfg = _short_config(4)
     scenario = sample_scenario(2, cfg)

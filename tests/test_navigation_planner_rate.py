@@ -13,16 +13,16 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder, EventStatus
 from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
 
-from emonav_drake.core.crowd import Crowd
-from emonav_drake.core.lip import LipState, lip_in_step
-from emonav_drake.core.navigation import NavigationWorld, PlannerInput
-from emonav_drake.core.scenario import sample_scenario
+from emonav_drake.crowd.crowd import Crowd
 from emonav_drake.diagrams.navigation import NavigationDiagram, build_navigation_diagram
+from emonav_drake.navigation.lip_world import NavigationWorld, PlannerInput
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners import configure_for, make_planner
 from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.mpc import MpcMemory, MpcPlanner
 from emonav_drake.planners.replay import ReplayPlanner
+from emonav_drake.robot.lip import LipState, lip_in_step
+from emonav_drake.scenarios.scenario import sample_scenario
 from emonav_drake.systems.episode_monitor import episode_monitor_callback
 from emonav_drake.systems.lip_robot_plant import LipRobotPlant
 from emonav_drake.systems.navigation_planner import NavigationPlanner

@@ -1,4 +1,4 @@
-"""Tests of the numpy ORCA implementation (emonav_drake.core.orca)."""
+"""Tests of the numpy ORCA implementation (emonav_drake.crowd.orca)."""
 
 from __future__ import annotations
 
@@ -15,8 +15,8 @@ if _REPO_ROOT not in sys.path:
     sys.path.insert(0, _REPO_ROOT)
 
 from benchmarks.reference.orca_reference import orca_velocities_reference  # noqa: E402
-from emonav_drake.core import orca_lp  # noqa: E402
-from emonav_drake.core.orca import OrcaParams, orca_velocities  # noqa: E402
+from emonav_drake.crowd import orca_lp  # noqa: E402
+from emonav_drake.crowd.orca import OrcaParams, orca_velocities  # noqa: E402
 
 DT = 0.1
 

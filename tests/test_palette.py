@@ -1,4 +1,4 @@
-"""One palette (`emonav_drake/core/palette.py`): no colour is written anywhere else in the
+"""One palette (`emonav_drake/palette.py`): no colour is written anywhere else in the
 code that draws, and the palette's roles stay apart (also for colour-blind readers)."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from emonav_drake.core import palette
+from emonav_drake import palette
 from emonav_drake.planners.legacy import method_label
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -21,7 +21,7 @@ PACKAGE = ROOT / "emonav_drake"
 
 # Files of the package that may hold colours of their own, with the reason.
 EXEMPT = {
-    PACKAGE / "core" / "palette.py": "the one definition",
+    PACKAGE / "palette.py": "the one definition",
 }
 
 
@@ -269,7 +269,7 @@ def test_no_colour_is_written_outside_the_palette():
         for name, source in _drawing_sources()
         for line, what in colour_literals(source)
     ]
-    assert not offences, "use a role of emonav_drake/core/palette.py:\n" + "\n".join(offences)
+    assert not offences, "use a role of emonav_drake/palette.py:\n" + "\n".join(offences)
 
 
 # ---------------------------------------------------------------------------------------
@@ -423,7 +423,7 @@ def test_methods_are_named_and_coloured_as_in_every_figure():
 def test_a_benchmark_of_every_method_gives_each_its_own_colour():
     """Table II with every method (three known + eight more): eleven distinct colours, none
     an emotion's (the IDT chart groups its bars by emotion)."""
-    from emonav_drake.core.palette import EMOTION_RGB, method_colours
+    from emonav_drake.palette import EMOTION_RGB, method_colours
 
     names = ["dwa", "mpc", "emobipednav", "single_lgm", "lidar_sac", "sarl", "policy", "ogm"]
     names += ["lndnl", "drlvo", "rgl"]
@@ -435,7 +435,7 @@ def test_a_benchmark_of_every_method_gives_each_its_own_colour():
 def test_a_table_ii_method_keeps_its_colour_in_any_order():
     """The LIP and the Digit charts list the methods in different orders and subsets; each
     of the paper's Table II methods is drawn in the same colour in both."""
-    from emonav_drake.core.palette import method_colours
+    from emonav_drake.palette import method_colours
 
     lip = ["dwa", "mpc", "emobipednav", "single_lgm", "lidar_sac", "sarl", "policy", "ogm"]
     lip += ["lndnl", "drlvo", "rgl"]

@@ -1,6 +1,6 @@
 """Pedestrian behaviours of the scenario families: own speed, waypoints, standing, groups.
 
-Every test steps the real crowd (`core/crowd.py`, ORCA) from a hand-written scenario.
+Every test steps the real crowd (`crowd/crowd.py`, ORCA) from a hand-written scenario.
 """
 
 import math
@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.core.crowd import Crowd, CrowdState
-from emonav_drake.core.pedestrian_routes import WAYPOINT_TOLERANCE
-from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec
+from emonav_drake.crowd.crowd import Crowd, CrowdState
+from emonav_drake.crowd.pedestrian_routes import WAYPOINT_TOLERANCE
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.scenarios.scenario import PedestrianSpec, Scenario, StaticDiscSpec
 from emonav_drake.typed_yaml import ConfigError
 
 FAR = np.array([40.0, 40.0])  # the robot, out of everyone's way

@@ -3,8 +3,7 @@
 import numpy as np
 import pytest
 
-from emonav_drake.core.crowd import Crowd
-from emonav_drake.core.scenario import sample_scenario
+from emonav_drake.crowd.crowd import Crowd
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.perception.noisy_emotions import (
     ConfusionEmotionModel,
@@ -14,6 +13,7 @@ from emonav_drake.perception.noisy_emotions import (
     replace_emotions,
     validate_confusion,
 )
+from emonav_drake.scenarios.scenario import sample_scenario
 
 C = np.array([[0.7, 0.2, 0.1], [0.15, 0.6, 0.25], [0.05, 0.0, 0.95]])
 

@@ -9,16 +9,16 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
 
-from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.core.lip import LipState
-from emonav_drake.core.observations import observation_frame
-from emonav_drake.core.scenario import sample_scenario
+from emonav_drake.crowd.crowd import CrowdSnapshot
+from emonav_drake.navigation.observations import observation_frame
 from emonav_drake.params import HAPPY, NEGATIVE, NEUTRAL, EmoNavConfig
 from emonav_drake.perception.face_assignment import face_bearings
 from emonav_drake.perception.face_emotion import FaceEmotionClassifier
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.perception.sample_photos import camera_frame
 from emonav_drake.planners.dwa import DwaPlanner
+from emonav_drake.robot.lip import LipState
+from emonav_drake.scenarios.scenario import sample_scenario
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.emotion_classifier import (
     EmotionClassifier,

@@ -6,9 +6,8 @@ import dataclasses as dc
 import numpy as np
 import pytest
 
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.learning.config import DaggerConfig, SarlConfig
+from emonav_drake.navigation.lip_world import NavigationWorld
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners import make_planner, planner_kind, planner_names
 from emonav_drake.planners.specs import (
@@ -22,6 +21,7 @@ from emonav_drake.planners.specs import (
     ShieldSpec,
     describe_spec,
 )
+from emonav_drake.scenarios.scenario import sample_scenario
 from emonav_drake.typed_yaml import ConfigError, from_plain, load_typed_yaml, to_plain
 
 

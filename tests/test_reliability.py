@@ -330,7 +330,7 @@ def test_bad_scenario_files(tmp_path, capsys, monkeypatch, yaml_text, culprits):
 
 
 def test_scenario_without_heading_faces_its_goal(tmp_path):
-    from emonav_drake.core.scenario import load_scenario
+    from emonav_drake.scenarios.scenario import load_scenario
 
     sc = tmp_path / "scene.yaml"
     sc.write_text("robot_start: [0.0, 0.0]\nrobot_goal: [0.0, 5.0]\n")
@@ -338,8 +338,8 @@ def test_scenario_without_heading_faces_its_goal(tmp_path):
 
 
 def test_crowd_that_does_not_fit_is_an_error_not_fewer_objects(tmp_path, capsys):
-    from emonav_drake.core.scenario import ScenarioSamplingError, sample_scenario
     from emonav_drake.params import load_config
+    from emonav_drake.scenarios.scenario import ScenarioSamplingError, sample_scenario
 
     text = (
         "crowd: {min_static: 12, max_static: 12, static_x_range: [-1.0, 1.0], "

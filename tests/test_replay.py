@@ -28,7 +28,6 @@ import pytest
 from pydrake.geometry import Meshcat, MeshcatParams
 from pydrake.systems.analysis import Simulator
 
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.diagrams.meshcat_viewing import (
     ReplayCaption,
     make_meshcat,
@@ -38,6 +37,7 @@ from emonav_drake.diagrams.meshcat_viewing import (
 from emonav_drake.diagrams.navigation import build_navigation_diagram
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner
+from emonav_drake.scenarios.scenario import sample_scenario
 from emonav_drake.systems.navigation_meshcat import (
     FOOTSTEPS_RECENT,
     HIT_LIFT,

@@ -13,8 +13,6 @@ import numpy as np
 import pytest
 import torch
 
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning import dagger as dagger_mod
 from emonav_drake.learning import run_state
@@ -33,9 +31,11 @@ from emonav_drake.learning.run_state import (
 )
 from emonav_drake.learning.sac_config import SacConfig
 from emonav_drake.learning.sac_trainer import train_sac
+from emonav_drake.navigation.lip_world import NavigationWorld
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import load_policy
 from emonav_drake.planners.specs import MpcNearbySpec, MpcSpec, ShieldSpec
+from emonav_drake.scenarios.scenario import sample_scenario
 from tests.state_equality import assert_equal_state
 
 DEAD_PID = 2**22 + 12_345  # above Linux's largest pid_max: never a running process

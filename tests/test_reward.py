@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.core.reward import evaluate_step
+from emonav_drake.crowd.crowd import CrowdSnapshot
+from emonav_drake.navigation.reward import evaluate_step
 from emonav_drake.params import HAPPY, NEGATIVE, EmoNavConfig, RewardParams
 
 P = RewardParams()
@@ -68,7 +68,7 @@ def test_goal_reward_and_min_distance():
 def test_a_collision_names_what_was_hit():
     import dataclasses as dc
 
-    from emonav_drake.core.metrics import EpisodeTracker
+    from emonav_drake.navigation.metrics import EpisodeTracker
 
     cfg = EmoNavConfig()
     snap = CrowdSnapshot(

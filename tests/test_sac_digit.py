@@ -8,7 +8,6 @@ loadable SAC actor that runs in the Digit diagram; an interrupted run resumes bi
 import numpy as np
 import pytest
 
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.diagrams.navigation_digit import run_digit_episode
 from emonav_drake.learning.digit_env import EmoNavDigitEnv
 from emonav_drake.learning.run_state import SAC_FORMAT, read_run_state
@@ -16,6 +15,7 @@ from emonav_drake.learning.sac_config import SacConfig
 from emonav_drake.learning.sac_trainer import make_env, train_sac
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners import configure_for, make_planner
+from emonav_drake.scenarios.scenario import sample_scenario
 from tests.state_equality import assert_equal_state
 
 

@@ -10,20 +10,20 @@ import pytest
 import torch
 
 from emonav_drake.cli import main
-from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.core.lip import LipState
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.sarl_state import (
+from emonav_drake.crowd.crowd import CrowdSnapshot
+from emonav_drake.learning.config import SarlConfig
+from emonav_drake.navigation.lip_world import NavigationWorld
+from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.planners.sarl import RglValue, SarlValue, command_grid, load_sarl
+from emonav_drake.planners.specs import DwaSpec
+from emonav_drake.planning.sarl_state import (
     FEATURES,
     agents,
     current_rows,
     lookahead,
 )
-from emonav_drake.core.scenario import sample_scenario
-from emonav_drake.learning.config import SarlConfig
-from emonav_drake.params import ConfigError, EmoNavConfig
-from emonav_drake.planners.sarl import RglValue, SarlValue, command_grid, load_sarl
-from emonav_drake.planners.specs import DwaSpec
+from emonav_drake.robot.lip import LipState
+from emonav_drake.scenarios.scenario import sample_scenario
 
 CFG = EmoNavConfig()
 F = {name: i for i, name in enumerate(FEATURES)}

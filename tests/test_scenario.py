@@ -3,8 +3,8 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.core.scenario import dump_scenario, load_scenario, sample_scenario
 from emonav_drake.params import EMOTION_NAMES, ConfigError, EmoNavConfig
+from emonav_drake.scenarios.scenario import dump_scenario, load_scenario, sample_scenario
 
 
 def test_same_seed_same_scenario_and_different_seeds_differ():

@@ -6,7 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.core.scenario import (
+from emonav_drake.params import SCENARIO_FAMILIES, EmoNavConfig
+from emonav_drake.scenarios.scenario import (
     PedestrianSpec,
     Scenario,
     StaticDiscSpec,
@@ -15,8 +16,7 @@ from emonav_drake.core.scenario import (
     sample_paper_scenario,
     sample_scenario,
 )
-from emonav_drake.core.scenario_families import FAMILIES, goal_reachable, sample_family
-from emonav_drake.params import SCENARIO_FAMILIES, EmoNavConfig
+from emonav_drake.scenarios.scenario_families import FAMILIES, goal_reachable, sample_family
 from emonav_drake.typed_yaml import ConfigError
 
 CFG = EmoNavConfig()
@@ -119,7 +119,7 @@ def test_the_family_list_matches_the_configs_names():
 
 def test_a_family_scene_walks_through_the_crowd():
     # the behaviours are real in the crowd: the blocker arrives and stands
-    from emonav_drake.core.crowd import Crowd
+    from emonav_drake.crowd.crowd import Crowd
 
     sc = sample_family("blocker", 5)
     crowd = Crowd(sc, CFG)

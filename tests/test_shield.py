@@ -1,4 +1,4 @@
-"""The LGM safety shield (`core/lgm_shield.py`, `planners/shield.py`) with the real
+"""The LGM safety shield (`planning/lgm_shield.py`, `planners/shield.py`) with the real
 shipped policy, the real LIP step map and the real fitted Digit response."""
 
 import dataclasses as dc
@@ -7,8 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.core.grid_maps import lgm_frame
-from emonav_drake.core.lgm_shield import (
+from emonav_drake.navigation.lip_world import NavigationWorld
+from emonav_drake.params import EmoNavConfig, EpisodeParams
+from emonav_drake.planners import SHIELDED, configure_for, make_planner
+from emonav_drake.planners.model_aware import load_response
+from emonav_drake.planners.policy import PolicyError, PolicyPlanner
+from emonav_drake.planners.shield import ShieldedPolicy
+from emonav_drake.planners.variants import shipped_checkpoint
+from emonav_drake.planning.lgm_shield import (
     ShieldParams,
     body_labels,
     body_velocities,
@@ -20,15 +26,9 @@ from emonav_drake.core.lgm_shield import (
     to_world,
     zone_intrusion,
 )
-from emonav_drake.core.lip import LipState, held_plans, lip_in_step, lip_rollout, lip_step
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.scenario import Scenario, StaticDiscSpec, sample_scenario
-from emonav_drake.params import EmoNavConfig, EpisodeParams
-from emonav_drake.planners import SHIELDED, configure_for, make_planner
-from emonav_drake.planners.model_aware import load_response
-from emonav_drake.planners.policy import PolicyError, PolicyPlanner
-from emonav_drake.planners.shield import ShieldedPolicy
-from emonav_drake.planners.variants import shipped_checkpoint
+from emonav_drake.robot.lip import LipState, held_plans, lip_in_step, lip_rollout, lip_step
+from emonav_drake.scenarios.scenario import Scenario, StaticDiscSpec, sample_scenario
+from emonav_drake.sensing.grid_maps import lgm_frame
 
 
 def test_hit_points_lie_on_the_seen_side_of_the_disc():

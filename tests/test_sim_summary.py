@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from emonav_drake.cli import main
 from emonav_drake.cli.sim import outcome_words
-from emonav_drake.core.metrics import EpisodeRecord
+from emonav_drake.navigation.metrics import EpisodeRecord
 
 
 def _line(capsys, *argv: str) -> str:

@@ -1,4 +1,4 @@
-"""The field's social-navigation metrics (core/social_metrics.py, docs/metrics.md): each
+"""The field's social-navigation metrics (navigation/social_metrics.py, docs/metrics.md): each
 on a hand-made walk whose answer is worked out by hand, then through real LIP episodes
 (the fast world and the Drake diagram), old records and the benchmark's tables."""
 
@@ -9,31 +9,31 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.core.lip import LipState
-from emonav_drake.core.metrics import (
+from emonav_drake.crowd.crowd import CrowdSnapshot
+from emonav_drake.evaluation import tables
+from emonav_drake.evaluation.run_directory import load_run
+from emonav_drake.evaluation.trial_check import check_trial
+from emonav_drake.navigation.lip_world import NavigationWorld
+from emonav_drake.navigation.metrics import (
     EpisodeTracker,
     format_summary,
     record_from_json,
     summarize,
 )
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.reward import StepEvaluation
-from emonav_drake.core.scenario import sample_scenario
-from emonav_drake.core.social_metrics import (
+from emonav_drake.navigation.reward import StepEvaluation
+from emonav_drake.navigation.social_metrics import (
     INTRUSION_DISTANCE,
     SOCIAL_FIELDS,
     TTC_THRESHOLD,
     check_social_fields,
     times_to_collision,
 )
-from emonav_drake.core.social_metrics import StepMotion as Motion
-from emonav_drake.evaluation import tables
-from emonav_drake.evaluation.run_directory import load_run
-from emonav_drake.evaluation.trial_check import check_trial
+from emonav_drake.navigation.social_metrics import StepMotion as Motion
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.replay import ReplayPlanner
+from emonav_drake.robot.lip import LipState
+from emonav_drake.scenarios.scenario import sample_scenario
 
 ROOT = Path(__file__).resolve().parent.parent
 LIP_RUN = ROOT / "benchmarks" / "results" / "lip_table2"
@@ -392,7 +392,7 @@ def test_compare_joins_a_run_recorded_before_the_metrics_with_a_new_one(tmp_path
 
 
 def test_a_share_s_interval_stays_within_zero_and_one():
-    from emonav_drake.core.metrics import EpisodeRecord, summarize
+    from emonav_drake.navigation.metrics import EpisodeRecord, summarize
 
     recs = [EpisodeRecord(intrusion_ratio=v, low_ttc_ratio=1.0 - v) for v in (0, 0, 0, 0, 0.1)]
     s = summarize(recs)

@@ -9,10 +9,10 @@ import pytest
 from pydrake.systems.analysis import Simulator
 
 from emonav_drake.cli import main
-from emonav_drake.core.scenario import PedestrianSpec, Scenario, StaticDiscSpec
 from emonav_drake.diagrams.navigation import build_navigation_diagram
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners import make_planner
+from emonav_drake.scenarios.scenario import PedestrianSpec, Scenario, StaticDiscSpec
 
 SHORT = "episode: {max_steps: 12}\n"
 

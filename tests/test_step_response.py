@@ -1,4 +1,4 @@
-"""The per-step response model of the walking stack (`core/step_response.py`).
+"""The per-step response model of the walking stack (`robot/step_response.py`).
 
 Fitting recovers a known model from its own traces; the trace indexing matches the
 diagram's (entry k: robot at t_k, command held before t_k's update); the LIP step map
@@ -11,12 +11,12 @@ import json
 import numpy as np
 import pytest
 
-from emonav_drake.core import step_response as sr
-from emonav_drake.core.lip import LipState, lip_step
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.scenario import sample_scenario
+from emonav_drake.navigation.lip_world import NavigationWorld
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner, ResponseMemory
+from emonav_drake.robot import step_response as sr
+from emonav_drake.robot.lip import LipState, lip_step
+from emonav_drake.scenarios.scenario import sample_scenario
 
 T, OMEGA = 0.4, EmoNavConfig().robot.omega
 

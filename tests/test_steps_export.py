@@ -14,12 +14,12 @@ import numpy as np
 import pytest
 
 from emonav_drake.cli import main
-from emonav_drake.core.lip import LipState, lip_step, wrap_angle
-from emonav_drake.core.scenario import sample_scenario
-from emonav_drake.core.tracking import COLUMNS, error_statistics, sequence_tracking
 from emonav_drake.diagrams.navigation_digit import run_digit_episode
 from emonav_drake.params import load_config
 from emonav_drake.planners import configure_for, make_planner
+from emonav_drake.robot.lip import LipState, lip_step, wrap_angle
+from emonav_drake.robot.tracking import COLUMNS, error_statistics, sequence_tracking
+from emonav_drake.scenarios.scenario import sample_scenario
 from emonav_drake.systems.walking_command_source import command_sequence
 
 

@@ -15,12 +15,12 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.diagrams.navigation import build_navigation_diagram
 from emonav_drake.params import NEUTRAL, ConfigError, EmoNavConfig
 from emonav_drake.perception.face_emotion import three_way_probabilities
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.planners import make_planner
+from emonav_drake.scenarios.scenario import sample_scenario
 
 SEED = 1  # two happy pedestrians walk towards the robot: their faces are found
 
@@ -143,10 +143,10 @@ def test_the_maps_ring_the_perceived_pedestrians_and_scan_the_true_ones():
     true crowd's, the discomfort rings (127 cells) are the perceived crowd's."""
     import dataclasses as dc
 
-    from emonav_drake.core.crowd import CrowdSnapshot
-    from emonav_drake.core.lip import LipState
-    from emonav_drake.core.observations import observation_frame
+    from emonav_drake.crowd.crowd import CrowdSnapshot
+    from emonav_drake.navigation.observations import observation_frame
     from emonav_drake.params import apply_sensor_preset
+    from emonav_drake.robot.lip import LipState
 
     cfg = EmoNavConfig()
     apply_sensor_preset(cfg, "vlp16")

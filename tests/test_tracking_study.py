@@ -14,9 +14,6 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.core.crowd_tracker import TrackerParams
-from emonav_drake.core.lidar import beam_step
-from emonav_drake.core.lidar_objects import DetectionParams
 from emonav_drake.evaluation.scan_visibility import (
     OCCLUDED,
     OUT_OF_RANGE,
@@ -29,6 +26,9 @@ from emonav_drake.evaluation.tracking_report import tables_md
 from emonav_drake.evaluation.tracking_study import study
 from emonav_drake.evaluation.tracking_summary import summarise
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.sensing.crowd_tracker import TrackerParams
+from emonav_drake.sensing.lidar import beam_step
+from emonav_drake.sensing.lidar_objects import DetectionParams
 
 CFG = EmoNavConfig()
 R_PED = CFG.crowd.pedestrian_radius

@@ -19,12 +19,12 @@ from pydrake.systems.analysis import Simulator
 from test_palette import CVD, EMOTIONS, OTHERS, _hue_gap, delta_e
 from test_replay import EMONAV, Recording
 
-from emonav_drake.core import palette
-from emonav_drake.core.scenario import sample_scenario
+from emonav_drake import palette
 from emonav_drake.diagrams.meshcat_viewing import ReplayCaption, make_meshcat, write_replay_html
 from emonav_drake.diagrams.navigation import build_navigation_diagram
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner
+from emonav_drake.scenarios.scenario import sample_scenario
 from emonav_drake.systems.navigation_meshcat import set_overview_camera
 from emonav_drake.systems.navigation_meshcat_style import PREFIX
 from emonav_drake.systems.navigation_meshcat_tracks import (

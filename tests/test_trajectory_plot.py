@@ -8,12 +8,12 @@ import pytest
 from PIL import Image
 
 from emonav_drake.cli import build_parser, main
-from emonav_drake.core.crowd import Crowd
-from emonav_drake.core.metrics import EpisodeRecord
-from emonav_drake.core.palette import EMOTION_RGB, GOAL_RGB, ROBOT_RGB
-from emonav_drake.core.scenario import Scenario, StaticDiscSpec, sample_scenario
+from emonav_drake.crowd.crowd import Crowd
 from emonav_drake.evaluation.trajectory import build_trajectory, load_trajectory
+from emonav_drake.navigation.metrics import EpisodeRecord
+from emonav_drake.palette import EMOTION_RGB, GOAL_RGB, ROBOT_RGB
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig, load_config
+from emonav_drake.scenarios.scenario import Scenario, StaticDiscSpec, sample_scenario
 
 PNG = b"\x89PNG\r\n\x1a\n"
 

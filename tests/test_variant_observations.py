@@ -14,7 +14,6 @@ import torch
 from pydrake.systems.analysis import Simulator
 
 from emonav_drake.cli import main
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.diagrams.navigation import build_navigation_diagram
 from emonav_drake.learning.env import EmoNavLIPEnv
 from emonav_drake.params import EmoNavConfig
@@ -22,6 +21,7 @@ from emonav_drake.planners import configure_for
 from emonav_drake.planners.networks import Actor, LgmEncoder, ScanEncoder, ScanLstmEncoder
 from emonav_drake.planners.policy import PolicyPlanner, save_policy
 from emonav_drake.planners.replay import ReplayPlanner
+from emonav_drake.scenarios.scenario import sample_scenario
 
 # name: (grid kind, num_frames, grid_size, encoder spec) — tiny networks, random weights.
 VARIANTS = {

@@ -11,21 +11,21 @@ import math
 import numpy as np
 import pytest
 
-from emonav_drake.core.crowd import Crowd, CrowdSnapshot
-from emonav_drake.core.crowd_tracker import CrowdTracker
-from emonav_drake.core.grid_maps import COLLISION_VALUE, DISCOMFORT_VALUE, lgm_frame
-from emonav_drake.core.lidar import beam_angles, cast_robot_frame, scan_discs
-from emonav_drake.core.lidar_objects import DetectionParams, detect_objects
-from emonav_drake.core.lip import LipState
-from emonav_drake.core.metrics import EpisodeTracker
-from emonav_drake.core.observations import observation_frame
-from emonav_drake.core.orca import OrcaParams, orca_velocities
-from emonav_drake.core.reward import evaluate_step
-from emonav_drake.core.scenario import PedestrianSpec, Scenario, WallSpec
-from emonav_drake.core.walls import point_segment_distances, wall_discs
+from emonav_drake.crowd.crowd import Crowd, CrowdSnapshot
+from emonav_drake.crowd.orca import OrcaParams, orca_velocities
 from emonav_drake.evaluation.failures import failure_cause
 from emonav_drake.evaluation.trial_check import check_trial
+from emonav_drake.navigation.metrics import EpisodeTracker
+from emonav_drake.navigation.observations import observation_frame
+from emonav_drake.navigation.reward import evaluate_step
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.robot.lip import LipState
+from emonav_drake.scenarios.scenario import PedestrianSpec, Scenario, WallSpec
+from emonav_drake.scenarios.walls import point_segment_distances, wall_discs
+from emonav_drake.sensing.crowd_tracker import CrowdTracker
+from emonav_drake.sensing.grid_maps import COLLISION_VALUE, DISCOMFORT_VALUE, lgm_frame
+from emonav_drake.sensing.lidar import beam_angles, cast_robot_frame, scan_discs
+from emonav_drake.sensing.lidar_objects import DetectionParams, detect_objects
 
 CFG = EmoNavConfig()
 ANGLES = beam_angles()
@@ -136,7 +136,7 @@ def test_orca_agent_touching_a_wall_only_moves_along_or_away() -> None:
 
 def test_orca_agent_on_the_wall_line_stops_at_its_end() -> None:
     """Walking exactly along a wall's line into its end (RVO2 would ignore the wall there,
-    `core/orca_walls.py`): the agent stops a radius short of it."""
+    `crowd/orca_walls.py`): the agent stops a radius short of it."""
     wall = np.array([[[0.0, 0.0], [5.0, 0.0]]])
     rng = np.random.default_rng(0)
     _, closest, end = _walk(np.array([[-3.0, 0.0]]), np.array([[8.0, 0.0]]), wall, 300, rng)
@@ -199,7 +199,7 @@ def test_orca_pedestrians_stay_in_the_corridor() -> None:
 
 
 def test_crowd_pedestrians_respect_walls() -> None:
-    """Through `Crowd.step` (needs the walls passed to ORCA in `core/crowd.py`): with the
+    """Through `Crowd.step` (needs the walls passed to ORCA in `crowd/crowd.py`): with the
     robot far away, pedestrians whose straight routes run into a wall with a door, or
     past the door's edge, never cross the wall over 90 s; the latter get through the door."""
     routes = [([-3.0, 2.0], [3.0, 2.2]), ([-3.0, -1.8], [3.0, -2.5])]  # into the wall

@@ -1,4 +1,4 @@
-"""A straightforward per-beam reference for `emonav_drake.core.grid_maps.lgm_frame`.
+"""A straightforward per-beam reference for `emonav_drake.sensing.grid_maps.lgm_frame`.
 
 Every beam is tested against every disc in plain Python, then the hit cells are marked one
 beam at a time — the style of the authors' original implementation, and about as slow.
@@ -31,7 +31,7 @@ def ranges_per_beam(
 
     Same formulas in the same floating-point order as the fast cast (centres rotated into
     the robot frame, math.cos/math.sin per beam, b = c·u, disc = r² − (d² − b²)), so the
-    two must agree bit for bit; it shares no code with `emonav_drake.core.lidar`.
+    two must agree bit for bit; it shares no code with `emonav_drake.sensing.lidar`.
     """
     step = _step(num_beams)
     ox, oy = float(origin[0]), float(origin[1])

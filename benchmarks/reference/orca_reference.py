@@ -1,6 +1,6 @@
 """Straightforward reference implementation of ORCA, used to cross-check the fast one.
 
-Same semantics and signature as :func:`emonav_drake.core.orca.orca_velocities` (see that
+Same semantics and signature as :func:`emonav_drake.crowd.orca.orca_velocities` (see that
 module's docstring): world frame, metres, m/s, seconds; RVO2's ORCA lines and linear
 programs. This version follows RVO2's structure literally — one agent at a time, one
 neighbour at a time, numpy 2-vectors, no vectorisation — and is therefore slow. It does not
@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from emonav_drake.core.orca import OrcaParams
+from emonav_drake.crowd.orca import OrcaParams
 
 EPSILON = 1e-5
 
@@ -50,7 +50,7 @@ def orca_velocities_reference(
     visible: np.ndarray | None = None,
     active: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Reference ORCA step; see :func:`emonav_drake.core.orca.orca_velocities`."""
+    """Reference ORCA step; see :func:`emonav_drake.crowd.orca.orca_velocities`."""
     positions = np.asarray(positions, dtype=float)
     velocities = np.asarray(velocities, dtype=float)
     radii = np.asarray(radii, dtype=float)

@@ -29,9 +29,9 @@ from emonav_drake.cli.resolve import (
     check_spec_flags,
     resolve_config,
 )
-from emonav_drake.core.metrics import format_idt
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.diagrams.trials import MAX_TRIALS
+from emonav_drake.navigation.metrics import format_idt
 
 if TYPE_CHECKING:
     from emonav_drake.diagrams.run_spec import RunSpec

@@ -32,8 +32,8 @@ if TYPE_CHECKING:
     import numpy as np
 
     from emonav_drake.cli.resolve import ResolvedConfig
-    from emonav_drake.core.episode_trace import EpisodeTrace
     from emonav_drake.diagrams.run_spec import MethodSpec, RunSpec
+    from emonav_drake.navigation.episode_trace import EpisodeTrace
 
 
 PLANNER_HELP = (
@@ -94,7 +94,7 @@ class UserHelpFormatter(argparse.RawDescriptionHelpFormatter):
 
 def parse_seed(text: str, flag: str) -> int:
     """A seed flag's value: an integer in [0, 2**64 - 1]; else `ConfigError` naming `flag`."""
-    from emonav_drake.core.scenario import MAX_SEED
+    from emonav_drake.scenarios.scenario import MAX_SEED
 
     try:
         value = int(text)
@@ -126,7 +126,7 @@ class SeedArg(argparse.Action):
 
 def check_seed_range(first: int, count: int, flag: str) -> None:
     """Seeds `first` … `first + count - 1` must all fit in 64 bits (`ConfigError` naming `flag`)."""
-    from emonav_drake.core.scenario import MAX_SEED
+    from emonav_drake.scenarios.scenario import MAX_SEED
 
     if first + count - 1 > MAX_SEED:
         raise ConfigError(
@@ -328,17 +328,17 @@ def parse_methods(
 
 
 def write_steps_csv(path: str | Path, table: np.ndarray) -> int:
-    """Write a tracking table (`core.tracking.COLUMNS`, one row per step) as CSV, atomically.
+    """Write a tracking table (`robot.tracking.COLUMNS`, one row per step) as CSV, atomically.
 
     The header is the column names; `step` is an integer, every other value a float in
-    SI units (m, rad, s, m/s: `core.tracking.UNITS`) with full precision (NaN as "nan").
+    SI units (m, rad, s, m/s: `robot.tracking.UNITS`) with full precision (NaN as "nan").
     Returns the number of rows written."""
     import csv
     import io
 
     import numpy as np
 
-    from emonav_drake.core.tracking import COLUMNS
+    from emonav_drake.robot.tracking import COLUMNS
 
     rows = np.asarray(table, float).reshape(-1, len(COLUMNS))
     buf = io.StringIO()
@@ -353,8 +353,8 @@ def write_steps_csv(path: str | Path, table: np.ndarray) -> int:
 def episode_steps_table(config: EmoNavConfig, trace: EpisodeTrace) -> np.ndarray:
     """The tracking table of a navigation episode, on either plant, against the planner's
     LIP (ω = √(g/H) of `config.robot`), from its `EpisodeTrace` (`Plant.simulate` with
-    `trace=True`): one row per step (`core.tracking.trace_tracking`)."""
-    from emonav_drake.core.tracking import trace_tracking
+    `trace=True`): one row per step (`robot.tracking.trace_tracking`)."""
+    from emonav_drake.robot.tracking import trace_tracking
 
     r = config.robot
     return trace_tracking(trace, r.omega, r.step_time)

@@ -103,8 +103,8 @@ LIST_WIDTH = 96  # `config --list` wraps its descriptions to this many columns
 def _list_examples() -> str:
     """The named settings and example scenarios shipped with the package, one per line."""
     from emonav_drake.configs import SETTINGS, setting_path
-    from emonav_drake.core.scenario_families import FAMILIES
     from emonav_drake.scenarios import EXAMPLES, SCENARIO_DIR
+    from emonav_drake.scenarios.scenario_families import FAMILIES
 
     def first_sentence(path: Path) -> str:
         """The first sentence of the file's leading comment (it may span lines)."""

@@ -26,12 +26,12 @@ from emonav_drake.cli.resolve import (
     check_spec_flags,
     resolve_config,
 )
-from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.diagrams.run_spec import RunSpec, load_run_spec, run_spec_plain
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners import planner_names
+from emonav_drake.scenarios.scenario import Scenario
 
 # `eval --episodes` at most: every scenario is sampled before the first episode (a crowd
 # that does not fit fails at once), ~0.2 ms per seed, ~20 s at the maximum; 100 000 DWA
@@ -77,10 +77,10 @@ def cmd_eval(args: argparse.Namespace) -> int:
     """Evaluate over seeds; on Ctrl-C keep the finished episodes (summary, --json, exit 130)."""
     check_outputs(args, "--json")
     spec = _eval_spec(args)
-    from emonav_drake.core.metrics import format_summary, summarize
     from emonav_drake.diagrams.episode import EpisodeRequest
     from emonav_drake.diagrams.evaluation_episode import run_evaluation_episode
     from emonav_drake.diagrams.trials import TrialRunner
+    from emonav_drake.navigation.metrics import format_summary, summarize
     from emonav_drake.progress import progress_bar
 
     seeds = range(spec.first_seed, spec.first_seed + spec.episodes)
@@ -164,7 +164,7 @@ def _eval_spec(args: argparse.Namespace) -> RunSpec:
 
 def _scene(spec: RunSpec, seed: int, args: argparse.Namespace) -> Scenario:
     """The scene of `seed`, a sampling error naming where the configuration came from."""
-    from emonav_drake.core.scenario import ScenarioSamplingError
+    from emonav_drake.scenarios.scenario import ScenarioSamplingError
 
     try:
         return spec.scenario_of(seed)

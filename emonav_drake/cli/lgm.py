@@ -44,9 +44,9 @@ def cmd_lgm(args: argparse.Namespace) -> int:
         raise ConfigError(f"--png {args.png}: the file name must end in .png")
     import numpy as np
 
-    from emonav_drake.core.crowd import obstacle_discs
-    from emonav_drake.core.navigation import NavigationWorld
+    from emonav_drake.crowd.crowd import obstacle_discs
     from emonav_drake.evaluation.grid_map_figure import render_grid_map_figure
+    from emonav_drake.navigation.lip_world import NavigationWorld
     from emonav_drake.planners.dwa import DwaPlanner
 
     resolved = resolve_config(args)

@@ -30,7 +30,7 @@ from emonav_drake.params import (
 )
 
 if TYPE_CHECKING:
-    from emonav_drake.core.scenario import Scenario
+    from emonav_drake.scenarios.scenario import Scenario
 
 CONFIG_HELP = "YAML configuration overriding the defaults"
 SETTING_HELP = (
@@ -178,7 +178,7 @@ FAMILY_HELP = (
 
 
 def add_family(p: argparse.ArgumentParser) -> None:
-    """`--family NAME` (`CrowdParams.family`, `core/scenario_families.py`)."""
+    """`--family NAME` (`CrowdParams.family`, `scenarios/scenario_families.py`)."""
     from emonav_drake.params import SCENARIO_FAMILIES
 
     p.add_argument("--family", choices=SCENARIO_FAMILIES, metavar="NAME", help=FAMILY_HELP)
@@ -231,7 +231,7 @@ def add_deployable(p: argparse.ArgumentParser) -> None:
 
 def sample(seed: int, resolved: ResolvedConfig) -> Scenario:
     """`sample_scenario`, its error naming where the configuration came from."""
-    from emonav_drake.core.scenario import ScenarioSamplingError, sample_scenario
+    from emonav_drake.scenarios.scenario import ScenarioSamplingError, sample_scenario
 
     try:
         return sample_scenario(seed, resolved.config)
@@ -243,7 +243,7 @@ def resolve_scenario(args: argparse.Namespace, resolved: ResolvedConfig) -> Scen
     """The episode's scenario: `--scenario` (a file or a shipped example's name; its seed,
     else `--seed`; `--time-varying` gives one of its pedestrians a changing emotion), else
     the one sampled from `--seed`."""
-    from emonav_drake.core.scenario import add_time_varying_emotion, load_scenario
+    from emonav_drake.scenarios.scenario import add_time_varying_emotion, load_scenario
 
     if getattr(args, "scenario", None):
         from emonav_drake.scenarios import scenario_path

@@ -33,10 +33,10 @@ from emonav_drake.cli.common import (
 )
 from emonav_drake.cli.planners_cmd import DEFAULT_PLANNER
 from emonav_drake.cli.resolve import add_spec, check_spec_flags, resolve_config
-from emonav_drake.core.metrics import format_idt
 from emonav_drake.diagrams.episode import EpisodeRequest
 from emonav_drake.diagrams.plants import DEFAULT_PLANT, PLANTS, Plant, plant_named
 from emonav_drake.diagrams.run_spec import RunSpec, load_run_spec, run_spec_plain
+from emonav_drake.navigation.metrics import format_idt
 from emonav_drake.params import ConfigError, is_deployable
 from emonav_drake.planners import planner_names
 

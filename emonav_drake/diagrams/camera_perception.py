@@ -29,9 +29,9 @@ from typing import Any
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, DiagramBuilder, InputPort, LeafSystem, OutputPort
 
-from emonav_drake.core.scenario import Scenario
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.perception.noisy_emotions import CAMERA_MODES, EmotionEstimateParams
+from emonav_drake.scenarios.scenario import Scenario
 from emonav_drake.systems.emotion_classifier import EmotionClassifier, EmotionEstimate
 from emonav_drake.systems.emotion_estimate_source import (
     AddEmotionEstimateSource,

@@ -3,7 +3,7 @@
 `EpisodeRequest` is what `Plant.simulate` (`diagrams/plants.py`) is given: the scenario,
 configuration, planner and its observation, the goal radius and emotion estimate, the
 viewer options of `emonav sim` and whether to keep the per-step `EpisodeTrace`
-(`core/episode_trace.py`). The LIP (`diagrams/navigation.py`) and Digit
+(`navigation/episode_trace.py`). The LIP (`diagrams/navigation.py`) and Digit
 (`diagrams/navigation_digit.py`) build their own diagrams — different physics — and hand
 them here as `EpisodeSystems`:
 
@@ -34,12 +34,12 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from emonav_drake.core.episode_trace import EpisodeTrace, perceived_emotions
-from emonav_drake.core.metrics import EpisodeRecord
-from emonav_drake.core.scenario import Scenario
+from emonav_drake.navigation.episode_trace import EpisodeTrace, perceived_emotions
+from emonav_drake.navigation.metrics import EpisodeRecord
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
+from emonav_drake.scenarios.scenario import Scenario
 
 if TYPE_CHECKING:
     from pydrake.geometry import Meshcat

@@ -9,8 +9,8 @@ a registered plant, and returns the episode's record.
 
 from __future__ import annotations
 
-from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.diagrams.episode import EpisodeRequest
+from emonav_drake.navigation.metrics import EpisodeRecord
 
 
 def run_evaluation_episode(plant: str, request: EpisodeRequest) -> EpisodeRecord:

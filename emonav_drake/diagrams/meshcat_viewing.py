@@ -28,7 +28,7 @@ from pathlib import Path
 
 from pydrake.geometry import Meshcat, MeshcatParams
 
-from emonav_drake.core import palette
+from emonav_drake import palette
 from emonav_drake.params import ConfigError
 from emonav_drake.systems import navigation_meshcat as nm
 from emonav_drake.systems import navigation_meshcat_style as style

@@ -26,14 +26,14 @@ fresh default contexts, or a cloned context, need no `planner.reset()`.
 Observation. The grid-map builder gives the planner the map observation of the
 diagram's `grid_kind` on its `lgm_stack` port — LGM or OGM stack uint8 (N, M, M), raw
 scan stack float32 (N, K) [m] ("scan": LiDAR-SAC, LNDNL), or the DRL-VO* image uint8
-(1, 3, M, M) ("drlvo") — computed by the same `core.observations.observation_frame` as the
+(1, 3, M, M) ("drlvo") — computed by the same `navigation.observations.observation_frame` as the
 Gymnasium env's, so any policy checkpoint runs here with its training observation
 (`planners.configure_for` reads the kind and sizes from the checkpoint). DWA and MPC
 ignore it.
 
 `build_navigation_diagram` wires it; `run_episode` simulates one episode walking step
 by walking step (the loop both plants share, `diagrams/episode.py`) and returns its
-`EpisodeRecord` and, with `trace=True`, its `EpisodeTrace` (`core/episode_trace.py`).
+`EpisodeRecord` and, with `trace=True`, its `EpisodeTrace` (`navigation/episode_trace.py`).
 With `progress=True` it shows `progress.SimulationProgress`, a bar over simulated time.
 """
 
@@ -47,19 +47,19 @@ import numpy as np
 from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 
-from emonav_drake.core.episode_trace import EpisodeTrace
-from emonav_drake.core.global_route import NoRouteError, StaticMap, plan_route
-from emonav_drake.core.metrics import EpisodeRecord
-from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.episode import (
     EpisodeRequest,
     EpisodeSystems,
     run_navigation_episode,
     training_request,
 )
+from emonav_drake.navigation.episode_trace import EpisodeTrace
+from emonav_drake.navigation.metrics import EpisodeRecord
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.perception.noisy_emotions import CAMERA_MODES, EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
+from emonav_drake.scenarios.global_route import NoRouteError, StaticMap, plan_route
+from emonav_drake.scenarios.scenario import Scenario
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.crowd_tracker_system import CrowdTrackerSystem
 from emonav_drake.systems.emotion_estimate_source import AddEmotionEstimateSource

@@ -43,9 +43,6 @@ from typing import Any
 from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams, Role
 from pydrake.systems.framework import Context, Diagram, DiagramBuilder
 
-from emonav_drake.core.episode_trace import EpisodeTrace
-from emonav_drake.core.metrics import EpisodeRecord
-from emonav_drake.core.scenario import Scenario
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
 from emonav_drake.diagrams.episode import (
     EpisodeRequest,
@@ -55,9 +52,12 @@ from emonav_drake.diagrams.episode import (
     training_request,
 )
 from emonav_drake.diagrams.navigation import AddNavigationStack, AddNavigationVisualizer
+from emonav_drake.navigation.episode_trace import EpisodeTrace
+from emonav_drake.navigation.metrics import EpisodeRecord
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import CAMERA_MODES, EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
+from emonav_drake.scenarios.scenario import Scenario
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.episode_monitor import EpisodeMonitor
 from emonav_drake.systems.head_camera import body_camera_mount

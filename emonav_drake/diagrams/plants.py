@@ -19,9 +19,9 @@ import dataclasses as dc
 import importlib
 from collections.abc import Callable
 
-from emonav_drake.core.episode_trace import EpisodeTrace
-from emonav_drake.core.metrics import EpisodeRecord
 from emonav_drake.diagrams.episode import EpisodeRequest
+from emonav_drake.navigation.episode_trace import EpisodeTrace
+from emonav_drake.navigation.metrics import EpisodeRecord
 from emonav_drake.params import ConfigError
 from emonav_drake.registry import Registry
 

@@ -24,11 +24,11 @@ import dataclasses as dc
 from pathlib import Path
 
 from emonav_drake.config_fields import setting
-from emonav_drake.core.scenario import MAX_SEED, Scenario, sample_scenario
 from emonav_drake.diagrams.plants import DEFAULT_PLANT, PLANTS
 from emonav_drake.params import ConfigError, EmoNavConfig, dump_config
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.provenance import sha256_file
+from emonav_drake.scenarios.scenario import MAX_SEED, Scenario, sample_scenario
 from emonav_drake.typed_yaml import dump_typed_yaml, from_plain, load_typed_yaml, to_plain
 
 FORMAT = 1

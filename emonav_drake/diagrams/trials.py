@@ -39,10 +39,10 @@ from emonav_drake.planners.legacy import planner_of
 from emonav_drake.provenance import sha256_file
 
 if TYPE_CHECKING:
-    from emonav_drake.core.episode_trace import EpisodeTrace
-    from emonav_drake.core.metrics import EpisodeRecord
-    from emonav_drake.core.scenario import Scenario
     from emonav_drake.diagrams.episode import EpisodeRequest
+    from emonav_drake.navigation.episode_trace import EpisodeTrace
+    from emonav_drake.navigation.metrics import EpisodeRecord
+    from emonav_drake.scenarios.scenario import Scenario
 
 # --trials at most (per method): every scenario is sampled (~0.2 ms per seed, ~20 s at the
 # maximum) and every (method, seed) task listed before the first trial.
@@ -244,8 +244,8 @@ class TrialRunner:
         """The `EpisodeRequest` of one trial: method `method` (its planner, configuration
         and observation) on the scenario of `seed`, with the run's emotion estimate, at
         the evaluation goal radius; `trace`: keep the per-step trace."""
-        from emonav_drake.core.scenario import sample_scenario
         from emonav_drake.diagrams.episode import EpisodeRequest
+        from emonav_drake.scenarios.scenario import sample_scenario
 
         planner, cfg, grid_kind = self.planner(method)
         scenario = sample_scenario(seed, self.config)

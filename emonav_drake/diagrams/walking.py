@@ -27,14 +27,14 @@ from pydrake.systems.analysis import Simulator, SimulatorStatus
 from pydrake.systems.framework import Context, Diagram, DiagramBuilder
 from pydrake.systems.primitives import LogVectorOutput, VectorLogSink
 
-from emonav_drake.core.lip import wrap_angle
-from emonav_drake.core.tracking import COLUMNS as TRACKING_COLUMNS
-from emonav_drake.core.tracking import column as tracking_column
-from emonav_drake.core.tracking import step_tracking
 from emonav_drake.diagrams.digit_station import AddDigitStation, DigitStation
 from emonav_drake.diagrams.meshcat_viewing import make_meshcat
 from emonav_drake.params import EmoNavConfig, load_config, pendulum_frequency
 from emonav_drake.progress import SimulationProgress
+from emonav_drake.robot.lip import wrap_angle
+from emonav_drake.robot.tracking import COLUMNS as TRACKING_COLUMNS
+from emonav_drake.robot.tracking import column as tracking_column
+from emonav_drake.robot.tracking import step_tracking
 from emonav_drake.systems.alip_footstep_planner import (
     LOG_COM,
     LOG_COMMAND,
@@ -158,7 +158,7 @@ class WalkResult:
         return FALL if self.fell else "walked"
 
     def tracking(self, config: EmoNavConfig) -> np.ndarray:
-        """The per-step tracking table of this walk (`walk_tracking`, `core.tracking.COLUMNS`)
+        """The per-step tracking table of this walk (`walk_tracking`, `robot.tracking.COLUMNS`)
         with this robot's ω = √(g/H) [1/s] and T [s] of `config.robot`."""
         omega = pendulum_frequency(self.com_height, config.robot.gravity)
         return walk_tracking(self.steps, omega, config.robot.step_time)
@@ -191,7 +191,7 @@ class WalkResult:
 
 
 def walk_tracking(steps: list[StepRecord], omega: float, step_time: float) -> np.ndarray:
-    """The per-step tracking table of a walk (`core.tracking.COLUMNS`), one row per step
+    """The per-step tracking table of a walk (`robot.tracking.COLUMNS`), one row per step
     between consecutive foot switches k → k + 1.
 
     Desired = the LIP step of paper Eq. 1 from the measured CoM position and sagittal speed

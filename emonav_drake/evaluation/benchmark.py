@@ -70,7 +70,6 @@ from pathlib import Path
 from emonav_drake.atomic_io import (
     check_output_dir,
 )
-from emonav_drake.core.scenario import MAX_SEED
 from emonav_drake.diagrams.plants import plant_named
 from emonav_drake.diagrams.trials import (
     MAX_TRIALS,
@@ -85,6 +84,7 @@ from emonav_drake.errors import RunInterrupted
 from emonav_drake.evaluation.run_directory import ERRORS_FILE, RunDirectory, trial_key
 from emonav_drake.evaluation.run_settings import make_settings
 from emonav_drake.params import ConfigError, EmoNavConfig, dump_config, load_config
+from emonav_drake.scenarios.scenario import MAX_SEED
 
 log = logging.getLogger(__name__)
 
@@ -486,7 +486,7 @@ def _interruption(
 
 def _check_scenarios(config: EmoNavConfig, first_seed: int, trials: int, where: str) -> None:
     """Sample every scenario now (cheap): a crowd that does not fit fails before any trial."""
-    from emonav_drake.core.scenario import ScenarioSamplingError, sample_scenario
+    from emonav_drake.scenarios.scenario import ScenarioSamplingError, sample_scenario
 
     for seed in range(first_seed, first_seed + trials):
         try:

@@ -11,7 +11,7 @@ intervals and the trajectories of chosen trials.
   policy is "emobipednav", also in old runs that call it "policy" or "sac":
   `method_label`).
 
-Colours: the shared palette (`core/palette.py`): the scene's roles as in every view, the
+Colours: the shared palette (`palette.py`): the scene's roles as in every view, the
 methods `palette.METHOD_RGB` (never an emotion's colour).
 """
 
@@ -22,9 +22,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from emonav_drake.core import palette
-from emonav_drake.core.episode_trace import EpisodeTrace
-from emonav_drake.core.palette import (
+from emonav_drake import palette
+from emonav_drake.evaluation import tables
+from emonav_drake.navigation.episode_trace import EpisodeTrace
+from emonav_drake.palette import (
     EMOTION_RGB,
     GOAL_RADIUS_RGB,
     GOAL_RGB,
@@ -33,7 +34,6 @@ from emonav_drake.core.palette import (
     ROBOT_RGB,
     STATIC_RGB,
 )
-from emonav_drake.evaluation import tables
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 from emonav_drake.planners.legacy import method_label
 

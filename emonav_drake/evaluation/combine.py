@@ -13,7 +13,7 @@ seeds both ran) and may come from different commits (each run's commit is listed
 combined settings). A method name
 may appear in two runs only for the same planner and checkpoint; its trials must then
 agree seed for seed (a deterministic planner gives the same trial twice) — on the fields
-both records have: a run recorded before the field's metrics (`core/social_metrics.py`)
+both records have: a run recorded before the field's metrics (`navigation/social_metrics.py`)
 agrees with a later one that has them, and the trial that has them is kept.
 """
 
@@ -22,7 +22,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from emonav_drake.core.social_metrics import SOCIAL_FIELDS
 from emonav_drake.evaluation.run_directory import (
     BenchmarkSettingsError,
     comparable,
@@ -30,6 +29,7 @@ from emonav_drake.evaluation.run_directory import (
     trial_key,
 )
 from emonav_drake.evaluation.run_settings import TRIAL_SETTINGS, config_difference
+from emonav_drake.navigation.social_metrics import SOCIAL_FIELDS
 
 
 def _measured(t: dict) -> bool:

@@ -42,10 +42,10 @@ from pathlib import Path
 
 import numpy as np
 
-from emonav_drake.core import step_response as sr
-from emonav_drake.core.episode_trace import EpisodeTrace
 from emonav_drake.evaluation.failures import failure_cause, format_failures, write_run_files
+from emonav_drake.navigation.episode_trace import EpisodeTrace
 from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.robot import step_response as sr
 
 
 def tracking_errors(
@@ -249,9 +249,9 @@ def _cause_order(cause: str) -> tuple[int, str]:
 
 
 def _cause_color(cause: str) -> tuple[float, float, float]:
-    """The world's colours (`core.palette`): emotions as everywhere, static discs and walls grey;
+    """The world's colours (`palette`): emotions as everywhere, static discs and walls grey;
     timeouts purple, falls and anything else black."""
-    from emonav_drake.core import palette
+    from emonav_drake import palette
     from emonav_drake.params import EMOTION_NAMES
 
     kind = cause.removeprefix("collision: ")
@@ -272,7 +272,7 @@ def plot_diagnosis(rows: list[dict]):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from emonav_drake.core import palette
+    from emonav_drake import palette
 
     methods = sorted({r["method"] for r in rows})
     causes = sorted({r["cause"] for r in rows if r["outcome"] != "success"}, key=_cause_order)

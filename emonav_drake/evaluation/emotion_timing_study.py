@@ -1,7 +1,7 @@
 """Emotion known when it matters, measured: per family and per emotion source.
 
 Each task is one LIP episode (the MPC on the LiDAR tracks, the exact scan) of one scenario
-family and one emotion source (`VARIANTS`), traced; `core/emotion_timing.py` turns the
+family and one emotion source (`VARIANTS`), traced; `navigation/emotion_timing.py` turns the
 trace into one sample per approached pedestrian (what the planner believed of them when the
 robot first came within their discomfort distance + 1 m, and whether their face could have
 been seen before). The episode's steps inside a true negative zone (IDT negative) come from
@@ -61,13 +61,13 @@ def variant_estimate(variant: str) -> Any:
 def episode(seed: int, family: str, variant: str) -> dict:
     """One traced LIP episode: {family, variant, seed, outcome, steps, negative_zone_steps,
     samples}."""
-    from emonav_drake.core.emotion_timing import CameraView, approach_samples
-    from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.episode import EpisodeRequest
     from emonav_drake.diagrams.plants import plant_named
     from emonav_drake.evaluation.perception_study import half_fov_x_deg
+    from emonav_drake.navigation.emotion_timing import CameraView, approach_samples
     from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
     from emonav_drake.planners import make_planner
+    from emonav_drake.scenarios.scenario import sample_scenario
 
     cfg = EmoNavConfig()
     cfg.crowd.family = family

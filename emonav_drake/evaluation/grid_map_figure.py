@@ -1,7 +1,7 @@
 """The paper's Fig. 3 for one scene: the LiDAR scan, its LGM and its OGM, written as a PNG.
 
 Panel (a) is the scene from above in the world frame, in the shared palette
-(`core/palette.py`, Okabe–Ito): the robot blue with a black heading arrow, pedestrians
+(`palette.py`, Okabe–Ito): the robot blue with a black heading arrow, pedestrians
 bluish green / orange / vermillion by emotion (happy / neutral / negative) with their
 discomfort zones dashed in the same colour, static discs grey with their dashed d_static
 rings, walls (if any) as grey lines with their dashed d_static bands, the LiDAR's hit
@@ -28,9 +28,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch
 
-from emonav_drake.core.grid_maps import COLLISION_VALUE, DISCOMFORT_VALUE, lgm_frame
-from emonav_drake.core.lidar import as_discs, as_point, beam_angles, scan_discs
-from emonav_drake.core.palette import (
+from emonav_drake.palette import (
     EMOTION_RGB,
     GOAL_RGB,
     GRID_COLLISION_RGB,
@@ -45,8 +43,10 @@ from emonav_drake.core.palette import (
     UNKNOWN_EMOTION_RGB,
     ZONE_EDGE_RGB,
 )
-from emonav_drake.core.walls import as_segments
 from emonav_drake.params import EMOTION_NAMES, NUM_BEAMS
+from emonav_drake.scenarios.walls import as_segments
+from emonav_drake.sensing.grid_maps import COLLISION_VALUE, DISCOMFORT_VALUE, lgm_frame
+from emonav_drake.sensing.lidar import as_discs, as_point, beam_angles, scan_discs
 
 STATIC, PEDESTRIAN = 0, 1
 
@@ -96,7 +96,7 @@ def render_grid_map_figure(
             static discs) colouring the pedestrians; without them pedestrians are dark grey
             (`palette.UNKNOWN_EMOTION_RGB`).
         segments: optional walls (W, 2, 2) in the world frame [m] (segment k from
-            ``[k, 0]`` to ``[k, 1]``), scanned with the discs (`core/lidar.py`).
+            ``[k, 0]`` to ``[k, 1]``), scanned with the discs (`sensing/lidar.py`).
         segment_margin: the walls' discomfort margin [m] (the static discs' 0.2 m).
 
     Returns:

@@ -17,9 +17,9 @@ import json
 from collections.abc import Sequence
 from pathlib import Path
 
-from emonav_drake.core.metrics import COLLISION, FALL, TIMEOUT
 from emonav_drake.errors import UserError
 from emonav_drake.evaluation import tables
+from emonav_drake.navigation.metrics import COLLISION, FALL, TIMEOUT
 
 
 class CurveError(UserError, ValueError):
@@ -179,7 +179,7 @@ def plot_curve(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from emonav_drake.core.palette import REFERENCE_RGB, ROBOT_RGB
+    from emonav_drake.palette import REFERENCE_RGB, ROBOT_RGB
 
     x = range(len(curve.labels))
     sr = [curve.summary[lab]["SR"] for lab in curve.labels]

@@ -35,12 +35,12 @@ from pydrake.math import RigidTransform
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
 
-from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.core.pedestrian_pose import bearing_and_facing
-from emonav_drake.core.scenario import PedestrianSpec, Scenario
+from emonav_drake.crowd.crowd import CrowdSnapshot
+from emonav_drake.crowd.pedestrian_pose import bearing_and_facing
 from emonav_drake.diagrams.episode import EpisodeStepper
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
+from emonav_drake.scenarios.scenario import PedestrianSpec, Scenario
 
 NUM_EMOTIONS = len(EMOTION_NAMES)
 
@@ -128,7 +128,7 @@ class CameraRig:
         """(u, v, height) [px] of the placed pedestrian's face in the image: the head's
         centre projected by the pinhole camera (`PedestrianBody.head_center_height`, the
         face's height `face_height`)."""
-        from emonav_drake.core.pedestrian_pose import PedestrianBody
+        from emonav_drake.crowd.pedestrian_pose import PedestrianBody
 
         cam, body = self.params.camera, PedestrianBody()
         f = (cam.height / 2.0) / math.tan(math.radians(cam.fov_y_deg) / 2.0)

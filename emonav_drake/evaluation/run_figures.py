@@ -10,7 +10,7 @@
   every method in every run, and, when the runs differ in their scenario family, a heat
   map of SR (methods × families).
 
-Colours from the shared palette (`core/palette.py`). The backend is left as it is (a
+Colours from the shared palette (`palette.py`). The backend is left as it is (a
 notebook keeps its inline one; without a display matplotlib draws with Agg), and every
 figure is closed once saved.
 """
@@ -23,11 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
-from emonav_drake.core import palette
-from emonav_drake.core.palette import INK_RGB
-from emonav_drake.core.social_metrics import TTC_THRESHOLD
+from emonav_drake import palette
 from emonav_drake.evaluation import tables
 from emonav_drake.evaluation.benchmark_plots import mean_interval, plot_summary, run_labels
+from emonav_drake.navigation.social_metrics import TTC_THRESHOLD
+from emonav_drake.palette import INK_RGB
 
 SUMMARY_FIGURE = "summary.png"
 SOCIAL_FIGURE = "social.png"

@@ -25,8 +25,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from emonav_drake.core.scenario import MAX_SEED
-from emonav_drake.core.scenario_families import WALLED_FAMILIES
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.diagrams.run_spec import RunSpec
 from emonav_drake.diagrams.trials import (
@@ -43,6 +41,8 @@ from emonav_drake.params import (
     load_config,
 )
 from emonav_drake.provenance import package_identity, sha256_bytes
+from emonav_drake.scenarios.scenario import MAX_SEED
+from emonav_drake.scenarios.scenario_families import WALLED_FAMILIES
 
 log = logging.getLogger(__name__)
 

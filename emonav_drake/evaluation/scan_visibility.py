@@ -14,9 +14,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from emonav_drake.core.lidar import scan_discs
-from emonav_drake.core.lidar_objects import DetectionParams
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.sensing.lidar import scan_discs
+from emonav_drake.sensing.lidar_objects import DetectionParams
 
 SAME_RANGE = 1e-6  # a beam shows an object when the full scan's range equals its own [m]
 

@@ -11,7 +11,7 @@ interval; methods are compared on the seeds they share with McNemar's exact test
 * Table III style: IDT [static; happy, neutral, negative] and SR per method and setting;
 * social metrics: mean path length, minimum pedestrian distance, collision, timeout and
   (full-order Digit) fall rates, wall time per trial;
-* the field's metrics (`core/social_metrics.py`, docs/metrics.md): path irregularity,
+* the field's metrics (`navigation/social_metrics.py`, docs/metrics.md): path irregularity,
   jerk, pedestrian clearance, low time-to-collision and intrusion ratios, clearance
   during intrusions — means per trial with 95 % Student-t intervals, over the trials
   that measured them (n/a: none did, e.g. a run recorded before they existed);
@@ -27,9 +27,9 @@ import itertools
 import math
 from collections.abc import Iterable, Sequence
 
-from emonav_drake.core.metrics import SUCCESS, record_from_json, summarize
-from emonav_drake.core.social_metrics import INTRUSION_DISTANCE, SOCIAL_FIELDS, TTC_THRESHOLD
 from emonav_drake.diagrams.plants import PLANTS
+from emonav_drake.navigation.metrics import SUCCESS, record_from_json, summarize
+from emonav_drake.navigation.social_metrics import INTRUSION_DISTANCE, SOCIAL_FIELDS, TTC_THRESHOLD
 
 ALPHA = 0.05
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile

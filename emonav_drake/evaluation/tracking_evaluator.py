@@ -5,7 +5,7 @@ episodes are `evaluation/tracking_study.py`'s), runs the scan, the detector and 
 tracker on it, scores the tracker's pedestrians against the truth with py-motmetrics and
 returns what the episode's scans gave (`EpisodeResult`).
 
-**One scan** (`EpisodeEvaluator.observe`, `ScanTruth`): `core/lidar.py::scan_discs` of
+**One scan** (`EpisodeEvaluator.observe`, `ScanTruth`): `sensing/lidar.py::scan_discs` of
 every pedestrian, static disc and wall from the robot's pose, `detect_objects`,
 `CrowdTracker.update`. Ground truth: every pedestrian (id = its index), its position and
 velocity. Hypotheses: the confirmed tracks that are not still (`CrowdTracker.is_static`),
@@ -36,12 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.core.crowd_tracker import CrowdTracker, TrackerParams, tracker_params
-from emonav_drake.core.leg_detection import detect_scan, detection_params
-from emonav_drake.core.lidar import scan_discs
-from emonav_drake.core.lidar_objects import DetectionParams
-from emonav_drake.core.lidar_sensor import seen_discs, sensed_ranges
+from emonav_drake.crowd.crowd import CrowdSnapshot
 from emonav_drake.evaluation.scan_visibility import (
     OCCLUDED,
     OUT_OF_RANGE,
@@ -51,6 +46,11 @@ from emonav_drake.evaluation.scan_visibility import (
     visible_beams,
 )
 from emonav_drake.params import EmoNavConfig, SensorParams
+from emonav_drake.sensing.crowd_tracker import CrowdTracker, TrackerParams, tracker_params
+from emonav_drake.sensing.leg_detection import detect_scan, detection_params
+from emonav_drake.sensing.lidar import scan_discs
+from emonav_drake.sensing.lidar_objects import DetectionParams
+from emonav_drake.sensing.lidar_sensor import seen_discs, sensed_ranges
 
 MATCH_DISTANCE = 0.5  # a hypothesis farther than this from a pedestrian is not it [m]
 
@@ -89,7 +89,7 @@ class ScanTruth:
     seed: int = 0
 
     def snapshot(self, config: EmoNavConfig) -> CrowdSnapshot:
-        """The crowd as the sensor model reads it (`core/lidar_sensor.py`)."""
+        """The crowd as the sensor model reads it (`sensing/lidar_sensor.py`)."""
         p = len(self.ped_positions)
         return CrowdSnapshot(
             positions=np.asarray(self.ped_positions, dtype=float).reshape(-1, 2),

@@ -25,7 +25,7 @@ def plot(summary: dict, png: Any, title: str | None = None) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from emonav_drake.core.palette import DATA_RGB, REFERENCE_RGB, SERIES_RGB, SHADE_RGB
+    from emonav_drake.palette import DATA_RGB, REFERENCE_RGB, SERIES_RGB, SHADE_RGB
 
     rows = summary["by_distance"]
     max_range = summary["settings"]["lidar"]["max_range"]

@@ -2,11 +2,11 @@
 
 `config.perception.state_source = "lidar"` gives the state-based planners the crowd as
 `systems/crowd_tracker_system.py` estimates it: every scan (10 Hz) is segmented into
-discs (`core/lidar_objects.py::detect_objects`) and folded into a multi-target tracker
-(`core/crowd_tracker.py::CrowdTracker`). This module measures that estimate against the
+discs (`sensing/lidar_objects.py::detect_objects`) and folded into a multi-target tracker
+(`sensing/crowd_tracker.py::CrowdTracker`). This module measures that estimate against the
 simulator's truth.
 
-**Episodes** (`run_episode`): the fast LIP world (`core/navigation.py::NavigationWorld`,
+**Episodes** (`run_episode`): the fast LIP world (`navigation/lip_world.py::NavigationWorld`,
 no map), the robot driven by a planner on the TRUE crowd (by default the MPC), so it
 moves as in a real episode whatever the tracker makes of the crowd. The world is stepped
 as usual; before each walking step the crowd periods of that step are replayed on a copy
@@ -32,18 +32,18 @@ from typing import Any
 
 import numpy as np
 
-from emonav_drake.core.crowd_tracker import TrackerParams
-from emonav_drake.core.lidar_objects import DetectionParams
-from emonav_drake.core.lip import lip_velocity
-from emonav_drake.core.navigation import (
+from emonav_drake.evaluation.tracking_evaluator import EpisodeEvaluator, EpisodeResult, ScanTruth
+from emonav_drake.navigation.lip_world import (
     NavigationWorld,
     check_command,
     robot_at_substep,
     substeps_per_step,
 )
-from emonav_drake.core.scenario import Scenario
-from emonav_drake.evaluation.tracking_evaluator import EpisodeEvaluator, EpisodeResult, ScanTruth
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.robot.lip import lip_velocity
+from emonav_drake.scenarios.scenario import Scenario
+from emonav_drake.sensing.crowd_tracker import TrackerParams
+from emonav_drake.sensing.lidar_objects import DetectionParams
 
 
 def run_episode(
@@ -99,8 +99,8 @@ def study(
     progress: bool = False,
 ) -> list[EpisodeResult]:
     """`run_episode` on the scenario `sample_scenario(seed, config)` of each seed."""
-    from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.planners import make_planner
+    from emonav_drake.scenarios.scenario import sample_scenario
 
     cfg = config or EmoNavConfig()
     planner = make_planner(planner_name, cfg)

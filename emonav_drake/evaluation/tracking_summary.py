@@ -15,8 +15,6 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from emonav_drake.core.crowd_tracker import TrackerParams
-from emonav_drake.core.lidar_objects import DetectionParams
 from emonav_drake.evaluation.scan_visibility import CATEGORY_NAMES, OCCLUDED
 from emonav_drake.evaluation.tracking_evaluator import (
     FP_CAUSES,
@@ -26,6 +24,8 @@ from emonav_drake.evaluation.tracking_evaluator import (
     _motmetrics,
 )
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.sensing.crowd_tracker import TrackerParams
+from emonav_drake.sensing.lidar_objects import DetectionParams
 
 # Bins of the summaries and the figure: distance to the robot [m] (the range is 6 m).
 DISTANCE_EDGES = (0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 4.5, 5.0, 5.5, 6.0, 7.0, 8.0, 10.0)

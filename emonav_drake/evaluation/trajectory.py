@@ -30,7 +30,7 @@ at t_k; the last row is the episode's end::
     }
 
 `collision` (outcome "collision" only) names the object the robot touched at t_K — the
-one whose surface is nearest the robot's centre, as `core.reward.evaluate_step` decides
+one whose surface is nearest the robot's centre, as `navigation.reward.evaluate_step` decides
 — and `point` is the point of that surface nearest the robot's centre. The discomfort
 distances are margins beyond an object's surface (the robot is inside a zone when its
 centre is within margin + robot radius of the surface).
@@ -44,11 +44,11 @@ from pathlib import Path
 
 import numpy as np
 
-from emonav_drake.core.episode_trace import EpisodeTrace
-from emonav_drake.core.metrics import COLLISION, EpisodeRecord
-from emonav_drake.core.scenario import Scenario
 from emonav_drake.json_input import JsonInputError, read_json
+from emonav_drake.navigation.episode_trace import EpisodeTrace
+from emonav_drake.navigation.metrics import COLLISION, EpisodeRecord
 from emonav_drake.params import EMOTION_NAMES, ConfigError, EmoNavConfig
+from emonav_drake.scenarios.scenario import Scenario
 
 FORMAT = 1
 # Decimals kept in the JSON: 1 mm, 0.1 mrad, 1 mm/s, 1 ms.

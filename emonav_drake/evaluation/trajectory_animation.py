@@ -17,7 +17,6 @@ from pathlib import Path
 from matplotlib.collections import LineCollection
 from matplotlib.patches import Circle
 
-from emonav_drake.core.palette import EMOTION_RGB, INK_RGB, ROBOT_RGB
 from emonav_drake.evaluation.trajectory import Trajectory
 from emonav_drake.evaluation.trajectory_drawing import (
     draw_static,
@@ -29,6 +28,7 @@ from emonav_drake.evaluation.trajectory_drawing import (
     title_of,
     view_bounds,
 )
+from emonav_drake.palette import EMOTION_RGB, INK_RGB, ROBOT_RGB
 from emonav_drake.params import EMOTION_NAMES
 
 

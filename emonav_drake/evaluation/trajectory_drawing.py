@@ -4,7 +4,7 @@ walls, start, goal), the pedestrians' paths by emotion, the end of the episode (
 or fall), the title, the legend and the figure with its key panel.
 
 They draw a `Trajectory` (`evaluation/trajectory.py`) in the world frame (x towards the
-goal, y left, metres) with the shared palette (`core/palette.py`, Okabe–Ito), with
+goal, y left, metres) with the shared palette (`palette.py`, Okabe–Ito), with
 matplotlib's object API and the Agg canvas: no screen, no pyplot state.
 """
 
@@ -18,7 +18,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle
 
-from emonav_drake.core.palette import (
+from emonav_drake.evaluation.trajectory import Trajectory
+from emonav_drake.palette import (
     EMOTION_RGB,
     GOAL_RADIUS_RGB,
     GOAL_RGB,
@@ -28,7 +29,6 @@ from emonav_drake.core.palette import (
     STATIC_RGB,
     ZONE_EDGE_RGB,
 )
-from emonav_drake.evaluation.trajectory import Trajectory
 from emonav_drake.params import EMOTION_NAMES
 
 _OUTCOME_TEXT = {

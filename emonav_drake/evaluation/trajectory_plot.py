@@ -2,7 +2,7 @@
 
 It reads a `Trajectory` (`evaluation/trajectory.py`, the `"trajectory"` section of
 `emonav sim --json`) and draws in the world frame (x towards the goal, y left, metres),
-with the shared palette (`core/palette.py`, Okabe–Ito): the robot blue, pedestrians bluish
+with the shared palette (`palette.py`, Okabe–Ito): the robot blue, pedestrians bluish
 green / orange / vermillion for happy / neutral / negative, static discs grey, the goal a
 black star in its dotted goal-radius ring.
 
@@ -28,15 +28,6 @@ from matplotlib.collections import LineCollection
 from matplotlib.colors import LinearSegmentedColormap, Normalize
 from matplotlib.patches import Circle
 
-from emonav_drake.core.palette import (
-    EMOTION_RGB,
-    INK_RGB,
-    PAPER_RGB,
-    ROBOT_DARK_RGB,
-    ROBOT_LIGHT_RGB,
-    ROBOT_RGB,
-    TEXT_RGB,
-)
 from emonav_drake.evaluation.trajectory import Trajectory
 from emonav_drake.evaluation.trajectory_drawing import (
     draw_static,
@@ -48,6 +39,15 @@ from emonav_drake.evaluation.trajectory_drawing import (
     pedestrian_segments,
     title_of,
     view_bounds,
+)
+from emonav_drake.palette import (
+    EMOTION_RGB,
+    INK_RGB,
+    PAPER_RGB,
+    ROBOT_DARK_RGB,
+    ROBOT_LIGHT_RGB,
+    ROBOT_RGB,
+    TEXT_RGB,
 )
 from emonav_drake.params import EMOTION_NAMES
 

@@ -13,10 +13,17 @@ import dataclasses as dc
 import math
 from typing import TYPE_CHECKING, Any
 
-from emonav_drake.core.metrics import COLLISION, FALL, NO_ROUTE, SUCCESS, TIMEOUT, EpisodeRecord
-from emonav_drake.core.scenario import MAX_SEED
-from emonav_drake.core.social_metrics import check_social_fields
 from emonav_drake.diagrams.plants import PLANTS
+from emonav_drake.navigation.metrics import (
+    COLLISION,
+    FALL,
+    NO_ROUTE,
+    SUCCESS,
+    TIMEOUT,
+    EpisodeRecord,
+)
+from emonav_drake.navigation.social_metrics import check_social_fields
+from emonav_drake.scenarios.scenario import MAX_SEED
 
 if TYPE_CHECKING:
     from emonav_drake.params import EmoNavConfig
@@ -53,8 +60,8 @@ def check_trial(t: dict, config: EmoNavConfig | None = None) -> str | None:
     that are finite and >= 0 (`min_ped_distance` may be null: no pedestrian), a finite
     reward, DT between the largest IDT entry and their sum, `collided_with` only on a
     collision and `fall_reason` only on a fall, the field's metrics absent, null or valid
-    (`core.social_metrics.check_social_fields`). With the run's `config`, also what the
-    episode's bookkeeping (`core.metrics.EpisodeTracker`, on either plant) makes of it:
+    (`navigation.social_metrics.check_social_fields`). With the run's `config`, also what the
+    episode's bookkeeping (`navigation.metrics.EpisodeTracker`, on either plant) makes of it:
     `nav_time` = `steps` × `robot.step_time`, at most `episode.max_steps` steps, a
     timeout exactly at `episode.max_steps`, at least one step before a success or a
     collision."""

@@ -8,13 +8,13 @@
 maps, planner) on training seeds, each planner's command replaced by a uniformly random
 one on a fraction `explore` of the steps (seeded) so that the fit sees every command,
 and appends one JSON line per episode: the planner, seed, outcome, wall time and the trace
-of the episode (`core.episode_trace.EpisodeTrace.rows`: robot state and held command at
+of the episode (`navigation.episode_trace.EpisodeTrace.rows`: robot state and held command at
 every planner instant).
 Episodes run one per Ray task (`--workers`), each worker simulating its own diagrams; the
 file is resumable (episodes already in it are not run again) and its lines are sorted
 by (planner, seed) whatever the order they finished in, so a parallel run writes the same
 file as a serial one. `fit` splits the episodes (the last fraction `held_out`, by seed
-order, is held out), fits `core.step_response`, and writes the model with its report:
+order, is held out), fits `robot.step_response`, and writes the model with its report:
 the residual σ on the fitting data and the RMS errors on the held-out episodes of the
 model and of the LIP driven by u_k, u_{k−1}, u_{k−2}.
 
@@ -73,8 +73,8 @@ def _trace_episode(runner, method: str, seed: int, explore: float) -> dict:
     """One traced Digit episode of `method` on the scenario of `seed` (a JSON line)."""
     import time
 
-    from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
+    from emonav_drake.scenarios.scenario import sample_scenario
 
     planner, cfg, grid_kind = runner.planner(method)
     t0 = time.perf_counter()
@@ -129,7 +129,6 @@ def collect_traces(
     episodes run now (the throughput of the Digit simulation, per worker).
     """
     from emonav_drake.atomic_io import write_text_atomic
-    from emonav_drake.core.scenario import MAX_SEED
     from emonav_drake.diagrams.trials import (
         MAX_TRIALS,
         BenchmarkSpec,
@@ -139,6 +138,7 @@ def collect_traces(
     )
     from emonav_drake.params import dump_config
     from emonav_drake.progress import progress_bar
+    from emonav_drake.scenarios.scenario import MAX_SEED
 
     if not 0.0 <= explore <= 1.0:
         raise ConfigError(f"--explore {explore}: must be in [0, 1]")
@@ -222,7 +222,7 @@ def read_trace_lines(path: str | Path) -> list[dict]:
 def read_traces(paths: list[str | Path], step_time: float):
     """All episodes of trace files as `Transitions` (episode ids in file order);
     `ConfigError` naming the file and line of a malformed episode."""
-    from emonav_drake.core.step_response import Transitions, transitions_from_trace
+    from emonav_drake.robot.step_response import Transitions, transitions_from_trace
 
     parts, names = [], []
     for path in paths:
@@ -246,7 +246,7 @@ def fit_response(
     import numpy as np
 
     from emonav_drake.atomic_io import write_json
-    from emonav_drake.core.step_response import (
+    from emonav_drake.robot.step_response import (
         OUTPUTS,
         UNITS,
         evaluate,

@@ -16,8 +16,6 @@ import dataclasses as dc
 from emonav_drake.config_fields import SEED_RANGE
 from emonav_drake.config_fields import setting as _setting  # DaggerConfig has a `setting`
 from emonav_drake.configs import SETTINGS
-from emonav_drake.core.goal_input import GOAL_INPUTS
-from emonav_drake.core.sarl_state import VALUE_NETWORKS
 from emonav_drake.learning.config_common import (
     COUNT,
     COUNT_OR_NONE,
@@ -35,6 +33,7 @@ from emonav_drake.learning.config_common import (
     check_sensor,
 )
 from emonav_drake.learning.teacher import expert_for_route
+from emonav_drake.navigation.goal_input import GOAL_INPUTS
 from emonav_drake.params import SCENARIO_FAMILIES, EpisodeParams
 from emonav_drake.planners.legacy import (
     LEGACY_EXPERT_FIELDS,
@@ -49,6 +48,7 @@ from emonav_drake.planners.specs import (
     describe_spec,
     is_soft,
 )
+from emonav_drake.planning.sarl_state import VALUE_NETWORKS
 from emonav_drake.typed_yaml import ConfigError, from_plain, validate_fields
 
 __all__ = ["DaggerConfig", "SarlConfig"]
@@ -98,7 +98,7 @@ class DaggerConfig:
     encoder: str = _setting("cnn", '"cnn"; "lstm" with grid_kind "scan" = LNDNL')
     goal_input: str = _setting(
         "goal",
-        'what the student reads as its goal (`core/goal_input.py`): "goal" (the paper\'s) or '
+        'what the student reads as its goal (`navigation/goal_input.py`): "goal" (the paper\'s) or '
         '"guide" (the bearing of a sub-goal on the shortest path around the static discs)',
     )
     setting: str = _setting(
@@ -120,7 +120,7 @@ class DaggerConfig:
         "",
         "the robot of the training world and of the expert's predictions: \"\" = the paper's "
         'LIP; "digit" = the shipped Digit step-response model; or the path of a fitted model '
-        "JSON (`emonav calibrate fit`; core/step_response.py)",
+        "JSON (`emonav calibrate fit`; robot/step_response.py)",
     )
     init_policy: str = _setting(
         "",

@@ -8,8 +8,8 @@ refused instead of started). The ranges of what a training configuration shares 
 """
 
 from emonav_drake.config_fields import field_range
-from emonav_drake.core.observations import observation_kind, observation_kinds
 from emonav_drake.errors import did_you_mean
+from emonav_drake.navigation.observations import observation_kind, observation_kinds
 from emonav_drake.params import (
     SENSOR_NAMES,
     EmoNavConfig,

@@ -54,10 +54,6 @@ import torch
 
 from emonav_drake.atomic_io import write_text_atomic
 from emonav_drake.configs import load_setting
-from emonav_drake.core.metrics import format_summary
-from emonav_drake.core.observations import observation_dtype, observation_shape
-from emonav_drake.core.scenario import sample_scenario
-from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.config_common import with_sensor
@@ -83,12 +79,16 @@ from emonav_drake.learning.run_state import (
     rng_state,
     set_rng_state,
 )
+from emonav_drake.navigation.metrics import format_summary
+from emonav_drake.navigation.observations import observation_dtype, observation_shape
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.model_aware import load_response
 from emonav_drake.planners.policy import save_policy
 from emonav_drake.planners.protocol import Planner
 from emonav_drake.progress import progress_bar
+from emonav_drake.robot.step_response import StepResponseModel
+from emonav_drake.scenarios.scenario import sample_scenario
 from emonav_drake.typed_yaml import to_plain
 
 log = logging.getLogger(__name__)

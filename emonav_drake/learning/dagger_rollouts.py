@@ -11,17 +11,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from emonav_drake.core.metrics import summarize
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.scenario import Scenario, sample_scenario
-from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.dagger_student import Student
 from emonav_drake.learning.demonstrations import Demonstrations, command_index
+from emonav_drake.navigation.lip_world import NavigationWorld
+from emonav_drake.navigation.metrics import summarize
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.policy import vector_state
 from emonav_drake.planners.protocol import Planner
+from emonav_drake.robot.step_response import StepResponseModel
+from emonav_drake.scenarios.scenario import Scenario, sample_scenario
 
 
 def run_episode_collect(
@@ -40,7 +40,7 @@ def run_episode_collect(
     `expert` is any planner with `reset()` and `plan(PlannerInput)`; its command is
     labelled as the nearest command of the grid: the student's, else `grid` (N, 2), else
     the expert's own DWA candidates. The student's vector state reads the goal as
-    `goal_input` says (`core/goal_input.py`). With `soft` the expert's distribution over
+    `goal_input` says (`navigation/goal_input.py`). With `soft` the expert's distribution over
     the grid (`last_distribution`, written by its `plan`) is stored as the soft label."""
     n = world.config.lidar.num_frames
     expert.reset()  # a model-aware expert remembers the episode's commands

@@ -14,9 +14,9 @@ import numpy as np
 import torch
 from torch.nn import functional as F
 
-from emonav_drake.core.observations import mirror_observation, observation_kind
 from emonav_drake.learning.config import DaggerConfig
 from emonav_drake.learning.demonstrations import Demonstrations, command_index
+from emonav_drake.navigation.observations import mirror_observation, observation_kind
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.networks import CategoricalPolicy
 from emonav_drake.planners.policy import build_encoder, encoder_spec, load_policy

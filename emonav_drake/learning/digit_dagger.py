@@ -110,8 +110,8 @@ def _labelled_episode(
 ) -> dict:
     """One Digit episode of the student (`runner`'s method) labelled by the expert of
     `rounds` (`DigitRoundsConfig.expert`, the calibrated run's)."""
-    from emonav_drake.core.scenario import sample_scenario
     from emonav_drake.diagrams.navigation_digit import run_digit_episode
+    from emonav_drake.scenarios.scenario import sample_scenario
 
     student, cfg, grid_kind = runner.planner(method)
     expert = rounds.expert.build(cfg)

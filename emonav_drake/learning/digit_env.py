@@ -36,11 +36,11 @@ from pydrake.gym import DrakeGymEnv
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context
 
-from emonav_drake.core.navigation import check_command, scenario_from_plain
-from emonav_drake.core.scenario import Scenario, sample_scenario
 from emonav_drake.diagrams.episode import EpisodeStepper
 from emonav_drake.learning.env import np_random_state, set_np_random_state, set_task
+from emonav_drake.navigation.lip_world import check_command, scenario_from_plain
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.scenarios.scenario import Scenario, sample_scenario
 
 
 class EmoNavDigitEnv(DrakeGymEnv):

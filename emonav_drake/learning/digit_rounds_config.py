@@ -42,8 +42,8 @@ class DigitRoundsConfig:
 
     def validate(self) -> DigitRoundsConfig:
         """Raise `ConfigError` naming the flag (or field) of a value out of range."""
-        from emonav_drake.core.scenario import MAX_SEED
         from emonav_drake.diagrams.trials import MAX_TRIALS
+        from emonav_drake.scenarios.scenario import MAX_SEED
 
         for name in ("rounds", "episodes", "grad_steps", "batch_size"):
             value = getattr(self, name)

@@ -1,6 +1,6 @@
 """`EmoNavLIP-v0`: the paper's navigation task on the LIP robot as a Gymnasium environment.
 
-A thin front over `core.navigation.NavigationWorld` (the same code the Drake diagram
+A thin front over `navigation.lip_world.NavigationWorld` (the same code the Drake diagram
 runs), so a trajectory replayed here and in the diagram is the same.
 
 Observation (`Dict`):
@@ -24,10 +24,10 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from emonav_drake.core.navigation import NavigationWorld, PlannerInput
-from emonav_drake.core.observations import map_key, observation_kind
-from emonav_drake.core.scenario import Scenario, sample_scenario
+from emonav_drake.navigation.lip_world import NavigationWorld, PlannerInput
+from emonav_drake.navigation.observations import map_key, observation_kind
 from emonav_drake.params import EmoNavConfig, load_config
+from emonav_drake.scenarios.scenario import Scenario, sample_scenario
 
 _BIT_GENERATORS = ("PCG64", "PCG64DXSM", "MT19937", "Philox", "SFC64")
 
@@ -78,7 +78,7 @@ class EmoNavLIPEnv(gym.Env):
         grid_kind: "lgm" (the paper's map), "ogm" (the Cartesian baseline) or "scan"
             (stacked raw scans under the key "scan", float32 (N, K) [m]: LiDAR-SAC) or
             "drlvo" (key "image", uint8 (1, 3, M, M): scan OGM + pedestrian velocity map,
-            the DRL-VO* baseline; see `core/kinematic_maps.py`).
+            the DRL-VO* baseline; see `sensing/kinematic_maps.py`).
         goal_radius: goal threshold [m]; default `config.episode.goal_radius` (0.1 m).
     """
 

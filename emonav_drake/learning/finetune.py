@@ -4,8 +4,8 @@ finetune`): a learning stage that can exceed its teacher.
 The DAgger routes imitate an expert and stay below it. This stage starts from a trained
 student (a DAgger route's `policy.pt`, kind "categorical": the frozen encoder over the
 observation stack, a trainable head over the command grid; `learning/finetune_agent.py`)
-and improves it on the paper's reward (`core/reward.py`, Eq. 6–9) in the route's reduced
-world: `core.navigation.NavigationWorld` on the LIP, or on the Digit-calibrated robot when
+and improves it on the paper's reward (`navigation/reward.py`, Eq. 6–9) in the route's reduced
+world: `navigation.lip_world.NavigationWorld` on the LIP, or on the Digit-calibrated robot when
 `FinetuneConfig.response` names a step-response model ("digit": the shipped one).
 
 * **Training episodes**: scenario seeds `train_seed_offset + i` (default 2 000 000 …,
@@ -50,10 +50,6 @@ import torch
 from tqdm import tqdm
 
 from emonav_drake.atomic_io import write_text_atomic
-from emonav_drake.core.metrics import COLLISION, SUCCESS, format_summary, summarize
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.scenario import sample_scenario
-from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config_common import with_sensor
 from emonav_drake.learning.finetune_agent import DiscreteSac, check_observation, load_init
@@ -78,6 +74,8 @@ from emonav_drake.learning.run_state import (
     set_rng_state,
 )
 from emonav_drake.learning.sac_config import FinetuneConfig
+from emonav_drake.navigation.lip_world import NavigationWorld
+from emonav_drake.navigation.metrics import COLLISION, SUCCESS, format_summary, summarize
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.model_aware import load_response
 from emonav_drake.planners.policy import (
@@ -87,6 +85,8 @@ from emonav_drake.planners.policy import (
     vector_state,
 )
 from emonav_drake.progress import progress_bar
+from emonav_drake.robot.step_response import StepResponseModel
+from emonav_drake.scenarios.scenario import sample_scenario
 from emonav_drake.torch_device import resolve_device
 
 log = logging.getLogger(__name__)
@@ -177,7 +177,7 @@ class _Run:
         self.response: StepResponseModel | None = load_response(cfg.response)
         meta = init["meta"]
         self.grid_kind = meta["observation"]["grid_kind"]
-        self.goal_input = goal_input_of(meta)  # the initial student's (`core/goal_input.py`)
+        self.goal_input = goal_input_of(meta)  # the initial student's (`navigation/goal_input.py`)
         self.commands = np.asarray(meta["commands"], dtype=float)
         self.bounds = (env_cfg.robot.max_speed, env_cfg.robot.max_heading_change)
         # one "frame" per step: the encoder's features; windows of one frame

@@ -37,8 +37,8 @@ import torch
 from torch import nn
 from torch.nn import functional as F
 
-from emonav_drake.core.observations import observation_kind, observation_shape
 from emonav_drake.learning.sac_config import FinetuneConfig
+from emonav_drake.navigation.observations import observation_kind, observation_shape
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.networks import VECTOR_STATE, CategoricalPolicy, mlp
 from emonav_drake.planners.policy import (

@@ -172,7 +172,7 @@ def restore_finetune_state(
 
 
 def history_entry(prog: Progress, agent: DiscreteSac, summary: dict, selected: bool) -> dict:
-    """An evaluation's entry in the history (`summary`: `core.metrics.summarize` of the
+    """An evaluation's entry in the history (`summary`: `navigation.metrics.summarize` of the
     selection episodes; the keys ending in `_s` are cumulative wall times [s])."""
     s = prog.since
 

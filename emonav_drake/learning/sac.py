@@ -22,8 +22,8 @@ import numpy as np
 import torch
 from torch.nn import functional as F
 
-from emonav_drake.core.observations import observation_kind
 from emonav_drake.learning.sac_config import SacConfig
+from emonav_drake.navigation.observations import observation_kind
 from emonav_drake.params import NUM_BEAMS
 from emonav_drake.planners.networks import (
     Actor,

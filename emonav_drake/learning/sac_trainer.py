@@ -33,7 +33,6 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
-from emonav_drake.core.metrics import record_from_json, summarize
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.env import EmoNavLIPEnv
 from emonav_drake.learning.env_pool import EnvPool, make_env, make_envs
@@ -60,6 +59,7 @@ from emonav_drake.learning.sac_curve import (
     open_tensorboard,
     truncate_curve,
 )
+from emonav_drake.navigation.metrics import record_from_json, summarize
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import encoder_spec, save_policy, vector_state
 from emonav_drake.progress import progress_bar

@@ -5,7 +5,7 @@ it through imitation, value learning and selection, and saves and restores it).
 `SarlRun.act` is the ε-greedy one-step look-ahead of CrowdNav's SARL on the LIP
 (`planners/sarl.py`: `action_values`); `episode` walks one scenario and returns its joint
 states, rewards and outcome; `train_batches` regresses the network on replayed states.
-Joint states are rows of `core/sarl_state.py`'s features, padded to the arena's most
+Joint states are rows of `planning/sarl_state.py`'s features, padded to the arena's most
 agents (`ReplayMemory`).
 """
 
@@ -18,14 +18,14 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from emonav_drake.core.metrics import summarize
-from emonav_drake.core.navigation import NavigationWorld
-from emonav_drake.core.sarl_state import NUM_FEATURES, current_rows, step_discount
-from emonav_drake.core.scenario import sample_scenario
 from emonav_drake.learning.config import SarlConfig
 from emonav_drake.learning.run_state import rng_state, set_rng_state, write_run_state
+from emonav_drake.navigation.lip_world import NavigationWorld
+from emonav_drake.navigation.metrics import summarize
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.sarl import action_values, command_grid, value_network
+from emonav_drake.planning.sarl_state import NUM_FEATURES, current_rows, step_discount
+from emonav_drake.scenarios.scenario import sample_scenario
 from emonav_drake.typed_yaml import to_plain
 
 STATE_FILE = "sarl_state.pt"  # in the run directory: what `--resume` reads

@@ -38,7 +38,6 @@ import torch
 from tqdm import tqdm
 
 from emonav_drake.atomic_io import write_text_atomic
-from emonav_drake.core.metrics import format_summary
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import SarlConfig
 from emonav_drake.learning.config_common import with_sensor
@@ -52,6 +51,7 @@ from emonav_drake.learning.run_state import (
     set_rng_state,
 )
 from emonav_drake.learning.sarl_run import SARL_STATE_FORMAT, STATE_FILE, SarlRun
+from emonav_drake.navigation.metrics import format_summary
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.sarl import save_sarl
 from emonav_drake.progress import progress_bar

@@ -22,7 +22,7 @@ import dataclasses as dc
 import numpy as np
 
 from emonav_drake.config_fields import SEED_RANGE, setting
-from emonav_drake.core.crowd import CrowdSnapshot
+from emonav_drake.crowd.crowd import CrowdSnapshot
 from emonav_drake.params import EMOTION_NAMES, ConfigError
 from emonav_drake.perception.track_emotions import TrackEmotionParams
 from emonav_drake.typed_yaml import validate_fields

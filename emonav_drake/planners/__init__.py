@@ -11,9 +11,9 @@ is that spec's `build(config, device)`. The built-in ones are registered below, 
 each:
 
 * model planners (no checkpoint): `dwa` and `mpc` (`planners/dwa.py`, `planners/mpc.py`;
-  their math in `core/dwa.py` and `core/mpc_*.py`), `dwa_digit` (DWA planning with
+  their math in `planning/dwa.py` and `planning/mpc_*.py`), `dwa_digit` (DWA planning with
   Digit's step-response model, the Digit/Digit route's expert), `mpc_digit` (the MPC
-  planning with that model, `core/mpc_response.py`);
+  planning with that model, `planning/mpc_response.py`);
 * learned planners (a policy checkpoint, `planners/policy.py`): `policy` (any trained
   checkpoint, by default the shipped policy), `sac` (a SAC-trained actor, checkpoint
   required), the LGM-shielded and MPC-steered policies, SARL and RGL (value networks),
@@ -28,7 +28,7 @@ from __future__ import annotations
 import copy
 from pathlib import Path
 
-from emonav_drake.core.observations import observation_kind
+from emonav_drake.navigation.observations import observation_kind
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.registry import (
     PlannerKind,

@@ -1,6 +1,6 @@
 """The DWA planner: the paper's Dynamic Window Approach baseline (§IV-D) as a planner.
 
-The algorithm (candidates, rollouts, rejection, score, tie-breaking) is `core/dwa.py`'s;
+The algorithm (candidates, rollouts, rejection, score, tie-breaking) is `planning/dwa.py`'s;
 this is the planner object around it (`planners.protocol.Planner`): its memory when it
 plans with a fitted step-response model, `plan_with_memory` for the diagram and `plan` /
 `reset` for the Gymnasium environment.
@@ -10,16 +10,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from emonav_drake.core.dwa import (
+from emonav_drake.navigation.lip_world import PlannerInput
+from emonav_drake.params import EmoNavConfig
+from emonav_drake.planning.dwa import (
     ResponseMemory,
     choose_candidate,
     command_candidates,
     lip_candidate_positions,
 )
-from emonav_drake.core.lip import LipState
-from emonav_drake.core.navigation import PlannerInput
-from emonav_drake.core.step_response import StepResponseModel
-from emonav_drake.params import EmoNavConfig
+from emonav_drake.robot.lip import LipState
+from emonav_drake.robot.step_response import StepResponseModel
 
 
 class DwaPlanner:
@@ -34,7 +34,7 @@ class DwaPlanner:
 
     Attributes:
         candidates: the commands it chooses among (C, 2) of (u_v [m/s], u_Δθ [rad]), in
-            the tie-breaking order (`core.dwa.command_candidates`).
+            the tie-breaking order (`planning.dwa.command_candidates`).
     """
 
     name = "dwa"

@@ -1,6 +1,6 @@
 """Step-response models by name: what a planner predicts a robot's walking steps with.
 
-A step-response model (`core.step_response`, fitted on traced Digit episodes by `emonav
+A step-response model (`robot.step_response`, fitted on traced Digit episodes by `emonav
 calibrate fit`) predicts each walking step's displacement, turn and speed from the
 commands; `DwaPlanner(config, response=model)` rolls its candidates out with it, the MPC
 and the LGM shield plan with it. A spec's `response` field (`planners/specs.py`) names
@@ -12,9 +12,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from emonav_drake.core.step_response import StepResponseModel
 from emonav_drake.json_input import JsonInputError, read_json
 from emonav_drake.params import ConfigError
+from emonav_drake.robot.step_response import StepResponseModel
 
 DIGIT_RESPONSE = Path(__file__).resolve().parent.parent / "data" / "digit_response.json"
 

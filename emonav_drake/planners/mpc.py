@@ -1,13 +1,13 @@
 """The MPC planner on the LIP model, solved with OSQP — the model-based baseline.
 
 The planner answers one walking-step command u_0 = (u_v, u_Δθ) per step by optimising a
-horizon of N walking steps of the paper's LIP step map (Eq. 1, `core/lip.py`) against a
+horizon of N walking steps of the paper's LIP step map (Eq. 1, `robot/lip.py`) against a
 constant-velocity prediction of the pedestrians and the static discs (privileged
 `CrowdSnapshot`, as DWA), then applying the first command (receding horizon).
 
 The formulation (decision variables, the LIP dynamics in condensed form, the emotion-aware
 discomfort and contact half-planes, the cost and the guide path it follows) is in the
-docstring of `core/mpc_qp.py`, which builds and solves it; this module is the planner
+docstring of `planning/mpc_qp.py`, which builds and solves it; this module is the planner
 around it.
 
 SCP loop. An initial guess is chosen by evaluating the nonlinear cost of a few seed
@@ -39,7 +39,7 @@ workspace per planning step would keep the q-aware scaling but a setup costs ~1.
 
 Work budget in iterations, not seconds. Every number that decides how far OSQP iterates is
 a count: `max_iter` (400 ADMM iterations per QP), the termination check every 25
-iterations and rho adapted every `_RHO_INTERVAL` = 50 iterations (`core/mpc_qp.py`;
+iterations and rho adapted every `_RHO_INTERVAL` = 50 iterations (`planning/mpc_qp.py`;
 OSQP's iteration-based rule, set explicitly: OSQP also has a rule that adapts rho after a
 fraction of the setup *time*). So a plan is the same on an idle and on a starved
 machine. OSQP's wall-clock `time_limit` (`mpc.time_limit`, 1 s per QP, ~1000× what a QP
@@ -49,11 +49,11 @@ step; no result we publish had one (`tests/test_mpc_load.py` runs the MPC beside
 hog and under stalls).
 
 Modules. This one (a planner, beside the others in `planners/`) holds `MpcPlanner` (seed
-choice, SCP loop, memory, fallback, counters) and `MpcMemory`; `core/mpc_model.py` the
+choice, SCP loop, memory, fallback, counters) and `MpcMemory`; `planning/mpc_model.py` the
 horizon's constants and solver-free model (rollout, Jacobian, obstacle prediction, seeds,
-nonlinear cost); `core/mpc_qp.py` the QP's structure, its linearisation and the OSQP solve
+nonlinear cost); `planning/mpc_qp.py` the QP's structure, its linearisation and the OSQP solve
 (one `osqp.OSQP` per obstacle count, fixed sparsity, values updated in place, explicit warm
-starts, polished solutions: see its docstring); `core/mpc_guide.py` the guide path. Beyond
+starts, polished solutions: see its docstring); `planning/mpc_guide.py` the guide path. Beyond
 numpy they need osqp and scipy (sparse matrices, the guide path's Dijkstra).
 
 Fallback. If the first QP of a planning step is infeasible (e.g. the hard contact
@@ -72,10 +72,12 @@ import signal
 
 import numpy as np
 
-from emonav_drake.core.dwa import ResponseMemory
-from emonav_drake.core.mpc_guide import GuidePath
-from emonav_drake.core.mpc_model import HorizonModel
-from emonav_drake.core.mpc_qp import (
+from emonav_drake.navigation.lip_world import PlannerInput
+from emonav_drake.params import EmoNavConfig
+from emonav_drake.planning.dwa import ResponseMemory
+from emonav_drake.planning.mpc_guide import GuidePath
+from emonav_drake.planning.mpc_model import HorizonModel
+from emonav_drake.planning.mpc_qp import (
     QpLayout,
     SolveInterrupted,
     build_layout,
@@ -86,10 +88,8 @@ from emonav_drake.core.mpc_qp import (
     solve_qp,
     solved_exactly,
 )
-from emonav_drake.core.mpc_response import ResponseHorizonModel
-from emonav_drake.core.navigation import PlannerInput
-from emonav_drake.core.step_response import StepResponseModel
-from emonav_drake.params import EmoNavConfig
+from emonav_drake.planning.mpc_response import ResponseHorizonModel
+from emonav_drake.robot.step_response import StepResponseModel
 
 log = logging.getLogger(__name__)
 
@@ -139,7 +139,7 @@ class MpcPlanner:
     Args:
         config: robot bounds and LIP constants, discomfort distances and the `mpc` params.
         response: None plans with the LIP (paper Eq. 1); a `StepResponseModel` plans with
-            the robot's fitted step response instead (`core/mpc_response.py`): the commands
+            the robot's fitted step response instead (`planning/mpc_response.py`): the commands
             already sent (u_{k−2} from the memory, u_{k−1} = `obs.last_command`) first, the
             step-averaged speed measured from the memory's previous pose.
 
@@ -160,7 +160,7 @@ class MpcPlanner:
         self.params = config.mpc
         self.response = response
         # The horizon's constants and solver-free model (rollout, Jacobian, obstacles,
-        # seeds, nonlinear cost): `core/mpc_model.py` (`core/mpc_response.py` with a
+        # seeds, nonlinear cost): `planning/mpc_model.py` (`planning/mpc_response.py` with a
         # step-response model).
         self.model = (
             HorizonModel(config) if response is None else ResponseHorizonModel(config, response)

@@ -3,7 +3,7 @@
 At every walking step the OSQP MPC (`planners/mpc.py`, with the privileged crowd state and,
 on Digit, its fitted step response) plans its command; the policy scores its 99 grid
 commands from its own LGM; the planner walks the best-scored command within `cells` grid
-steps of the MPC's (`core/nearby_labels.py`). `last_distribution` is the policy's softmax
+steps of the MPC's (`planning/nearby_labels.py`). `last_distribution` is the policy's softmax
 over those commands — the soft label a distilling route learns (`DaggerConfig.expert`
 "mpc_nearby"). Not the paper's method: a teacher that keeps the student's own ranking and
 takes from the MPC only where to go. With a `shield` (an LGM shield around the same
@@ -18,9 +18,7 @@ import dataclasses as dc
 
 import numpy as np
 
-from emonav_drake.core.lgm_shield import shield_distribution
-from emonav_drake.core.navigation import PlannerInput
-from emonav_drake.core.nearby_labels import nearby_mask, restricted_softmax
+from emonav_drake.navigation.lip_world import PlannerInput
 from emonav_drake.planners.mpc import MpcMemory, MpcPlanner
 from emonav_drake.planners.policy import (
     PolicyError,
@@ -29,6 +27,8 @@ from emonav_drake.planners.policy import (
     describe_policy,
 )
 from emonav_drake.planners.shield import ShieldedPolicy, ShieldMemory
+from emonav_drake.planning.lgm_shield import shield_distribution
+from emonav_drake.planning.nearby_labels import nearby_mask, restricted_softmax
 
 
 @dc.dataclass(frozen=True)

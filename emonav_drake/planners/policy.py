@@ -15,10 +15,10 @@ A policy checkpoint is one `torch.save` file:
 policy drives the Drake diagram (`emonav sim --planner policy`) or the Gymnasium env
 exactly like DWA or MPC. It uses only the map observation of its grid kind (the planner
 input's `lgm_stack`: uint8 (N, M, M) LGM/OGM stack, float32 (N, K) scan stack [m], uint8
-(1, 3, M, M) DRL-VO* image; `core/navigation.py`), the goal state and the last command —
+(1, 3, M, M) DRL-VO* image; `navigation/lip_world.py`), the goal state and the last command —
 never the pedestrians' privileged state. A policy trained with `goal_input: guide` reads
 the bearing of a sub-goal on the shortest path around the static discs instead of the
-goal's (`core/goal_input.py`): the discs are then known map obstacles.
+goal's (`navigation/goal_input.py`): the discs are then known map obstacles.
 """
 
 from __future__ import annotations
@@ -31,10 +31,10 @@ import numpy as np
 import torch
 
 from emonav_drake.atomic_io import atomic_write
-from emonav_drake.core.goal_input import check_goal_input
-from emonav_drake.core.navigation import PlannerInput
-from emonav_drake.core.observations import observation_kind, observation_kinds
 from emonav_drake.errors import UserError
+from emonav_drake.navigation.goal_input import check_goal_input
+from emonav_drake.navigation.lip_world import PlannerInput
+from emonav_drake.navigation.observations import observation_kind, observation_kinds
 from emonav_drake.params import NUM_BEAMS, LidarParams, RobotParams
 from emonav_drake.planners.catalog import DEFAULT_POLICY as _SHIPPED_DEFAULT
 from emonav_drake.planners.networks import (
@@ -224,7 +224,7 @@ def describe_policy(meta: dict[str, Any]) -> str:
 
 
 def goal_input_of(meta: dict[str, Any]) -> str:
-    """The goal input a checkpoint's policy reads ("goal" or "guide"; `core/goal_input.py`);
+    """The goal input a checkpoint's policy reads ("goal" or "guide"; `navigation/goal_input.py`);
     checkpoints from before the key existed read "goal"."""
     return check_goal_input(meta["observation"].get("goal_input", "goal"))
 
@@ -232,7 +232,7 @@ def goal_input_of(meta: dict[str, Any]) -> str:
 def observation_spec(meta: dict[str, Any]) -> tuple[str, tuple[int, ...], np.dtype]:
     """(grid kind, shape, dtype) of the map observation a checkpoint's policy reads.
 
-    The shapes of `core.observations.observation_shape` with the checkpoint's N, M and, for
+    The shapes of `navigation.observations.observation_shape` with the checkpoint's N, M and, for
     scans, K = the encoder's beams: uint8 (N, M, M) for "lgm"/"ogm", float32 (N, K) for
     "scan", uint8 (N, 3, M, M) for "drlvo" (the env and the diagram give N = 1).
     """

@@ -6,7 +6,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from emonav_drake.core.navigation import PlannerInput
+from emonav_drake.navigation.lip_world import PlannerInput
 
 
 class Planner(Protocol):

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from emonav_drake.core.navigation import PlannerInput
+from emonav_drake.navigation.lip_world import PlannerInput
 
 
 class ReplayPlanner:

@@ -3,7 +3,7 @@
 The paper (§IV-A) names SARL (Chen et al., ICRA 2019) among the planners that fail on the
 biped. This is SARL on our task, to test that claim: the crowd state is privileged (every
 pedestrian's position, velocity and emotion zone, every static disc), as in CrowdNav;
-`core/sarl_state.py` builds the joint state and the look-ahead on the LIP.
+`planning/sarl_state.py` builds the joint state and the look-ahead on the LIP.
 
 **Network** (`SarlValue`, CrowdNav's sizes): each row (robot ⊕ one agent, 15 features)
 → mlp1 (150, 100) → e_i; the mean of the e_i is the global state; attention
@@ -34,15 +34,15 @@ import numpy as np
 import torch
 from torch import nn
 
-from emonav_drake.core.navigation import PlannerInput
-from emonav_drake.core.sarl_state import (
+from emonav_drake.navigation.lip_world import PlannerInput
+from emonav_drake.params import ConfigError, EmoNavConfig
+from emonav_drake.planning.sarl_state import (
     NUM_FEATURES,
     SELF_FEATURES,
     VALUE_NETWORKS,
     lookahead,
     step_discount,
 )
-from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.torch_load import CheckpointReadError, load_checked
 
 SARL_FORMAT = "emonav-sarl/1"
@@ -115,7 +115,7 @@ class RglValue(nn.Module):
 
 
 # The value networks a SARL checkpoint may hold (its "network"; absent = "sarl"), under the
-# names of `core.sarl_state.VALUE_NETWORKS`.
+# names of `planning.sarl_state.VALUE_NETWORKS`.
 _NETWORK_CLASSES: dict[str, type[nn.Module]] = {"sarl": SarlValue, "rgl": RglValue}
 
 

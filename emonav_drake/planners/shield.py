@@ -1,4 +1,4 @@
-"""A categorical policy behind the LGM safety shield (`core/lgm_shield.py`).
+"""A categorical policy behind the LGM safety shield (`planning/lgm_shield.py`).
 
 `--planner policy_shield` runs a policy checkpoint (by default the MPC route's student,
 `emobipednav_digit_mpc`, on which it was tuned and measured) and walks, of its 99 grid
@@ -15,8 +15,16 @@ import dataclasses as dc
 
 import numpy as np
 
-from emonav_drake.core.dwa import ResponseMemory
-from emonav_drake.core.lgm_shield import (
+from emonav_drake.navigation.lip_world import PlannerInput
+from emonav_drake.params import EmoNavConfig
+from emonav_drake.planners.policy import (
+    PolicyError,
+    PolicyPlanner,
+    WrappedPolicy,
+    describe_policy,
+)
+from emonav_drake.planning.dwa import ResponseMemory
+from emonav_drake.planning.lgm_shield import (
     ShieldParams,
     body_velocities,
     brake_plans,
@@ -28,16 +36,8 @@ from emonav_drake.core.lgm_shield import (
     to_world,
     zone_intrusion,
 )
-from emonav_drake.core.lip import LipState, lip_rollout
-from emonav_drake.core.navigation import PlannerInput
-from emonav_drake.core.step_response import StepResponseModel
-from emonav_drake.params import EmoNavConfig
-from emonav_drake.planners.policy import (
-    PolicyError,
-    PolicyPlanner,
-    WrappedPolicy,
-    describe_policy,
-)
+from emonav_drake.robot.lip import LipState, lip_rollout
+from emonav_drake.robot.step_response import StepResponseModel
 
 
 def default_shield_params(response: StepResponseModel | str | None) -> ShieldParams:

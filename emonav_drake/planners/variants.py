@@ -26,13 +26,13 @@ planner name of `emonav sim|eval|benchmark` (`--planner NAME`, `--planners NAME,
 
 `emobipednav_digit` and `emobipednav_digit_mpc` differ by their training world, not its
 observation: the LIP-trained policy fine-tuned in the Digit-calibrated reduced world
-(`core/step_response.py`, `learning/calibration.py`). `emobipednav_distilled` continues
+(`robot/step_response.py`, `learning/calibration.py`). `emobipednav_distilled` continues
 `emobipednav_digit_mpc` with that policy behind its LGM shield as the teacher (soft labels;
 the same observation); its Digit rounds' round 2 (`emonav digit-rounds`, not a variant:
 `data/policies/emobipednav_distilled_digit.pt`) is the default `--planner policy`.
 `emobipednav_guide` is the
 MPC route with `goal_input: guide`
-(`core/goal_input.py`): a deviation from the paper's observation, measured against it.
+(`navigation/goal_input.py`): a deviation from the paper's observation, measured against it.
 `emobipednav_dd02` and `emobipednav_dd05` are its route trained in the constant settings
 `no_emotion` and `constant_0.5` (`DaggerConfig.setting`), Table III's first two rows.
 `emobipednav_mixed` is `emobipednav_digit_mpc`'s route on the `mixed` scenario family

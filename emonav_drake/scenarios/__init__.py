@@ -1,7 +1,7 @@
 """Example scenarios shipped with the package (hand-written `Scenario` YAML files).
 
 `emonav sim --scenario NAME` runs one by name (or any file by its path); `emonav config
---list` lists them. The fields are those of `core.scenario.Scenario` (world frame, metres,
+--list` lists them. The fields are those of `scenarios.scenario.Scenario` (world frame, metres,
 radians; emotions happy | neutral | negative); see docs/scenarios.md.
 
 | name | what it tests |

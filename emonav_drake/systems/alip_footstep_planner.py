@@ -6,10 +6,10 @@ Input ports:
         navigation diagram: the navigation planner's held command; in the walking
         diagram: `WalkingCommandSource`). Taken up for step k at the first update after
         the step clock's instant t_k (see "Step clock" below). Out-of-bound commands are
-        clipped with a warning (`core.navigation.check_command`); NaN raises
+        clipped with a warning (`navigation.lip_world.check_command`); NaN raises
         `CommandError`.
 Output ports:
-    targets (abstract `core.walking_targets.WalkingTargets`): the current step's targets
+    targets (abstract `robot.walking_targets.WalkingTargets`): the current step's targets
         the whole-body controller tracks, world frame W (phase, step start time, stance
         ankle, swing start/target, swing yaw, torso heading, the ALIP state at the step
         start, H, m and the gait timing).
@@ -27,7 +27,7 @@ Discrete state (private layout), updated by a periodic unrestricted update every
 `walking.planner_period` (default 20 ms, 50 Hz). Each update: detect touchdown (swing
 ankle at the ground within the last (1 − `early_touchdown`)·T of the step, or the step's
 end reached) and switch stance; otherwise take up the step's command once it is there
-and re-plan the swing target with the ALIP law of `core.alip` (sagittal ℒ_des = m H
+and re-plan the swing target with the ALIP law of `robot.alip` (sagittal ℒ_des = m H
 v_des, lateral ±½ m H W ℓ tanh(ℓT/2), clamped to the step limits of `WalkingParams`),
 frozen in the last (1 − `target_freeze_fraction`)·T for a clean landing. The pivot is
 the stance ankle's ground projection; L is measured about it with
@@ -62,15 +62,15 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, Context, LeafSystem, State
 
-from emonav_drake.core.alip import (
+from emonav_drake.navigation.lip_world import check_command
+from emonav_drake.params import RobotParams, WalkingParams
+from emonav_drake.robot.alip import (
     alip_predict,
     foot_placement,
     lateral_momentum_target,
 )
-from emonav_drake.core.lip import wrap_angle
-from emonav_drake.core.navigation import check_command
-from emonav_drake.core.walking_targets import DOUBLE_SUPPORT, GaitTiming, WalkingTargets
-from emonav_drake.params import RobotParams, WalkingParams
+from emonav_drake.robot.lip import wrap_angle
+from emonav_drake.robot.walking_targets import DOUBLE_SUPPORT, GaitTiming, WalkingTargets
 from emonav_drake.systems.digit_plant import ANKLE_TO_SOLE, DigitModel
 
 log = logging.getLogger(__name__)

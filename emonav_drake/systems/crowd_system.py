@@ -8,7 +8,7 @@ Output port:
         the world frame, radius, emotions and discomfort distances in force, and the
         static discs.
 Abstract state: the `CrowdState`, advanced every `crowd.dt` from t = 0 by
-`core.crowd.Crowd.step` (the same function the Gymnasium environment calls).
+`crowd.crowd.Crowd.step` (the same function the Gymnasium environment calls).
 """
 
 from __future__ import annotations
@@ -17,10 +17,10 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem, State
 
-from emonav_drake.core.crowd import Crowd
-from emonav_drake.core.lip import lip_velocity
-from emonav_drake.core.scenario import Scenario
+from emonav_drake.crowd.crowd import Crowd
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.robot.lip import lip_velocity
+from emonav_drake.scenarios.scenario import Scenario
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
 

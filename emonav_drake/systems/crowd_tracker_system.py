@@ -1,8 +1,8 @@
 """`CrowdTrackerSystem`: the crowd as a robot estimates it from its LiDAR scan.
 
 At the scan's rate (every `crowd.dt`, 10 Hz) it segments the 1800-beam scan into objects
-and fits circles (`core/lidar_objects.py`), then updates a multi-target tracker
-(`core/crowd_tracker.py`: constant-velocity Kalman filters, gated Hungarian assignment,
+and fits circles (`sensing/lidar_objects.py`), then updates a multi-target tracker
+(`sensing/crowd_tracker.py`: constant-velocity Kalman filters, gated Hungarian assignment,
 birth, confirmation, coasting through occlusions, deletion). Its output replaces the
 simulator's crowd on the planner's input when `perception.state_source` is "lidar":
 
@@ -38,11 +38,11 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem, State
 
-from emonav_drake.core.crowd import CrowdSnapshot
-from emonav_drake.core.crowd_tracker import CrowdTracker, TrackerParams, tracker_params
-from emonav_drake.core.leg_detection import detect_scan, detection_params
-from emonav_drake.core.lidar_objects import DetectionParams
+from emonav_drake.crowd.crowd import CrowdSnapshot
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
+from emonav_drake.sensing.crowd_tracker import CrowdTracker, TrackerParams, tracker_params
+from emonav_drake.sensing.leg_detection import detect_scan, detection_params
+from emonav_drake.sensing.lidar_objects import DetectionParams
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
 NEUTRAL = EMOTION_NAMES.index("neutral")  # a track no emotion report is near
@@ -74,7 +74,7 @@ class CrowdTrackerSystem(LeafSystem):
         config: the LiDAR (beams, range), the scan period `crowd.dt`, the nominal
             pedestrian radius and the discomfort distances.
         detection, tracking: the detector's and the tracker's parameters (defaults:
-            `core/leg_detection.py`'s `detection_params` and `tracker_params` of the
+            `sensing/leg_detection.py`'s `detection_params` and `tracker_params` of the
             configuration: the disc detector, or legs paired into people for a sensor
             that sees legs; the configuration's `perception.still_duration`).
     """

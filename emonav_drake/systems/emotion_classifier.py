@@ -211,7 +211,7 @@ class EmotionClassifier(LeafSystem):
         """Square regions (x0, y0, side) [px] centred where each visible pedestrian's head
         projects (bearing [rad] relative to the heading, NaN: not visible; distance [m]),
         2.5 face heights wide and at least the detector's 128 px."""
-        from emonav_drake.core.pedestrian_pose import PedestrianBody
+        from emonav_drake.crowd.pedestrian_pose import PedestrianBody
         from emonav_drake.perception.blazeface import INPUT
 
         body, cam = PedestrianBody(), self.camera

@@ -15,7 +15,7 @@ Output port:
         the episode is over. At t_k it already counts step k (evaluated on the robot at
         its foot switch and the crowd at t_k), before the periodic update stores it.
 Abstract state: the `EpisodeTracker` and the previous foot-switch position (and robot
-state, for the field's metrics: `core/social_metrics.py`), updated at t_k = kT (a no-op at
+state, for the field's metrics: `navigation/social_metrics.py`), updated at t_k = kT (a no-op at
 k = 0). The robot at t_0 is taken to be the scenario's start: its position and heading,
 at rest.
 
@@ -33,12 +33,12 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, EventStatus, LeafSystem, State
 
-from emonav_drake.core.lip import LipState
-from emonav_drake.core.metrics import EpisodeRecord, EpisodeTracker
-from emonav_drake.core.reward import StepEvaluation, evaluate_step
-from emonav_drake.core.scenario import Scenario
-from emonav_drake.core.social_metrics import StepMotion
+from emonav_drake.navigation.metrics import EpisodeRecord, EpisodeTracker
+from emonav_drake.navigation.reward import StepEvaluation, evaluate_step
+from emonav_drake.navigation.social_metrics import StepMotion
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.robot.lip import LipState
+from emonav_drake.scenarios.scenario import Scenario
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
 

@@ -31,7 +31,7 @@ from pydrake.geometry import QueryObject
 from pydrake.multibody.tree import BodyIndex
 from pydrake.systems.framework import Context, EventStatus, LeafSystem, State
 
-from emonav_drake.core.metrics import FALL
+from emonav_drake.navigation.metrics import FALL
 from emonav_drake.params import WalkingParams
 from emonav_drake.systems.digit_plant import DigitModel
 

@@ -2,7 +2,7 @@
 
 The global layer of a navigation stack (Nav2's planner server, move_base's global
 planner): at a low rate it plans the shortest route from the robot to the goal around the
-walls and static discs (`core/global_route.py`), and at any time it gives the sub-goal a
+walls and static discs (`scenarios/global_route.py`), and at any time it gives the sub-goal a
 local planner steers to, `lookahead` metres along the route beyond the robot (with
 `line_of_sight`, pulled back along the route until the straight line from the robot to
 it keeps `min_clearance` from every obstacle: the local planner is never sent across a
@@ -40,15 +40,15 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, Context, LeafSystem, State
 
-from emonav_drake.core.global_route import (
+from emonav_drake.scenarios.global_route import (
     NoRouteError,
     StaticMap,
     lookahead_point,
     plan_route,
     segments_clear,
 )
-from emonav_drake.core.scenario_spec import discs_in_place
-from emonav_drake.core.walls import point_segment_distances
+from emonav_drake.scenarios.scenario_spec import discs_in_place
+from emonav_drake.scenarios.walls import point_segment_distances
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
 

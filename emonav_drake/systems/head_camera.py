@@ -45,7 +45,7 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import Context, DiagramBuilder, LeafSystem, OutputPort
 from pydrake.systems.sensors import CameraInfo, RgbdSensor
 
-from emonav_drake.core.palette import CAMERA_GROUND_RGB, CAMERA_SKY_RGB
+from emonav_drake.palette import CAMERA_GROUND_RGB, CAMERA_SKY_RGB
 from emonav_drake.perception.noisy_emotions import HeadCameraParams
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 

@@ -1,8 +1,8 @@
 """`LidarGridMapBuilder`: 1800-beam LiDAR scan → the policy's map observation, per step.
 
 Builds, for the grid kind of the planner, exactly the observation the Gymnasium env
-(`core.navigation.NavigationWorld`) gives for the same robot and crowd states: both call
-`core.observations.observation_frame` (docs/learning.md, "Observation variants").
+(`navigation.lip_world.NavigationWorld`) gives for the same robot and crowd states: both call
+`navigation.observations.observation_frame` (docs/learning.md, "Observation variants").
 
 Input ports:
     robot_state (4): (x, y, θ, v) of the robot CoM, world frame; the LiDAR sits at the
@@ -27,9 +27,9 @@ Output ports:
             "scan"  float32 (N, K): raw ranges [m] in [min_range, max_range]
                     (LiDAR-SAC; LNDNL min-pools and normalises them in its encoder);
             "drlvo" uint8 (1, 3, M, M): scan OGM + pedestrian velocity map (DRL-VO*,
-                    `core/kinematic_maps.py`); no stack, the current image only.
+                    `sensing/kinematic_maps.py`); no stack, the current image only.
     scan (K): the LiDAR ranges now [m], float64, clipped to [0.27, 6.0]: the configured
-        sensor's scan (`core/lidar_sensor.py::sensed_ranges`, the same real scan as the
+        sensor's scan (`sensing/lidar_sensor.py::sensed_ranges`, the same real scan as the
         maps' 255 layer and the "scan" observation; its noise is drawn from the sensor's
         seed and the crowd's scenario seed and time, so a re-evaluation gives the same
         ranges). The crowd tracker reads it; the visualiser draws it.
@@ -44,14 +44,14 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, Context, LeafSystem, State, ValueProducer
 
-from emonav_drake.core.lidar_sensor import sensed_ranges
-from emonav_drake.core.observations import (
+from emonav_drake.navigation.observations import (
     check_observation_kind,
     observation_dtype,
     observation_frame,
     observation_shape,
 )
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.sensing.lidar_sensor import sensed_ranges
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
 

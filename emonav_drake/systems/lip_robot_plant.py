@@ -10,9 +10,9 @@ Output port:
     robot_state (4): (x [m], y [m], θ [rad], v [m/s]) of the CoM in the world frame at the
         current time, from the step's start state, the command and the time elapsed since
         the step started: at the crowd's sample times the state the Gymnasium env's crowd
-        sees (`core.navigation.robot_at_substep`: the start itself at the foot switch, the
+        sees (`navigation.lip_world.robot_at_substep`: the start itself at the foot switch, the
         next foot switch `lip_step` at the step's end), in between the LIP CoM trajectory
-        of Eq. 1 (`core.lip.lip_in_step`). Direct feedthrough from `command` (the planner's
+        of Eq. 1 (`robot.lip.lip_in_step`). Direct feedthrough from `command` (the planner's
         command output is a state output, so there is no algebraic loop).
 Discrete state (5): [x_s, y_s, θ_s, v_s, t_s] — the start state of the step in progress
     (at its foot switch) and its start time [s]; initially the scenario's start at rest
@@ -32,10 +32,10 @@ import logging
 import numpy as np
 from pydrake.systems.framework import BasicVector, Context, LeafSystem, State
 
-from emonav_drake.core.lip import LipState, lip_in_step
-from emonav_drake.core.navigation import check_command, robot_at_substep
-from emonav_drake.core.scenario import Scenario
+from emonav_drake.navigation.lip_world import check_command, robot_at_substep
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.robot.lip import LipState, lip_in_step
+from emonav_drake.scenarios.scenario import Scenario
 
 log = logging.getLogger(__name__)
 

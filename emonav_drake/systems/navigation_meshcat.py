@@ -5,7 +5,7 @@ Input ports:
     crowd (abstract `CrowdSnapshot`): pedestrians (positions [m], emotion codes).
     scan (K): LiDAR ranges [m] (drawn as rays when `show_rays`; leave unconnected
         otherwise).
-    footstep_targets (abstract `core.walking_targets.WalkingTargets`): the full-order
+    footstep_targets (abstract `robot.walking_targets.WalkingTargets`): the full-order
         Digit's footstep planner output (swing-foot landing target and yaw, W); leave
         unconnected for the LIP robot.
     tracks (abstract `CrowdSnapshot`): the crowd as the robot tracks it from its LiDAR
@@ -17,7 +17,7 @@ Input ports:
         the route layer.
 
 What is drawn (all under `/emonav`, world frame W, z up), in the shared palette
-(`core/palette.py`, as Drake colours in `navigation_meshcat_style.py`; the names of the
+(`palette.py`, as Drake colours in `navigation_meshcat_style.py`; the names of the
 colours here are its roles):
     * every `publish_period` (default 0.1 s): the robot (blue column with a black heading
       marker; off when the full-order Digit is drawn by Drake's `MeshcatVisualizer`),
@@ -78,8 +78,8 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.perception import PointCloud
 from pydrake.systems.framework import Context, EventStatus, LeafSystem
 
-from emonav_drake.core.scenario import Scenario
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
+from emonav_drake.scenarios.scenario import Scenario
 from emonav_drake.systems.navigation_meshcat_style import (
     EMOTION_RGBA,
     FOOT_RGBA,

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pydrake.geometry import Rgba
 
-from emonav_drake.core import palette
+from emonav_drake import palette
 
 
 def _rgba(rgb: palette.RGB, alpha: float = 1.0) -> Rgba:

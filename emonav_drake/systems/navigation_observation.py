@@ -22,9 +22,9 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem
 
-from emonav_drake.core.lip import LipState
-from emonav_drake.core.navigation import goal_state
+from emonav_drake.navigation.lip_world import goal_state
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.robot.lip import LipState
 
 
 class NavigationObservation(LeafSystem):
@@ -38,7 +38,7 @@ class NavigationObservation(LeafSystem):
 
     def __init__(self, goal_xy: np.ndarray, config: EmoNavConfig, grid_kind: str) -> None:
         super().__init__()
-        from emonav_drake.core.observations import map_key
+        from emonav_drake.navigation.observations import map_key
 
         self._goal = np.asarray(goal_xy, float)
         self._key = map_key(grid_kind)

@@ -29,7 +29,7 @@ all periodic unrestricted events at offset 0, so at t_k = kT each reads the same
 pre-update state). At t_k the planner reads the robot at its foot switch, the crowd and
 the grid-map stack at t_k, and its own previous command u_{k−1}; it stores u_k, which the
 robot executes during step k (t_k → t_{k+1}). The command is checked with
-`core.navigation.check_command`: NaN raises `CommandError`; out of range is clipped to the
+`navigation.lip_world.check_command`: NaN raises `CommandError`; out of range is clipped to the
 bounds of Eq. 2, counted in `plan_log` and logged as a warning naming the system, the time
 and the command.
 
@@ -55,9 +55,9 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem, State
 
-from emonav_drake.core.crowd import with_wall_discs
-from emonav_drake.core.navigation import CommandError, PlannerInput, check_command
+from emonav_drake.crowd.crowd import with_wall_discs
 from emonav_drake.errors import PluginError
+from emonav_drake.navigation.lip_world import CommandError, PlannerInput, check_command
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.protocol import Planner
 from emonav_drake.planners.registry import outside_module

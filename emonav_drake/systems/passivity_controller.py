@@ -2,7 +2,7 @@
 
 Input ports:
     state (nq + nv): the Digit plant state (q, v).
-    targets (abstract `core.walking_targets.WalkingTargets`): the footstep planner's
+    targets (abstract `robot.walking_targets.WalkingTargets`): the footstep planner's
         targets; the controller evaluates their reference motion at its own time.
 Output port:
     actuation (nu): joint torques [N·m] in the plant's actuator order, within the
@@ -50,8 +50,8 @@ from pydrake.multibody.tree import JacobianWrtVariable, MultibodyForces
 from pydrake.systems.framework import BasicVector, Context, LeafSystem, State
 from scipy.linalg.lapack import dgesv
 
-from emonav_drake.core.walking_targets import WalkingTargets
 from emonav_drake.params import WalkingParams
+from emonav_drake.robot.walking_targets import WalkingTargets
 from emonav_drake.systems.digit_plant import DigitModel
 
 _ZERO3 = np.zeros(3)

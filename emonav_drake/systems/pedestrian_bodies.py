@@ -5,7 +5,7 @@ a head (box) and three face quads, one per emotion, textured with that emotion's
 (`emonav_drake/data/faces/`, their sources and licences in its README). Only the face of
 the pedestrian's current (true) emotion is on its head; the other two are parked far
 below the ground, so a pedestrian whose emotion changes changes its face at once. Every
-pedestrian faces its walking direction (`core.pedestrian_pose.facing_headings`; when it
+pedestrian faces its walking direction (`crowd.pedestrian_pose.facing_headings`; when it
 stands, the direction from its start to its goal). The static discs of the scenario are
 anchored cylinders, its walls anchored boxes 2.2 m high. All geometry has the
 perception role (what `RgbdSensor` renders); heads and faces also the illustration role
@@ -41,19 +41,19 @@ from pydrake.geometry import (
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import Context, DiagramBuilder, LeafSystem, OutputPort
 
-from emonav_drake.core.palette import (
-    CAMERA_DISC_RGB,
-    PEDESTRIAN_CLOTHES_RGB,
-    PEDESTRIAN_HAIR_RGB,
-)
-from emonav_drake.core.pedestrian_pose import (
+from emonav_drake.crowd.pedestrian_pose import (
     HIDDEN_DEPTH,
     PedestrianBody,
     facing_headings,
     start_to_goal_headings,
 )
-from emonav_drake.core.scenario import Scenario
+from emonav_drake.palette import (
+    CAMERA_DISC_RGB,
+    PEDESTRIAN_CLOTHES_RGB,
+    PEDESTRIAN_HAIR_RGB,
+)
 from emonav_drake.params import EMOTION_NAMES
+from emonav_drake.scenarios.scenario import Scenario
 
 FACES_DIR = Path(__file__).resolve().parent.parent / "data" / "faces"
 BODY_RGBA = Rgba(*PEDESTRIAN_CLOTHES_RGB)

@@ -1,0 +1,389 @@
+"""The map observations a navigation policy can read: one registry entry per kind.
+
+The planner input's `lgm_stack` (the name is the paper's LGM; the field carries whichever
+map the policy reads) is built, robot frame, from the CoM and heading at the foot switch
+t_k and the crowd at t_k, oldest first:
+
+    kind     variant (paper)                  frame at t_k      stack (observation)
+    "lgm"    EmoBipedNav; N = 1: Single-LGM   uint8 (M, M)      uint8 (N, M, M)
+    "ogm"    OGM (Cartesian occupancy grid)   uint8 (M, M)      uint8 (N, M, M)
+    "scan"   LiDAR-SAC, LNDNL (ranges [m])    float32 (K,)      float32 (N, K)
+    "drlvo"  DRL-VO* (scan OGM + ped. v map)  uint8 (3, M, M)   uint8 (1, 3, M, M)
+
+Everything that depends on the kind asks its `ObservationKind`: the environments
+(`NavigationWorld`, `EmoNavLIP-v0`, `EmoNavDigit-v0`), the diagram's
+`LidarGridMapBuilder`, the policies' encoders and checkpoints, DAgger's mirror
+augmentation. A new observation is one `register_observation(ObservationKind(...))`.
+The observation dictionary holds the map under the kind's `key` ("lgm", "scan" or
+"image") beside "goal" and "last_action".
+
+Every kind reads the LiDAR through `sensing/lidar_sensor.py`: the real scan (the maps' 255
+layer, the "scan" ranges) is `sensed_ranges`, the configured sensor's scan (its faults,
+pedestrians as legs), the inflated scan (the 127 layer) `inflated_ranges`. With the exact
+sensor (`config.sensor`, preset "ideal") the frames are computed by the exact code path
+(`lgm_frame`, `scan_discs`, `drlvo_image`), bit for bit the paper simulator's.
+"""
+
+from __future__ import annotations
+
+import dataclasses as dc
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from emonav_drake.crowd.crowd import CrowdSnapshot, obstacle_discs
+from emonav_drake.params import EmoNavConfig, LidarParams
+from emonav_drake.registry import Registry
+from emonav_drake.sensing.grid_maps import FrameStack, lgm_frame, lgm_from_ranges, ogm_from_ranges
+from emonav_drake.sensing.kinematic_maps import drlvo_image, drlvo_image_from_ranges
+from emonav_drake.sensing.lidar_sensor import inflated_ranges, sensed_ranges
+
+if TYPE_CHECKING:
+    from emonav_drake.robot.lip import LipState
+
+
+class ScanStack:
+    """The last N LiDAR scans (N, K) float32, oldest first (the LiDAR-SAC observation)."""
+
+    def __init__(self, num_frames: int, num_beams: int) -> None:
+        self._scans = np.zeros((num_frames, num_beams), np.float32)
+
+    def reset(self, scan: np.ndarray) -> np.ndarray:
+        self._scans[:] = scan
+        return self.array
+
+    def push(self, scan: np.ndarray) -> np.ndarray:
+        self._scans[:-1] = self._scans[1:]
+        self._scans[-1] = scan
+        return self.array
+
+    @property
+    def array(self) -> np.ndarray:
+        return self._scans.copy()
+
+
+class LatestFrame:
+    """Holds only the newest observation frame (observations without a frame stack)."""
+
+    def reset(self, frame: np.ndarray) -> np.ndarray:
+        self._frame = frame
+        return self.array
+
+    push = reset
+
+    @property
+    def array(self) -> np.ndarray:
+        return self._frame.copy()
+
+
+@dc.dataclass(frozen=True)
+class ObservationKind:
+    """One map observation.
+
+    Attributes:
+        name: the kind (`grid_kind` in configurations and checkpoints).
+        description: in words, for users ("LiDAR grid maps").
+        key: the observation dictionary's key of the map.
+        frame: `frame(robot, crowd, config)` → one frame seen from the robot's CoM and
+            heading (`LipState`) at t_k, of the crowd `CrowdSnapshot` at t_k.
+        shape: `shape(lidar)` → the stack's shape (`LidarParams`: N, M, K).
+        dtype: the stack's dtype.
+        high: `high(lidar)` → the largest value (the observation space's bound; low is 0).
+        new_stack: `new_stack(lidar)` → an empty stack (`reset(item)`, `push(item)`,
+            `array`).
+        mirror: the observation of the left-right mirrored world (y → −y in the robot
+            frame), on a frame, a stack or a batch of stacks; returns a new array.
+        lidar_for: `lidar_for(shape, lidar)` → the `LidarParams` fields (num_frames,
+            grid_size) that make `shape(lidar)` equal a policy's declared stack `shape`;
+            `ValueError` if no setting can (e.g. another number of beams).
+        single_frame: the stack is the current frame only (no history; num_frames 1).
+        planes_per_frame: input planes each frame gives a 2-D CNN encoder.
+        scans: a 1-D range signal (scan encoders), not an image (2-D CNN).
+    """
+
+    name: str
+    description: str
+    key: str
+    frame: Callable[[LipState, CrowdSnapshot, EmoNavConfig], np.ndarray]
+    shape: Callable[[LidarParams], tuple[int, ...]]
+    dtype: np.dtype
+    high: Callable[[LidarParams], float]
+    new_stack: Callable[[LidarParams], Any]
+    mirror: Callable[[np.ndarray], np.ndarray]
+    lidar_for: Callable[[tuple[int, ...], LidarParams], dict[str, int]]
+    single_frame: bool = False
+    planes_per_frame: int = 1
+    scans: bool = False
+
+    def stack_item(self, frame: np.ndarray) -> np.ndarray:
+        """What one frame is in the stack (a single-frame kind stores the whole (1, …))."""
+        return frame[None] if self.single_frame else frame
+
+
+_KINDS: Registry[ObservationKind] = Registry("observation kind")
+
+
+def register_observation(kind: ObservationKind, replace: bool = False) -> ObservationKind:
+    """Add an observation kind (`ValueError` if the name is taken and not `replace`)."""
+    return _KINDS.add(kind.name, kind, replace)
+
+
+def unregister_observation(name: str) -> None:
+    """Remove an observation kind (tests that register a throw-away one)."""
+    _KINDS.remove(name)
+
+
+def observation_kinds() -> tuple[str, ...]:
+    """The registered kinds, in registration order."""
+    return tuple(_KINDS)
+
+
+def observation_kind(kind: str) -> ObservationKind:
+    """The kind called `kind`; `ValueError` listing the kinds otherwise."""
+    if kind not in _KINDS:
+        raise ValueError(f"grid kind = {kind!r}: must be one of {list(_KINDS)}")
+    return _KINDS[kind]
+
+
+def check_observation_kind(kind: str) -> str:
+    """`kind` if it is registered, else `ValueError`."""
+    return observation_kind(kind).name
+
+
+def map_key(grid_kind: str) -> str:
+    """The map observation's key: "lgm" for grid maps (LGM or OGM), "scan" for scans,
+    "image" for the DRL-VO* image (an unregistered kind: "lgm")."""
+    return _KINDS[grid_kind].key if grid_kind in _KINDS else "lgm"
+
+
+def observation_shape(kind: str, lidar: LidarParams) -> tuple[int, ...]:
+    """Shape of the map observation (the stack) of `kind` (module docstring)."""
+    return observation_kind(kind).shape(lidar)
+
+
+def observation_dtype(kind: str) -> np.dtype:
+    """dtype of the map observation of `kind`: float32 ranges for scans, else uint8."""
+    return observation_kind(kind).dtype
+
+
+def observation_frame(
+    robot: LipState,
+    crowd: CrowdSnapshot,
+    config: EmoNavConfig,
+    kind: str = "lgm",
+    inflation: CrowdSnapshot | None = None,
+) -> np.ndarray:
+    """One observation frame of `kind` seen from the robot's CoM and heading (module
+    docstring). The environment (`NavigationWorld`) and the diagram
+    (`LidarGridMapBuilder`) both build their observations from this function.
+
+    `inflation`: the crowd whose discs (grown by their discomfort margins) make the grid
+    maps' inflated layer instead of `crowd`'s — e.g. the pedestrians as the robot tracks
+    them, with the emotions it keeps for them — while the real scan stays `crowd`'s (the
+    world the LiDAR sees). Grid kinds ("lgm", "ogm") only; kinds without an inflated
+    layer ignore it; "drlvo" refuses it."""
+    k = observation_kind(kind)
+    if inflation is None or kind not in ("lgm", "ogm", "drlvo"):
+        return k.frame(robot, crowd, config)
+    if kind == "drlvo":
+        raise ValueError("the drlvo kind's maps cannot take a perceived crowd's inflation")
+    return _grid_from_ranges(kind, robot, crowd, inflation, config)
+
+
+def _grid_from_ranges(
+    kind: str, robot: LipState, crowd: CrowdSnapshot, inflation: CrowdSnapshot, config: EmoNavConfig
+) -> np.ndarray:
+    """A grid frame from the sensor's scan of `crowd` and the inflated scan of
+    `inflation` (`lgm_from_ranges` / `ogm_from_ranges`)."""
+    li = config.lidar
+    xy = np.array([robot.x, robot.y])
+    hit = sensed_ranges(xy, robot.heading, crowd, config)
+    inflated = inflated_ranges(xy, robot.heading, inflation, config)
+    to_grid = lgm_from_ranges if kind == "lgm" else ogm_from_ranges
+    return to_grid(hit, inflated, li.grid_size, li.max_range)
+
+
+def mirror_observation(stacks: np.ndarray, kind: str) -> np.ndarray:
+    """The observation of the left-right mirrored world (y → −y in the robot frame), on a
+    frame, a stack or a batch of stacks; returns a new array (`ObservationKind.mirror`)."""
+    return observation_kind(kind).mirror(np.asarray(stacks))
+
+
+# ------------------------------------------------------------------ the paper's kinds
+def _grid_frame(kind: str) -> Callable[[LipState, CrowdSnapshot, EmoNavConfig], np.ndarray]:
+    def frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
+        li = config.lidar
+        if not config.sensor.is_exact():
+            return _grid_from_ranges(kind, robot, crowd, crowd, config)
+        centers, radii, margins = obstacle_discs(crowd)
+        return lgm_frame(
+            np.array([robot.x, robot.y]),
+            robot.heading,
+            centers,
+            radii,
+            margins,
+            num_beams=li.num_beams,
+            grid_size=li.grid_size,
+            max_range=li.max_range,
+            min_range=li.min_range,
+            kind=kind,
+            segments=crowd.wall_segments,
+            segment_margin=crowd.static_discomfort,
+        )
+
+    return frame
+
+
+def _scan_frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
+    ranges = sensed_ranges(np.array([robot.x, robot.y]), robot.heading, crowd, config)
+    return ranges.astype(np.float32)
+
+
+def _drlvo_frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
+    li = config.lidar
+    xy = np.array([robot.x, robot.y])
+    if not config.sensor.is_exact():
+        return drlvo_image_from_ranges(
+            sensed_ranges(xy, robot.heading, crowd, config),
+            inflated_ranges(xy, robot.heading, crowd, config),
+            xy,
+            robot.heading,
+            crowd.positions,
+            crowd.velocities,
+            crowd.radius,
+            li.grid_size,
+            li.max_range,
+        )
+    centers, radii, margins = obstacle_discs(crowd)
+    return drlvo_image(
+        np.array([robot.x, robot.y]),
+        robot.heading,
+        centers,
+        radii,
+        margins,
+        crowd.positions,
+        crowd.velocities,
+        crowd.radius,
+        li.num_beams,
+        li.grid_size,
+        li.max_range,
+        li.min_range,
+        segments=crowd.wall_segments,
+        segment_margin=crowd.static_discomfort,
+    )
+
+
+def _mirror_rows(x: np.ndarray) -> np.ndarray:
+    """LGM (…, M, M): sector i ↔ M − 1 − i (rows; beam i ↔ K − 1 − i)."""
+    return np.ascontiguousarray(x[..., ::-1, :])
+
+
+def _mirror_last_axis(x: np.ndarray) -> np.ndarray:
+    """OGM (…, M, M): column j ↔ M − 1 − j (y ↔ −y); scan (…, K): beam i ↔ K − 1 − i."""
+    return np.ascontiguousarray(x[..., ::-1])
+
+
+def _mirror_drlvo(x: np.ndarray) -> np.ndarray:
+    """DRL-VO* (…, 3, M, M): columns reversed and the v_y plane negated about its zero,
+    128 (256 − value, at most 255)."""
+    out = np.ascontiguousarray(x[..., ::-1])
+    vy = out[..., 2, :, :]
+    out[..., 2, :, :] = np.minimum(256 - vy.astype(np.int16), 255).astype(np.uint8)
+    return out
+
+
+def _grid_shape(li: LidarParams) -> tuple[int, ...]:
+    return (li.num_frames, li.grid_size, li.grid_size)
+
+
+def _byte_max(li: LidarParams) -> float:
+    return 255
+
+
+def _grid_stack(li: LidarParams) -> FrameStack:
+    return FrameStack(li.num_frames, li.grid_size)
+
+
+def _grid_lidar(shape: tuple[int, ...], li: LidarParams) -> dict[str, int]:
+    return {"num_frames": shape[0], "grid_size": shape[1]}
+
+
+def _scan_lidar(shape: tuple[int, ...], li: LidarParams) -> dict[str, int]:
+    num_frames, beams = shape
+    if beams != li.num_beams:
+        raise ValueError(
+            f"the policy reads {beams}-beam scans, but lidar.num_beams = {li.num_beams}"
+        )
+    return {"num_frames": num_frames}
+
+
+def _drlvo_lidar(shape: tuple[int, ...], li: LidarParams) -> dict[str, int]:
+    num_frames, _, size, _ = shape
+    if num_frames != 1:
+        raise ValueError(
+            f"the DRL-VO* policy declares num_frames = {num_frames}: its observation is "
+            "one (3, M, M) image (num_frames 1), as the environment gives it"
+        )
+    return {"num_frames": 1, "grid_size": size}
+
+
+register_observation(
+    ObservationKind(
+        "lgm",
+        "LiDAR grid maps",
+        "lgm",
+        _grid_frame("lgm"),
+        _grid_shape,
+        np.dtype(np.uint8),
+        _byte_max,
+        _grid_stack,
+        _mirror_rows,
+        _grid_lidar,
+    )
+)
+register_observation(
+    ObservationKind(
+        "ogm",
+        "occupancy grids",
+        "lgm",
+        _grid_frame("ogm"),
+        _grid_shape,
+        np.dtype(np.uint8),
+        _byte_max,
+        _grid_stack,
+        _mirror_last_axis,
+        _grid_lidar,
+    )
+)
+register_observation(
+    ObservationKind(
+        "scan",
+        "raw scans",
+        "scan",
+        _scan_frame,
+        lambda li: (li.num_frames, li.num_beams),
+        np.dtype(np.float32),
+        lambda li: li.max_range,
+        lambda li: ScanStack(li.num_frames, li.num_beams),
+        _mirror_last_axis,
+        _scan_lidar,
+        scans=True,
+    )
+)
+register_observation(
+    ObservationKind(
+        "drlvo",
+        "DRL-VO* image",
+        "image",
+        _drlvo_frame,
+        lambda li: (1, 3, li.grid_size, li.grid_size),
+        np.dtype(np.uint8),
+        _byte_max,
+        lambda li: LatestFrame(),
+        _mirror_drlvo,
+        _drlvo_lidar,
+        single_frame=True,
+        planes_per_frame=3,
+    )
+)

@@ -1,0 +1,123 @@
+"""The DRL-VO* observation: a robot-centric image of the scan and the pedestrians' motion.
+
+DRL-VO (Xie & Dames) feeds a CNN with an image built from the LiDAR scan history and a
+pedestrian kinematic map (each cell a pedestrian occupies holds that pedestrian's
+velocity). The paper's DRL-VO* keeps that observation and swaps in the paper's SAC.
+Ours, on the OGM's Cartesian grid (2L × 2L, x forward and y left of the robot,
+row ⌊(x + L)/(2L/M)⌋, column ⌊(L − y)/(2L/M)⌋):
+
+    channel 0: the OGM of the current scan (255 hit, 127 discomfort ring, 0 free);
+    channel 1: v_x of the pedestrian covering the cell, robot frame, 128 + 127·v/v_max;
+    channel 2: v_y likewise (128 = at rest or no pedestrian).
+
+uint8 (3, M, M); the temporal context comes from the velocity channels rather than a
+frame stack.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from emonav_drake.params import NUM_BEAMS
+from emonav_drake.sensing.grid_maps import lgm_frame, ogm_from_ranges
+
+
+def pedestrian_velocity_map(
+    robot_xy: np.ndarray,
+    heading: float,
+    positions: np.ndarray,
+    velocities: np.ndarray,
+    radius: float,
+    grid_size: int = 100,
+    half_extent: float = 6.0,
+    max_speed: float = 1.0,
+) -> np.ndarray:
+    """uint8 (2, M, M): pedestrians' (v_x, v_y) in the robot frame on the OGM grid."""
+    out = np.full((2, grid_size, grid_size), 128, np.uint8)
+    if len(positions) == 0:
+        return out
+    c, s = math.cos(heading), math.sin(heading)
+    rot = np.array([[c, s], [-s, c]])  # world → robot
+    rel = (np.asarray(positions, float) - robot_xy) @ rot.T
+    vel = np.asarray(velocities, float) @ rot.T
+    cell = 2.0 * half_extent / grid_size
+    centres = -half_extent + (np.arange(grid_size) + 0.5) * cell  # x of row i, also −y of col j
+    for (px, py), (vx, vy) in zip(rel, vel, strict=True):
+        rows = np.flatnonzero(np.abs(centres - px) <= radius)
+        cols = np.flatnonzero(np.abs(-centres - py) <= radius)  # col j ↔ y = −centre_j
+        if rows.size == 0 or cols.size == 0:
+            continue
+        dx = centres[rows][:, None] - px
+        dy = -centres[cols][None, :] - py
+        inside = dx * dx + dy * dy <= radius * radius
+        r, k = np.nonzero(inside)
+        out[0, rows[r], cols[k]] = np.uint8(np.clip(np.rint(128 + 127 * vx / max_speed), 0, 255))
+        out[1, rows[r], cols[k]] = np.uint8(np.clip(np.rint(128 + 127 * vy / max_speed), 0, 255))
+    return out
+
+
+def drlvo_image(
+    robot_xy: np.ndarray,
+    heading: float,
+    centers: np.ndarray,
+    radii: np.ndarray,
+    margins: np.ndarray,
+    ped_positions: np.ndarray,
+    ped_velocities: np.ndarray,
+    ped_radius: float,
+    num_beams: int = NUM_BEAMS,
+    grid_size: int = 100,
+    max_range: float = 6.0,
+    min_range: float = 0.27,
+    segments: np.ndarray | None = None,
+    segment_margin: float = 0.0,
+) -> np.ndarray:
+    """uint8 (3, M, M): scan OGM of all discs + pedestrian velocity map (module docstring).
+
+    Optional walls ``segments`` (W, 2, 2) [m, world] and their discomfort margin [m] go
+    into the scan OGM as `sensing/grid_maps.py::lgm_frame` describes.
+    """
+    image = np.empty((3, grid_size, grid_size), np.uint8)
+    image[0] = lgm_frame(
+        robot_xy,
+        heading,
+        centers,
+        radii,
+        margins,
+        num_beams,
+        grid_size,
+        max_range,
+        min_range,
+        kind="ogm",
+        segments=segments,
+        segment_margin=segment_margin,
+    )
+    image[1:] = pedestrian_velocity_map(
+        robot_xy, heading, ped_positions, ped_velocities, ped_radius, grid_size, max_range
+    )
+    return image
+
+
+def drlvo_image_from_ranges(
+    hit_ranges: np.ndarray,
+    inflated_ranges: np.ndarray,
+    robot_xy: np.ndarray,
+    heading: float,
+    ped_positions: np.ndarray,
+    ped_velocities: np.ndarray,
+    ped_radius: float,
+    grid_size: int = 100,
+    max_range: float = 6.0,
+) -> np.ndarray:
+    """uint8 (3, M, M) as `drlvo_image`, from scans already cast: the real scan
+    `hit_ranges` (K,) [m] and the inflated scan `inflated_ranges` (K,) [m] (a sensor's
+    scan, `sensing/lidar_sensor.py`), robot at `robot_xy` [m] heading `heading` [rad], world
+    frame; the velocity planes from the pedestrians' positions [m] and velocities [m/s]."""
+    image = np.empty((3, grid_size, grid_size), np.uint8)
+    image[0] = ogm_from_ranges(hit_ranges, inflated_ranges, grid_size, max_range)
+    image[1:] = pedestrian_velocity_map(
+        robot_xy, heading, ped_positions, ped_velocities, ped_radius, grid_size, max_range
+    )
+    return image
