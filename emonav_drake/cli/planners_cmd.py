@@ -49,7 +49,6 @@ GROUPS = (
     "learned baselines of the paper",
     "route stages, ablations and shields",
 )
-_PAPER_BASELINES = ("sarl", "rgl", "drlvo", "lndnl", "single_lgm", "ogm", "lidar_sac", "sac")
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -86,7 +85,7 @@ def planner_rows() -> list[PlannerRow]:
             entry = None if path is None else catalog_entry(path)
             if entry is not None:
                 how, run = made_by(entry), entry["run"]
-            if kind.runs_as == "sarl":
+            if getattr(kind.spec, "value_network", False):
                 reads = f"{STATE} (value network)"
             else:
                 reads, privileged = _policy_reads(path, entry)
@@ -124,7 +123,9 @@ def _group(name: str, learned: bool) -> str:
         return GROUPS[0]
     if not learned:
         return GROUPS[1]
-    if name in _PAPER_BASELINES:
+    from emonav_drake.planners import PAPER_BASELINES
+
+    if name in PAPER_BASELINES:
         return GROUPS[2]
     return GROUPS[3]
 
@@ -136,7 +137,7 @@ def _default_checkpoint(kind) -> Path | None:  # noqa: ANN001 - a PlannerKind
         return None
     try:
         return Path(kind.default_checkpoint())
-    except ConfigError:  # "sac": none shipped
+    except ConfigError:  # a variant with none shipped in this version
         return None
 
 

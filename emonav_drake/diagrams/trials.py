@@ -104,19 +104,17 @@ def method_specs(
             methods.append(MethodSpec(n, n))
         elif kind is not None or n in ckpt:
             path = ckpt.get(n)
-            if path is None and n == "sac":
-                raise _refused(
-                    "{planners} sac: a SAC-trained checkpoint is needed ({checkpoint} "
-                    "sac=PATH); the shipped policy is a DAgger student: use policy"
-                )
+            spec = kind.spec if kind is not None else None
             if path is None:
                 if kind is None or kind.default_checkpoint is None:
+                    hint = getattr(spec, "checkpoint_hint", "")
                     raise _refused(
-                        "{planners} {n}: give its checkpoint, {checkpoint} {n}=PATH", n=n
+                        "{planners} {n}: " + (hint or "give its checkpoint, {checkpoint} {n}=PATH"),
+                        n=n,
                     )
                 path = kind.default_checkpoint()
-            if n == "sac":
-                _check_sac_actor(path)
+            if hasattr(spec, "checkpoint_problem"):
+                _check_checkpoint(spec, n, path)
             runs_as = kind.runs_as if kind is not None else "policy"
             methods.append(MethodSpec(n, runs_as, str(path), sha256_file(path)))
         else:
@@ -161,18 +159,15 @@ def _checkpoints(checkpoints: Sequence[str], names: list[str]) -> dict[str, Path
     return ckpt
 
 
-def _check_sac_actor(path: str | Path) -> None:
-    """The method called `sac` must be a SAC actor, not a DAgger student under that label."""
-    from emonav_drake.planners.policy import describe_policy, load_policy, policy_kind
+def _check_checkpoint(spec: object, n: str, path: str | Path) -> None:
+    """A checkpoint its spec cannot run (`checkpoint_problem`, e.g. a DAgger student given
+    as `sac`) is refused here, before any trial."""
+    from emonav_drake.planners.policy import load_policy
 
     _, meta = load_policy(Path(path), "cpu")
-    if policy_kind(meta) != "sac":
-        raise _refused(
-            "{checkpoint} sac={path}: not a SAC actor but a {what}; give it another method "
-            "name (e.g. policy)",
-            path=path,
-            what=describe_policy(meta),
-        )
+    problem = spec.checkpoint_problem(meta)
+    if problem:
+        raise _refused("{checkpoint} {n}={path}: " + problem, n=n, path=path)
 
 
 class TrialRunner:

@@ -68,6 +68,11 @@ __all__ = [
 ]
 
 
+# The learned baselines the paper compares with (Table II), as `emonav planners` groups them.
+PAPER_BASELINES = frozenset(
+    {"sarl", "rgl", "drlvo", "lndnl", "single_lgm", "ogm", "lidar_sac", "sac"}
+)
+
 # A policy steered by the MPC (`planners/mpc_nearby.py`, the `MpcNearbySpec` DAgger expert):
 # NAME: (behind its LGM shield too, what it says).
 MPC_STEERED = {
@@ -149,9 +154,7 @@ def reads_crowd_state(name: str) -> bool:
     a user's planners, SARL/RGL and the MPC-steered policies. A policy that reads only its
     map observation does not, so the state source changes nothing for it (DRL-VO*'s
     velocity image is drawn from the simulator's crowd either way)."""
-    if not is_learned(name):
-        return True
-    return planner_kind(name).runs_as == "sarl" or name in MPC_STEERED
+    return not is_registered(name) or planner_kind(name).reads_crowd_state
 
 
 def is_default_checkpoint(name: str, path: str | Path) -> bool:

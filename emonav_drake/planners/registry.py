@@ -57,8 +57,16 @@ class PlannerKind:
     def default_checkpoint(self) -> Callable[[], Path] | None:
         """What gives the checkpoint a learned planner runs without `--checkpoint` (called
         when needed: it may raise `ConfigError` saying how to train it); None for a model
-        planner."""
-        return getattr(self.spec, "checkpoint_file", None) if self.learned else None
+        planner or a spec that has none (`has_default_checkpoint` False: SAC's actor)."""
+        if not self.learned or not getattr(self.spec, "has_default_checkpoint", True):
+            return None
+        return getattr(self.spec, "checkpoint_file", None)
+
+    @property
+    def reads_crowd_state(self) -> bool:
+        """Reads `PlannerInput.crowd` (a model planner, a user's, or a learned spec that says
+        so: SARL/RGL, the MPC-steered policies); a policy on its own map does not."""
+        return not self.learned or getattr(self.spec, "reads_crowd_state", False)
 
 
 _KINDS: Registry[PlannerKind] = Registry("planner")

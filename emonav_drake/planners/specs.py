@@ -128,6 +128,14 @@ class PolicySpec(_Learned):
 class SacSpec:
     """A SAC-trained actor (`emonav train --algo sac`); the checkpoint must be given."""
 
+    # No default checkpoint: what to give instead, and a check that the file given is one.
+    # ({planners}, {checkpoint}, {n}: the method flags and name, filled in by the caller.)
+    has_default_checkpoint: ClassVar[bool] = False
+    checkpoint_hint: ClassVar[str] = (
+        "a SAC-trained checkpoint is needed ({checkpoint} {n}=PATH, from `emonav train --algo "
+        "sac`); the shipped policy is a DAgger student: use {planners} policy"
+    )
+
     checkpoint: str = setting("", "the SAC-trained actor it runs (required)")
 
     def checkpoint_file(self) -> Path:
@@ -141,14 +149,22 @@ class SacSpec:
 
         return resolve_policy_file(self.checkpoint, "checkpoint")
 
-    def build(self, config: EmoNavConfig, device: str = "cpu"):
+    @staticmethod
+    def checkpoint_problem(meta: dict) -> str:
+        """Why a checkpoint (its metadata) cannot run as this spec ("" = it can): not a SAC
+        actor. A template like `checkpoint_hint`."""
         from emonav_drake.planners.policy import describe_policy, policy_kind
 
+        if policy_kind(meta) == "sac":
+            return ""
+        return f"not a SAC actor but a {describe_policy(meta)}; use {{planners}} policy"
+
+    def build(self, config: EmoNavConfig, device: str = "cpu"):
         planner = _categorical_policy(self.checkpoint_file(), config, device)
-        if policy_kind(planner.meta) != "sac":
+        problem = self.checkpoint_problem(planner.meta)
+        if problem:
             raise ConfigError(
-                f"--planner sac: {planner.path} is not a SAC actor but a "
-                f"{describe_policy(planner.meta)}; run it with --planner policy"
+                f"--planner sac: {planner.path} is " + problem.format(planners="--planner")
             )
         return planner
 
@@ -184,6 +200,7 @@ class MpcNearbySpec(_Learned):
     """
 
     soft: ClassVar[bool] = True
+    reads_crowd_state: ClassVar[bool] = True  # the MPC it steers by does
 
     checkpoint: str = setting(
         "",
@@ -224,6 +241,9 @@ class SarlSpec:
     """A value network on the crowd state with one-step look-ahead (`planners/sarl.py`):
     CrowdNav's SARL or its relational graph network (RGL).
     """
+
+    reads_crowd_state: ClassVar[bool] = True
+    value_network: ClassVar[bool] = True
 
     checkpoint: str = setting("", 'the value network\'s file ("" = the shipped one of `network`)')
     network: str = setting("sarl", '"sarl" or "rgl": whose shipped checkpoint runs by default')
