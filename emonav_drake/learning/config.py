@@ -13,7 +13,6 @@ cross-field rules, raising `ConfigError` naming the field.
 
 import dataclasses as dc
 
-from emonav_drake.config_fields import SEED_RANGE
 from emonav_drake.config_fields import setting as _setting  # DaggerConfig has a `setting`
 from emonav_drake.configs import SETTINGS
 from emonav_drake.learning.config_common import (
@@ -25,12 +24,11 @@ from emonav_drake.learning.config_common import (
     NUM_FRAMES,
     POOL,
     SEED_OFFSET,
-    SENSOR_DOC,
     THREADS,
     WIDTH,
+    TrainingRunConfig,
     check_choice,
     check_observation,
-    check_sensor,
 )
 from emonav_drake.learning.teacher import expert_for_route
 from emonav_drake.navigation.goal_input import GOAL_INPUTS
@@ -59,10 +57,9 @@ EXPERT_BY_NAME = "a registered planner by its name: `expert: !PlannerSpec {name:
 
 
 @dc.dataclass
-class DaggerConfig:
+class DaggerConfig(TrainingRunConfig):
     """Every setting of the CPU route."""
 
-    seed: int = _setting(0, "the run's seed (network initialisation, sampling)", "", SEED_RANGE)
     expert_episodes: int = _setting(400, "episodes of the expert round", "", COUNT)
     rounds: int = _setting(6, "DAgger rounds after the expert round", "", COUNT)
     episodes_per_round: int = _setting(150, "episodes of each DAgger round", "", COUNT)
@@ -114,7 +111,6 @@ class DaggerConfig:
         '"paper" (the paper\'s arena) or another family, e.g. "mixed" (the paper\'s arena '
         "half the time, else any family: walls, corridors, standing and grouped pedestrians)",
     )
-    sensor: str = _setting("ideal", SENSOR_DOC)
     mirror_augment: bool = _setting(True, "mirror half of every batch left-right (every kind)")
     response: str = _setting(
         "",
@@ -158,7 +154,6 @@ class DaggerConfig:
     heading_noise: float = _setting(
         1.5, "their initial heading error, uniform in ± this", "rad", (0.0, 3.1416)
     )
-    device: str = _setting("cpu", "the torch device")
     threads: int = _setting(1, "torch threads: batch-1 acting is fastest on one", "", THREADS)
 
     # Fields of earlier versions, now parts of `expert` (a YAML file naming one is refused
@@ -189,7 +184,7 @@ class DaggerConfig:
         check_choice("goal_input", self.goal_input, GOAL_INPUTS)
         check_choice("setting", self.setting, SETTINGS)
         check_choice("family", self.family, SCENARIO_FAMILIES)
-        check_sensor(self.sensor)
+        self.check_common()
         self.teacher()  # the expert's own rules
         if self.soft_labels and not is_soft(self.expert):
             raise ConfigError(
@@ -200,12 +195,11 @@ class DaggerConfig:
 
 
 @dc.dataclass
-class SarlConfig:
+class SarlConfig(TrainingRunConfig):
     """SARL by CrowdNav's route (`learning/sarl_train.py`): imitation of an expert (value
     regression on discounted returns), then value learning with ε-greedy exploration,
     experience replay and a target network. CrowdNav's settings unless noted."""
 
-    seed: int = _setting(0, "the run's seed (networks, sampling, exploration)", "", SEED_RANGE)
     network: str = _setting(
         "sarl",
         'the value network: "sarl" (CrowdNav\'s SARL) or "rgl" (its relational graph '
@@ -264,8 +258,6 @@ class SarlConfig:
         "m",
         GOAL_RADIUS,
     )
-    sensor: str = _setting("ideal", SENSOR_DOC)
-    device: str = _setting("cpu", "the torch device")
     threads: int = _setting(1, "torch threads", "", THREADS)
 
     _HINTS = {"expert": EXPERT_BY_NAME}
@@ -275,7 +267,7 @@ class SarlConfig:
         validate_fields(self)
         expert_for_route(self.expert, "", self.planner_modules)
         check_choice("network", self.network, VALUE_NETWORKS)
-        check_sensor(self.sensor)
+        self.check_common()
         return self
 
     @classmethod

@@ -7,7 +7,9 @@ refused instead of started). The ranges of what a training configuration shares 
 `EmoNavConfig` (a goal radius, a frame count, a grid size) are the configuration's.
 """
 
-from emonav_drake.config_fields import field_range
+import dataclasses as dc
+
+from emonav_drake.config_fields import SEED_RANGE, field_range, setting
 from emonav_drake.errors import did_you_mean
 from emonav_drake.navigation.observations import observation_kind, observation_kinds
 from emonav_drake.params import (
@@ -89,3 +91,24 @@ def check_choice(name: str, value: str, allowed: tuple[str, ...]) -> None:
             f"{name} = {value!r} is invalid: must be one of {list(allowed)}"
             f"{did_you_mean(value, allowed)}"
         )
+
+
+@dc.dataclass
+class TrainingRunConfig:
+    """The fields every training configuration shares (DAgger, SAC, the SAC fine-tuning,
+    SARL): the run's seed, its torch device and the LiDAR sensor of its world. Each route's
+    configuration adds its own fields after these."""
+
+    seed: int = setting(
+        0,
+        "the run's seed: every random choice of the run (networks, sampling, scenarios, "
+        "exploration) follows from it",
+        "",
+        SEED_RANGE,
+    )
+    device: str = setting("cpu", "the torch device")
+    sensor: str = setting("ideal", SENSOR_DOC)
+
+    def check_common(self) -> None:
+        """`ConfigError` naming the field for a shared field out of its range or choices."""
+        check_sensor(self.sensor)

@@ -10,7 +10,7 @@ and the cross-field rules, raising `ConfigError` naming the field.
 
 import dataclasses as dc
 
-from emonav_drake.config_fields import SEED_RANGE, setting
+from emonav_drake.config_fields import setting
 from emonav_drake.diagrams.plants import PLANTS
 from emonav_drake.learning.config_common import (
     COUNT,
@@ -25,13 +25,12 @@ from emonav_drake.learning.config_common import (
     POLYAK,
     POOL,
     SEED_OFFSET,
-    SENSOR_DOC,
     TEMPERATURE,
     THREADS,
     WIDTH,
+    TrainingRunConfig,
     check_choice,
     check_observation,
-    check_sensor,
 )
 from emonav_drake.params import NUM_BEAMS, EpisodeParams
 from emonav_drake.typed_yaml import ConfigError, validate_fields
@@ -40,11 +39,9 @@ _ADAM_BETA1 = (0.0, 0.999999)
 
 
 @dc.dataclass
-class SacConfig:
+class SacConfig(TrainingRunConfig):
     """SAC with the shared LGM encoder; defaults are the paper's / authors' (docs/learning.md)."""
 
-    seed: int = setting(0, "the run's seed (networks, sampling, scenarios)", "", SEED_RANGE)
-    device: str = setting("cpu", "the torch device")
     threads: int = setting(2, "torch threads", "", THREADS)
     total_steps: int = setting(6_000_000, "environment steps of the run", "", COUNT)
     random_steps: int = setting(10_000, "uniform random actions first", "", COUNT_OR_NONE)
@@ -95,7 +92,6 @@ class SacConfig:
         'the robot of the training environment: "lip" (`EmoNavLIP-v0`) or "digit" (the '
         "full-order Digit diagram, `EmoNavDigit-v0`: ~0.2 s of CPU per environment step)",
     )
-    sensor: str = setting("ideal", SENSOR_DOC)
     num_envs: int = setting(
         1,
         "environments stepped together (on Ray actors when > 1; `learning/env_pool.py`)",
@@ -110,7 +106,7 @@ class SacConfig:
         validate_fields(self)
         check_observation(self.grid_kind, self.encoder, self.num_frames)
         check_choice("plant", self.plant, tuple(PLANTS))
-        check_sensor(self.sensor)
+        self.check_common()
         if self.grid_kind != "scan":
             if NUM_BEAMS % self.grid_size:
                 raise ConfigError(
@@ -126,12 +122,10 @@ class SacConfig:
 
 
 @dc.dataclass
-class FinetuneConfig:
+class FinetuneConfig(TrainingRunConfig):
     """Discrete soft actor-critic fine-tuning of a categorical student
     (`learning/finetune.py`; docs/learning.md, "Fine-tuning a student by SAC")."""
 
-    seed: int = setting(0, "the run's seed (networks, sampling, acting)", "", SEED_RANGE)
-    device: str = setting("cpu", "the torch device")
     threads: int = setting(
         1, "torch threads: batch-1 acting and small MLP updates are fastest on one", "", THREADS
     )
@@ -146,7 +140,6 @@ class FinetuneConfig:
         "m",
         GOAL_RADIUS,
     )
-    sensor: str = setting("ideal", SENSOR_DOC)
     total_steps: int = setting(
         100_000, "environment (walking) steps; the episode reaching it ends", "", COUNT
     )
@@ -219,7 +212,7 @@ class FinetuneConfig:
         training, selection and evaluation seed ranges overlap."""
         validate_fields(self)
         check_choice("critic_loss", self.critic_loss, ("huber", "mse"))
-        check_sensor(self.sensor)
+        self.check_common()
         # at most one episode per environment step: seeds offset … offset + total_steps − 1
         ranges = {
             "train_seed_offset": (self.train_seed_offset, self.total_steps),
