@@ -217,7 +217,7 @@ def test_a_scene_whose_goal_no_route_reaches_is_refused_when_built():
         WallSpec(start=[3, 1], end=[3, 0.6]),
         WallSpec(start=[3, -0.6], end=[3, -1]),
     ]
-    assert len(make_route_planner(Scenario(walls=door), cfg).static_map.walls) == 5
+    assert len(make_route_planner(Scenario(walls=door), cfg).follower.static_map.walls) == 5
     with pytest.raises(ConfigError, match="cannot be reached"):  # the layer is on by default
         build_navigation_diagram(closed, cfg, make_planner("dwa", cfg))
     cfg.route.enabled = False

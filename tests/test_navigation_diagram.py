@@ -132,3 +132,71 @@ def test_episode_records_are_identical(seed):
         env.step(dwa.plan(env.planner_input()))
     record, _ = run_episode(sample_scenario(seed, cfg), cfg, DwaPlanner(cfg), goal_radius=0.2)
     assert record.to_json() == env.world.record.to_json()
+
+
+@pytest.mark.parametrize(
+    ("family", "seed"),
+    [("corner_traffic", 6001), ("doorway", 3), ("office", 3), ("t_junction", 5)],
+)
+def test_the_lip_world_follows_the_global_route_as_the_diagram_does(family, seed):
+    """In a scene with walls both worlds follow the route layer's sub-goal
+    (`navigation/route_following.py`): the same DWA episode, step for step."""
+    cfg = EmoNavConfig()
+    cfg.crowd.family = family
+    scenario = sample_scenario(seed, cfg)
+    assert scenario.walls
+    env = EmoNavLIPEnv(cfg, goal_radius=0.2, grid_kind="lgm")
+    env.reset(seed=seed)
+    w = env.world
+    assert w.route is not None and len(w.route_points) >= 2
+    dwa, robots, subgoals = DwaPlanner(cfg), [np.array(w.robot)], []
+    while not w.tracker.done:
+        inp = env.planner_input()
+        assert inp.goal_is_subgoal
+        subgoals.append(inp.goal_xy)
+        env.step(dwa.plan(inp))
+        robots.append(np.array(w.robot))
+    record, log = run_episode(scenario, cfg, DwaPlanner(cfg), goal_radius=0.2, trace=True)
+    assert record.to_json() == w.record.to_json()
+    assert np.array_equal(np.array(log.robot), np.array(robots))
+    # the sub-goal is not the goal while the route turns (the layer did something)
+    assert any(np.linalg.norm(g - scenario.robot_goal) > 0.5 for g in subgoals)
+
+
+def test_a_saved_lip_world_continues_on_its_route():
+    from emonav_drake.navigation.lip_world import NavigationWorld
+
+    cfg = EmoNavConfig()
+    cfg.crowd.family = "office"
+    scenario = sample_scenario(3, cfg)
+    a, dwa = NavigationWorld(scenario, cfg), DwaPlanner(cfg)
+    for _ in range(8):
+        a.step(dwa.plan(a.planner_input()))
+    b = NavigationWorld.from_state_dict(a.state_dict(), cfg)
+    assert np.array_equal(b.route_points, a.route_points)
+    for _ in range(6):
+        ua, ub = dwa.plan(a.planner_input()), dwa.plan(b.planner_input())
+        assert np.array_equal(ua, ub)
+        a.step(ua)
+        b.step(ub)
+    assert a.record.to_json() == b.record.to_json()
+    # without walls there is no route, and the goal is the goal
+    paper = NavigationWorld(sample_scenario(3, EmoNavConfig()), EmoNavConfig())
+    assert paper.route is None and not paper.planner_input().goal_is_subgoal
+
+
+def test_the_lip_world_replans_when_a_door_closes_as_the_diagram_does():
+    from emonav_drake.navigation.lip_world import NavigationWorld
+    from emonav_drake.scenarios import scenario_path
+    from emonav_drake.scenarios.scenario import load_scenario
+
+    cfg = EmoNavConfig()
+    scenario = load_scenario(scenario_path("closed_door"))
+    w, dwa = NavigationWorld(scenario, cfg, goal_radius=0.2), DwaPlanner(cfg)
+    first = w.route_points.copy()
+    while not w.tracker.done:
+        w.step(dwa.plan(w.planner_input()))
+    # replanned round the cart through the other door
+    assert w.route_points.shape != first.shape or not np.allclose(w.route_points, first)
+    record, _ = run_episode(scenario, cfg, DwaPlanner(cfg), goal_radius=0.2)
+    assert record.to_json() == w.record.to_json()

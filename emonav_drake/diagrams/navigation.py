@@ -43,7 +43,6 @@ import dataclasses as dc
 import logging
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
 from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 
@@ -55,10 +54,10 @@ from emonav_drake.diagrams.episode import (
 )
 from emonav_drake.navigation.episode_trace import EpisodeTrace
 from emonav_drake.navigation.metrics import EpisodeRecord
+from emonav_drake.navigation.route_following import route_follower, uses_route
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.perception.noisy_emotions import CAMERA_MODES, EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
-from emonav_drake.scenarios.global_route import NoRouteError, StaticMap, plan_route
 from emonav_drake.scenarios.scenario import Scenario
 from emonav_drake.systems.crowd_system import CrowdSystem
 from emonav_drake.systems.crowd_tracker_system import CrowdTrackerSystem
@@ -112,37 +111,13 @@ class NavigationStack:
 
 
 def make_route_planner(scenario: Scenario, config: EmoNavConfig) -> GlobalRoutePlanner:
-    """The `GlobalRoutePlanner` of a scene: its walls and static discs, its goal, the
-    clearances of the robot's radius + each of `config.route.margins` (then the radius
-    alone), look-ahead, line of sight and stray distance of `config.route`, checked every
-    walking step. `ConfigError` naming what blocks it when no route
-    with the robot's radius joins the start to the goal on the map at t = 0 (a disc put in
-    place later, `appears_at` > 0, may close the route during the episode: the outcome
-    "no_route")."""
-    static_map = StaticMap.of(
-        [[w.start, w.end] for w in scenario.walls],
-        [o.center for o in scenario.obstacles],
-        [o.radius for o in scenario.obstacles],
+    """The `GlobalRoutePlanner` of a scene (`navigation.route_following.route_follower`:
+    its map, goal, clearances, look-ahead, line of sight and stray distance), checked
+    every walking step. `ConfigError` naming what blocks it when no route with the robot's
+    radius joins the start to the goal on the map at t = 0."""
+    return GlobalRoutePlanner.of_follower(
+        route_follower(scenario, config), period=config.robot.step_time
     )
-    r, rp = config.robot.radius, config.route
-    route = GlobalRoutePlanner(
-        static_map,
-        np.asarray(scenario.robot_goal, float),
-        [r + m for m in rp.margins],
-        r,
-        period=config.robot.step_time,
-        lookahead=rp.lookahead,
-        stray=rp.stray,
-        appear_times=[o.appears_at for o in scenario.obstacles],
-        line_of_sight=rp.line_of_sight,
-    )
-    try:  # a goal no route reaches is refused here, naming what blocks it
-        plan_route(
-            scenario.robot_start, scenario.robot_goal, route.map_at(0.0), route.min_clearance
-        )
-    except NoRouteError as e:
-        raise ConfigError(f"the scene's goal cannot be reached: {e}") from None
-    return route
 
 
 def AddNavigationStack(
@@ -184,9 +159,7 @@ def AddNavigationStack(
     for sys in (crowd, maps, plan, monitor):
         b.Connect(robot_state, sys.GetInputPort("robot_state"))
     route = None
-    if global_route is None:
-        global_route = config.route.enabled
-    if global_route and scenario.walls:  # the planner steers to a sub-goal along the route
+    if uses_route(scenario, config, global_route):  # the planner steers to a sub-goal
         route = b.AddNamedSystem("global_route", make_route_planner(scenario, config))
         b.Connect(robot_state, route.GetInputPort("robot_state"))
         b.Connect(route.GetOutputPort("subgoal"), plan.GetInputPort("goal"))

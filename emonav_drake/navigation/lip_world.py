@@ -40,6 +40,12 @@ from emonav_drake.navigation.goal_input import goal_state, policy_goal_state
 from emonav_drake.navigation.metrics import EpisodeRecord, EpisodeTracker
 from emonav_drake.navigation.observations import observation_kind
 from emonav_drake.navigation.reward import StepEvaluation, evaluate_step
+from emonav_drake.navigation.route_following import (
+    RouteFollower,
+    RoutePlan,
+    route_follower,
+    uses_route,
+)
 from emonav_drake.navigation.social_metrics import StepMotion
 from emonav_drake.params import EmoNavConfig, RobotParams
 from emonav_drake.robot.lip import LipState, lip_in_step, lip_step, lip_velocity
@@ -151,6 +157,11 @@ class NavigationWorld:
             the step-averaged speed v̄, and within a step the crowd sees the robot moving
             at constant velocity between the two instants.
         response_noise: add the model's residuals (True) or walk its expectation.
+        global_route: in a scene with walls, follow a route on the known map
+            (`navigation/route_following.py`, as the Drake diagram's `GlobalRoutePlanner`
+            does, bit for bit): the planner's goal is the sub-goal along it, and an
+            episode with no route left ends "no_route". None: `config.route.enabled`
+            (on by default); never in a scene without walls.
     """
 
     def __init__(
@@ -161,6 +172,7 @@ class NavigationWorld:
         grid_kind: str | None = "lgm",
         response: StepResponseModel | None = None,
         response_noise: bool = True,
+        global_route: bool | None = None,
     ) -> None:
         self.response = response
         self.response_noise = response_noise
@@ -171,6 +183,9 @@ class NavigationWorld:
         self.goal_xy = np.asarray(scenario.robot_goal, dtype=float)
         self.crowd = Crowd(scenario, config)
         self._substeps = substeps_per_step(config)
+        self.route: RouteFollower | None = None
+        if uses_route(scenario, config, global_route):
+            self.route = route_follower(scenario, config)
         self.reset()
 
     def reset(self) -> PlannerInput:
@@ -184,6 +199,9 @@ class NavigationWorld:
         self.command_before = np.zeros(2)  # u_{k−2}: the calibrated robot still feels it
         self.response_rng = np.random.default_rng([RESPONSE_SEED_SALT, s.seed % 2**64])
         self.step_count = 0
+        self.route_plan: RoutePlan | None = None
+        if self.route is not None:  # planned once at the start, as the diagram initialises
+            self.route_plan = self.route.replan(self.route.initial_plan(), self._xy(), 0.0)
         self.goal_distance = float(goal_state(self.robot, self.goal_xy)[0])
         self.tracker = EpisodeTracker(
             self.config.episode.max_steps, self.config.robot.step_time, seed=s.seed
@@ -200,16 +218,32 @@ class NavigationWorld:
         frame = kind.frame(self.robot, self.crowd.snapshot(self.crowd_state), self.config)
         return kind.stack_item(frame)
 
+    def _xy(self) -> np.ndarray:
+        return np.array([self.robot.x, self.robot.y])
+
+    def _time(self) -> float:
+        return self.step_count * self.config.robot.step_time
+
     def planner_input(self) -> PlannerInput:
-        """The planner's view of the current walking step."""
+        """The planner's view of the current walking step: with a global route, its goal
+        is the sub-goal along the route (`goal_is_subgoal`)."""
+        goal = self.goal_xy
+        if self.route is not None:
+            goal = self.route.subgoal(self.route_plan, self._xy(), self._time())
         return PlannerInput(
             robot=self.robot,
-            goal_xy=self.goal_xy,
+            goal_xy=goal,
             last_command=self.last_command.copy(),
             crowd=with_wall_discs(self.crowd.snapshot(self.crowd_state)),
             lgm_stack=None if self.frames is None else self.frames.array,
             step=self.step_count,
+            goal_is_subgoal=self.route is not None,
         )
+
+    @property
+    def route_points(self) -> np.ndarray:
+        """The global route [m, world], robot to goal ((0, 2) without one)."""
+        return np.zeros((0, 2)) if self.route_plan is None else self.route_plan.route
 
     @property
     def record(self) -> EpisodeRecord:
@@ -243,6 +277,7 @@ class NavigationWorld:
                 "social": t.social_state(),
             },
             "frames": None if self.frames is None else self.frames.array,
+            "route_plan": None if self.route_plan is None else self.route_plan.to_plain(),
         }
 
     @classmethod
@@ -274,6 +309,13 @@ class NavigationWorld:
             self.response_rng.bit_generator.state = state["response_rng"]
         self.step_count = state["step_count"]
         self.goal_distance = state["goal_distance"]
+        if self.route is not None:  # a state saved without a route: planned from here
+            saved = state.get("route_plan")
+            self.route_plan = (
+                RoutePlan.from_plain(saved)
+                if saved is not None
+                else self.route.replan(self.route.initial_plan(), self._xy(), self._time())
+            )
         tr = state["tracker"]
         self.tracker = EpisodeTracker(tr["max_steps"], tr["step_time"])
         self.tracker.record = EpisodeRecord(**tr["record"])
@@ -298,8 +340,10 @@ class NavigationWorld:
 
     def step(self, command: np.ndarray) -> tuple[StepEvaluation, str | None]:
         """Walk one step with a valid command; returns its evaluation and the outcome
-        (success | collision | timeout) if the episode ended, else None."""
+        (success | collision | timeout | no_route) if the episode ended, else None."""
         u, _ = check_command(command, self.config.robot)
+        if self.route is not None:  # the check at t_k, with the robot where it is
+            self.route_plan = self.route.replan(self.route_plan, self._xy(), self._time())
         start = self.robot
         crowd = self.crowd_state
         r = self.config.robot
@@ -338,6 +382,7 @@ class NavigationWorld:
             motion=StepMotion(
                 start, self.robot, self.crowd.snapshot(crowd), self.goal_xy, r.radius, u
             ),
+            no_route=self.route_plan is not None and not self.route_plan.found,
         )
         if self.frames is not None:
             self.frames.push(self._frame())
