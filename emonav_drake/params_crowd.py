@@ -37,6 +37,7 @@ SCENARIO_FAMILIES = (
     "doorway",
     "office",
     "mixed",
+    "mixed_buildings",
 )
 
 _COUNT = (0, 20)  # pedestrians or static discs in a sampled scenario

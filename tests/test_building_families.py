@@ -106,6 +106,20 @@ def test_the_mixed_training_family_keeps_its_scenes():
     assert len(MIXED_FAMILIES) == 15 and "paper" not in MIXED_FAMILIES
 
 
+def test_the_buildings_training_family_draws_every_family():
+    from emonav_drake.scenarios.scenario_families import MIXED_BUILDINGS_FAMILIES
+
+    assert set(BUILDINGS) <= set(MIXED_BUILDINGS_FAMILIES)
+    assert len(MIXED_BUILDINGS_FAMILIES) == 18 and not any(
+        n == "paper" or n.startswith("mixed") for n in MIXED_BUILDINGS_FAMILIES
+    )
+    scenes = [sample_family("mixed_buildings", seed) for seed in range(60)]
+    walls = [len(s.walls) for s in scenes]
+    # the office (10 walls) and the arena (none) both occur; the same seed, the same scene
+    assert 10 in walls and 0 in walls
+    assert sample_family("mixed_buildings", 7) == sample_family("mixed_buildings", 7)
+
+
 def test_walled_families_are_the_families_whose_scenes_have_walls():
     """The route layer is built only where a family's scenes have walls, and the labels
     name it only there: `WALLED_FAMILIES` must agree with the scenes drawn (`mixed` draws
@@ -114,9 +128,10 @@ def test_walled_families_are_the_families_whose_scenes_have_walls():
 
     for name in FAMILIES:
         walled = [
-            bool(sample_family(name, seed).walls) for seed in range(40 if name == "mixed" else 3)
+            bool(sample_family(name, seed).walls)
+            for seed in range(40 if name.startswith("mixed") else 3)
         ]
-        if name == "mixed":
+        if name.startswith("mixed"):
             assert name in WALLED_FAMILIES and any(walled) and not all(walled)
         else:
             assert all(walled) == (name in WALLED_FAMILIES) and len(set(walled)) == 1, name

@@ -503,6 +503,24 @@ def _mixed(rng: np.random.Generator, cfg: EmoNavConfig) -> Scenario:
     return FAMILIES[MIXED_FAMILIES[int(rng.integers(len(MIXED_FAMILIES)))]].draw(rng, cfg)
 
 
+# `mixed_buildings` (training where a robot goes, issue 53): the paper's arena a third of
+# the time, else any family but the mixes, the buildings included, uniformly.
+MIXED_BUILDINGS_PAPER_SHARE = 1 / 3
+MIXED_BUILDINGS_FAMILIES = SCENARIO_FAMILIES[
+    SCENARIO_FAMILIES.index("circle_crossing") : SCENARIO_FAMILIES.index("office") + 1
+]
+
+
+def _mixed_buildings(rng: np.random.Generator, cfg: EmoNavConfig) -> Scenario:
+    """Training in every family: the paper's arena with probability
+    `MIXED_BUILDINGS_PAPER_SHARE`, else one of `MIXED_BUILDINGS_FAMILIES` (the 18 named
+    families, buildings included), uniformly; from its own stream, as `mixed`."""
+    if rng.random() < MIXED_BUILDINGS_PAPER_SHARE:
+        return sample_paper_scenario(int(rng.integers(2**63)), cfg)
+    names = MIXED_BUILDINGS_FAMILIES
+    return FAMILIES[names[int(rng.integers(len(names)))]].draw(rng, cfg)
+
+
 FAMILIES: dict[str, Family] = {
     f.name: f
     for f in [
@@ -558,6 +576,11 @@ FAMILIES: dict[str, Family] = {
             "training: the paper's arena half the time, else one of 15 families",
             _mixed,
         ),
+        Family(
+            "mixed_buildings",
+            "training: the arena a third of the time, else any of 18 families",
+            _mixed_buildings,
+        ),
     ]
 }
 
@@ -567,7 +590,15 @@ assert tuple(FAMILIES) == SCENARIO_FAMILIES, "params.SCENARIO_FAMILIES lists the
 # layer is built; in every other family it never is (tests/test_building_families.py
 # checks this set against drawn scenes).
 WALLED_FAMILIES = frozenset(
-    {"corner_traffic", "corridor_head_on", "t_junction", "doorway", "office", "mixed"}
+    {
+        "corner_traffic",
+        "corridor_head_on",
+        "t_junction",
+        "doorway",
+        "office",
+        "mixed",
+        "mixed_buildings",
+    }
 )
 
 
