@@ -387,3 +387,36 @@ def test_a_walking_person_with_one_disc_like_scan_keeps_walking():
     (track,) = tracker.tracks()
     assert not tracker.is_static(track)
     assert abs(track.velocity[0] - 1.0) < 0.15 and abs(track.position[0] - 2.9) < 0.1
+
+
+def test_the_tracker_system_drops_the_known_walls_returns_and_keeps_a_person_by_one():
+    """Map-based filtering (`CrowdTrackerSystem`, `known_walls`): in a corridor of known
+    walls the scan's wall returns become no-returns, so the walls give no objects; a disc
+    standing 0.3 m off a wall is still there, its beams intact."""
+    from emonav_drake.params import EmoNavConfig
+    from emonav_drake.sensing.leg_detection import detect_scan
+    from emonav_drake.sensing.lidar import scan_discs
+    from emonav_drake.systems.crowd_tracker_system import CrowdTrackerSystem
+
+    cfg = EmoNavConfig()
+    walls = np.array([[[-6.0, 1.2], [6.0, 1.2]], [[-6.0, -1.2], [6.0, -1.2]]])
+    system = CrowdTrackerSystem(cfg, known_walls=walls)
+    xy, heading, k = np.zeros(2), 0.3, cfg.lidar.num_beams
+    args = (k, cfg.lidar.max_range, cfg.lidar.min_range)
+    empty = scan_discs(xy, heading, np.zeros((0, 2)), np.zeros(0), *args, segments=walls)
+    person = scan_discs(xy, heading, [[3.0, 0.6]], [0.3], *args, segments=walls)
+
+    def found(ranges):
+        d = detect_scan(ranges, xy, heading, cfg.lidar.max_range, system._detection)
+        return np.asarray(d.centers).reshape(-1, 2)
+
+    assert len(found(empty)) > 0  # unfiltered, the walls are objects
+    filtered = system.without_known_walls(empty, xy, heading)
+    assert np.all(filtered == cfg.lidar.max_range) and len(found(filtered)) == 0
+    kept = system.without_known_walls(person, xy, heading)
+    hit = person < empty - 0.05  # the person's beams
+    assert hit.sum() > 5 and np.array_equal(kept[hit], person[hit])
+    centers = found(kept)
+    assert len(centers) == 1 and np.linalg.norm(centers[0] - [3.0, 0.6]) < 0.05
+    # without a map, nothing is dropped
+    assert np.array_equal(CrowdTrackerSystem(cfg).without_known_walls(empty, xy, heading), empty)

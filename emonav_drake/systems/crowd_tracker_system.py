@@ -1,6 +1,9 @@
 """`CrowdTrackerSystem`: the crowd as a robot estimates it from its LiDAR scan.
 
-At the scan's rate (every `crowd.dt`, 10 Hz) it segments the 1800-beam scan into objects
+At the scan's rate (every `crowd.dt`, 10 Hz) it first drops the returns the known map
+explains — a beam whose range is within `WALL_RETURN_TOLERANCE` of the range the map's
+walls alone give it (`known_walls`; map-based filtering, as a robot with a building's map
+does) — then segments the 1800-beam scan into objects
 and fits circles (`sensing/lidar_objects.py`), then updates a multi-target tracker
 (`sensing/crowd_tracker.py`: constant-velocity Kalman filters, gated Hungarian assignment,
 birth, confirmation, coasting through occlusions, deletion). Its output replaces the
@@ -23,7 +26,10 @@ Output ports:
     crowd (abstract `CrowdSnapshot`), world frame, SI units: the confirmed moving tracks as
         pedestrians (position predicted to the current time with the track's velocity,
         velocity, the nominal pedestrian radius, the associated emotion and its discomfort
-        distance) and the confirmed still tracks as static discs (centre, fitted radius).
+        distance) and the confirmed still tracks as static discs (centre, fitted radius);
+        its `wall_segments` are the known map's walls (`known_walls`), which the planners
+        that read discs are given as the simulator's crowd gives them (a building's map,
+        as the global route layer has it: the tracker does not have to find the walls).
     tracks (abstract `TrackedPeople`): every confirmed track's id, position [m, world]
         and whether it is static, at the last scan (what a face is assigned to).
 Abstract state: the tracker (its tracks and the time of its last scan).
@@ -42,10 +48,14 @@ from emonav_drake.crowd.crowd import CrowdSnapshot
 from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
 from emonav_drake.sensing.crowd_tracker import CrowdTracker, TrackerParams, tracker_params
 from emonav_drake.sensing.leg_detection import detect_scan, detection_params
+from emonav_drake.sensing.lidar import scan_discs
 from emonav_drake.sensing.lidar_objects import DetectionParams
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
 NEUTRAL = EMOTION_NAMES.index("neutral")  # a track no emotion report is near
+# A return within this of the known walls' own range is the wall [m]: ~9 σ of the VLP-16's
+# range noise (0.01125 m), well inside a person's radius (legs stand ≥ 0.1 m off a wall).
+WALL_RETURN_TOLERANCE = 0.1
 
 
 @dc.dataclass(frozen=True)
@@ -84,9 +94,13 @@ class CrowdTrackerSystem(LeafSystem):
         config: EmoNavConfig,
         detection: DetectionParams | None = None,
         tracking: TrackerParams | None = None,
+        known_walls: np.ndarray | None = None,
     ) -> None:
+        """`known_walls`: (W, 2, 2) wall segments [m, world] of the known map (None: none)."""
         super().__init__()
         self._config = config
+        walls = np.zeros((0, 2, 2)) if known_walls is None else np.asarray(known_walls, float)
+        self._known_walls = walls.reshape(-1, 2, 2)
         self._detection = detection or detection_params(config)
         self._tracking = tracking or tracker_params(config)
         self._distances = np.asarray(config.reward.emotion_distances(), dtype=float)
@@ -121,11 +135,32 @@ class CrowdTrackerSystem(LeafSystem):
         """The tracker in `context` (read only)."""
         return context.get_abstract_state(self._tracker).get_value()
 
+    def without_known_walls(self, ranges: np.ndarray, xy: np.ndarray, heading: float) -> np.ndarray:
+        """`ranges` (K,) [m] with the returns of the known walls set to `max_range` (no
+        return): a beam within `WALL_RETURN_TOLERANCE` of the walls' own range there."""
+        if not len(self._known_walls):
+            return ranges
+        lidar = self._config.lidar
+        walls = scan_discs(
+            xy,
+            heading,
+            np.zeros((0, 2)),
+            np.zeros(0),
+            len(ranges),
+            lidar.max_range,
+            lidar.min_range,
+            segments=self._known_walls,
+        )
+        wall = (walls < lidar.max_range) & (np.abs(ranges - walls) < WALL_RETURN_TOLERANCE)
+        return np.where(wall, lidar.max_range, ranges)
+
     def _scan(self, context: Context, state: State) -> None:
         robot = lip_state_from_vector(self._robot_in.Eval(context))
+        xy = np.array([robot.x, robot.y])
+        ranges = np.asarray(self._scan_in.Eval(context), dtype=float)
         detections = detect_scan(
-            np.asarray(self._scan_in.Eval(context), dtype=float),
-            np.array([robot.x, robot.y]),
+            self.without_known_walls(ranges, xy, robot.heading),
+            xy,
             robot.heading,
             self._config.lidar.max_range,
             self._detection,
@@ -172,4 +207,6 @@ class CrowdTrackerSystem(LeafSystem):
         lag = context.get_time() - tracker.time if tracker.time is not None else 0.0
         if lag > 0 and len(snap.positions):  # the last scan's tracks, predicted to now
             snap = dc.replace(snap, positions=snap.positions + snap.velocities * lag)
+        if len(self._known_walls):
+            snap = dc.replace(snap, wall_segments=self._known_walls)
         return snap
