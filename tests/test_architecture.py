@@ -186,12 +186,14 @@ def test_every_module_has_a_layer():
     assert unplaced == []
 
 
+@pytest.mark.slow
 def test_every_import_points_down():
     graph = import_graph()
     assert sum(len(t) for t in graph.values()) > 200  # the graph was read, not empty
     assert upward_imports(graph) == []
 
 
+@pytest.mark.slow
 def test_no_import_cycle():
     assert cycles(import_graph()) == []
 

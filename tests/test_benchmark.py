@@ -61,6 +61,7 @@ def reference(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.mark.slow
 def test_serial_run_writes_lines_settings_and_tables(reference):
     settings, trials = load_run(reference)
     assert settings["planners"] == ["dwa", "policy"] and settings["plant"] == "lip"
@@ -104,6 +105,7 @@ def test_wilson_and_mcnemar_values():
     assert tables.signed_rank_p([2, 0, 5], [2, 0, 5]) == 1.0
 
 
+@pytest.mark.slow
 def test_ray_equals_serial_and_a_ray_run_survives_ctrl_c(reference, tmp_path):
     """2 Ray workers: Ctrl-C after 2 trials keeps them and writes the tables; the same call
     continues; the result is the serial run, record for record."""
@@ -128,6 +130,7 @@ def test_ray_equals_serial_and_a_ray_run_survives_ctrl_c(reference, tmp_path):
     _same_tables(out, reference)
 
 
+@pytest.mark.slow
 def test_interrupted_serial_run_resumes_to_the_same_result(reference, tmp_path):
     out = tmp_path / "resumed"
     # a short run first (as if killed after 2 trials per method), then a Ctrl-C …
@@ -161,6 +164,7 @@ def test_interrupted_serial_run_resumes_to_the_same_result(reference, tmp_path):
     _same_tables(out, reference)
 
 
+@pytest.mark.slow
 def test_torn_last_line_is_dropped_and_redone(reference, tmp_path):
     out = tmp_path / "torn"
     shutil.copytree(reference, out)
@@ -179,6 +183,7 @@ def test_torn_last_line_is_dropped_and_redone(reference, tmp_path):
         read_trials(path)
 
 
+@pytest.mark.slow
 def test_other_settings_in_the_same_directory_are_refused(reference, tmp_path, capsys):
     out = tmp_path / "mixed"
     shutil.copytree(reference, out)
@@ -209,6 +214,7 @@ def _err_of(out: Path, capsys) -> str:
     return capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_planner_reuse_gives_the_records_of_fresh_planners():
     """One runner (planners built once) over seeds in any order = a fresh planner per trial
     (the MPC keeps OSQP workspaces on itself; its memory lives in the Context)."""
@@ -221,6 +227,7 @@ def test_planner_reuse_gives_the_records_of_fresh_planners():
     assert a == b and a[0] == a[4]
 
 
+@pytest.mark.slow
 def test_one_digit_trial(tmp_path):
     cfg = tmp_path / "short.yaml"
     cfg.write_text("episode: {max_steps: 3}\n")

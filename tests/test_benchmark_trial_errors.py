@@ -148,6 +148,7 @@ def _records(out: Path) -> dict[tuple[str, int], dict]:
 # --------------------------------------------------------- a trial that raises, the others go on
 
 
+@pytest.mark.slow
 def test_a_trial_that_raises_is_recorded_beside_the_run_serially_and_on_ray(
     tmp_path: Path, short: Path, capsys: pytest.CaptureFixture
 ) -> None:
@@ -191,6 +192,7 @@ def test_a_trial_that_raises_is_recorded_beside_the_run_serially_and_on_ray(
     assert "RuntimeError: boom on purpose" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_the_same_command_again_retries_the_failed_trial(
     tmp_path: Path, short: Path, capsys: pytest.CaptureFixture
 ) -> None:
@@ -228,6 +230,7 @@ def test_ctrl_c_still_stops_the_run_after_a_failed_trial(tmp_path: Path, short: 
     assert ("flaky", BAD + 1) not in done and ("dwa", BAD + 1) not in done
 
 
+@pytest.mark.slow
 def test_run_benchmark_raises_trials_failed_with_the_result(tmp_path: Path, short: Path) -> None:
     """The library call: `TrialsFailed` at the end, its `result` the finished trials."""
     from emonav_drake.diagrams.trials import method_specs
@@ -278,6 +281,7 @@ def test_an_answer_that_is_no_speed_turn_pair_names_the_planner(
     assert err.startswith("emonav: error: ") and message in err and str(plugin) in err
 
 
+@pytest.mark.slow
 def test_a_benchmark_trial_answering_a_string_is_an_error_naming_the_planner(
     tmp_path: Path, short: Path
 ) -> None:
@@ -315,6 +319,7 @@ def test_the_build_error_is_a_config_error() -> None:
     assert issubclass(PlannerBuildError, ConfigError)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("workers", [1, 2])
 def test_a_planner_that_hangs_is_stopped_by_the_decision_watchdog(
     tmp_path: Path, workers: int, capsys: pytest.CaptureFixture
@@ -357,6 +362,7 @@ def test_the_watchdog_changes_no_finished_result(tmp_path: Path) -> None:
     assert records[0] == records[1]
 
 
+@pytest.mark.slow
 def test_the_watchdog_raises_again_in_a_body_that_swallows_it() -> None:
     """A body that catches the first error is interrupted again a second later; a body
     that returns in time is untouched; off the main thread there is no watchdog."""
@@ -391,6 +397,7 @@ def test_the_watchdog_raises_again_in_a_body_that_swallows_it() -> None:
 # ------------------------------------------------------------------- trials.jsonl's last line
 
 
+@pytest.mark.slow
 def test_a_complete_damaged_last_line_is_refused_not_dropped(
     tmp_path: Path, short: Path, capsys: pytest.CaptureFixture
 ) -> None:

@@ -80,6 +80,7 @@ def test_bad_parameters_are_refused():
         BlazeFaceParams(tile=128, overlap=128)
 
 
+@pytest.mark.slow
 def test_the_head_camera_at_5_m_blazeface_finds_the_face_the_cascade_does_not():
     """The detection sweep on real renders: at 1.5 m both find the face; at 5 m facing
     the camera the cascade's 24-px minimum is not reached, BlazeFace finds it."""
@@ -107,6 +108,7 @@ def test_the_head_camera_at_5_m_blazeface_finds_the_face_the_cascade_does_not():
     assert face[5.0] < 30 < face[1.5]
 
 
+@pytest.mark.slow
 def test_the_classifier_with_blazeface_assigns_a_face_at_5_m_and_reads_it_at_1_m():
     """`face_detector: blazeface`: the face at the pedestrian's projected head is found
     at 5 m (the cascade finds none there) and, near, its emotion is read right."""

@@ -30,6 +30,7 @@ def _clear(path, walls: StaticMap, clearance: float) -> bool:
     return not any(clearance_violations(np.concatenate([*dense, path[-1:]]), walls, clearance))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("family", BUILDINGS)
 def test_the_goal_is_out_of_sight_and_a_route_reaches_it_clear_of_the_walls(family):
     r = CFG.robot.radius
@@ -71,6 +72,7 @@ def test_the_office_robot_leaves_one_room_and_enters_another():
         assert room[0] != room[1]
 
 
+@pytest.mark.slow
 def test_pedestrians_walk_through_the_door_in_the_crowd_simulation():
     # doorway: the first one to three pedestrians start in the right room and walk to the
     # left one (and back: they walk to and fro); ORCA among themselves and the walls takes
@@ -106,6 +108,7 @@ def test_the_mixed_training_family_keeps_its_scenes():
     assert len(MIXED_FAMILIES) == 15 and "paper" not in MIXED_FAMILIES
 
 
+@pytest.mark.slow
 def test_the_buildings_training_family_draws_every_family():
     from emonav_drake.scenarios.scenario_families import MIXED_BUILDINGS_FAMILIES
 
@@ -120,6 +123,7 @@ def test_the_buildings_training_family_draws_every_family():
     assert sample_family("mixed_buildings", 7) == sample_family("mixed_buildings", 7)
 
 
+@pytest.mark.slow
 def test_walled_families_are_the_families_whose_scenes_have_walls():
     """The route layer is built only where a family's scenes have walls, and the labels
     name it only there: `WALLED_FAMILIES` must agree with the scenes drawn (`mixed` draws

@@ -33,6 +33,7 @@ def _lines(path):
     return out
 
 
+@pytest.mark.slow
 def test_parallel_collection_equals_serial_and_resumes(tmp_path):
     serial, parallel = tmp_path / "serial.jsonl", tmp_path / "parallel.jsonl"
     kw = dict(explore=0.5, progress=False, config=_short(4))
@@ -82,6 +83,7 @@ def test_fit_reports_held_out_errors_and_the_model_loads(tmp_path):
     assert load_response("") is None
 
 
+@pytest.mark.slow
 def test_the_shipped_model_predicts_a_fresh_digit_episode_within_its_reported_error(tmp_path):
     shipped = json.loads(DIGIT_RESPONSE.read_text())
     model = load_response("digit")

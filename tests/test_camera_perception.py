@@ -182,6 +182,7 @@ def test_pedestrians_face_their_walking_direction():
     assert d.tolist() == [2.0] and facing.tolist() == pytest.approx([0.0])
 
 
+@pytest.mark.slow
 def test_camera_episodes_are_deterministic_and_keep_the_truth_for_the_metrics():
     """A whole LIP episode with camera emotions runs; the same seed gives the same record;
     the perceived emotions shape only what the planner sees (the monitor keeps the truth)."""
@@ -197,6 +198,7 @@ def test_camera_episodes_are_deterministic_and_keep_the_truth_for_the_metrics():
     assert records[0].to_json() == records[1].to_json()
 
 
+@pytest.mark.slow
 def test_the_camera_rides_on_digits_torso():
     """On Digit the camera is a frame on the torso: its pose is the torso's pose times
     the configured offset, and the chain classifies while Digit walks."""
@@ -254,6 +256,7 @@ def test_emotion_source_flags(tmp_path, capsys):
     assert (FACES_DIR / "face_happy.obj").is_file()
 
 
+@pytest.mark.slow
 def test_the_perception_study_measures_what_the_chain_does():
     """The sweep's rig and the in-episode samples use the real chain: a facing pedestrian
     2 m ahead is found and recognised, its back is not; an episode's samples carry, at
@@ -302,6 +305,7 @@ def test_a_confusion_runs_recorded_estimate_is_unchanged_by_the_camera(tmp_path)
     assert load_typed_yaml(EmotionEstimateParams, data=camera) == CAMERA
 
 
+@pytest.mark.slow
 def test_the_default_camera_is_the_zed2_at_hd720_and_640x480_stays_selectable(tmp_path, capsys):
     """The default head camera is the paper's ZED 2 at HD720 (1280 × 720, 70° vertical:
     ≈ 102° horizontal as a pinhole); `camera: {width: 640, height: 480, fov_y_deg: 45}`
@@ -334,6 +338,7 @@ def test_the_default_camera_is_the_zed2_at_hd720_and_640x480_stays_selectable(tm
     capsys.readouterr()
 
 
+@pytest.mark.slow
 def test_a_wall_hides_a_face_from_the_camera():
     """The face 2 m ahead is found; with a wall 1 m ahead across the view it is not (the
     camera renders the scenario's walls)."""

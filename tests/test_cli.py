@@ -48,12 +48,14 @@ def test_sim_with_a_yaml_scenario_and_bad_scenarios(tmp_path, capsys):
     assert "robot.max_speed" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_lgm_png(tmp_path):
     png = tmp_path / "lgm.png"
     assert main(["lgm", "--seed", "2", "--png", str(png)]) == 0
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
 
 
+@pytest.mark.slow
 def test_eval_summary(tmp_path):
     out = tmp_path / "e.json"
     assert (
@@ -75,6 +77,7 @@ def test_eval_summary(tmp_path):
     assert {k: sim[k] for k in r["episodes"][1]} == r["episodes"][1]
 
 
+@pytest.mark.slow
 def test_sim_with_misclassified_emotions(tmp_path):
     est = tmp_path / "est.yaml"
     est.write_text(
@@ -130,6 +133,7 @@ def test_shipped_example_scenarios_load_and_run_by_name(tmp_path, capsys):
     assert "head_on, crossing, mood_swing, hallway" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_sim_and_eval_take_a_named_setting_as_benchmark_does(tmp_path, capsys):
     """`--setting NAME` on sim and eval: the shipped setting's configuration; an unknown
     name is refused (exit 2) with the same error line as `benchmark`'s, naming the choices."""
@@ -196,6 +200,7 @@ def test_the_progress_bar_changes_no_lip_episode(capsys):
     assert f"{t:.1f}/{t:.1f} s simulated" in err1 and r1.outcome in err1
 
 
+@pytest.mark.slow
 def test_sim_on_digit_shows_its_bar_on_a_terminal_only(tmp_path, capsys, monkeypatch):
     """`emonav sim --plant digit`: the bar on stderr when it is a terminal and --quiet is
     not given; the --json output is the same file byte for byte either way."""

@@ -63,6 +63,7 @@ def test_compare_out_an_existing_file_names_the_flag(capsys, tmp_path):
     assert out.read_text() == "mine\n"
 
 
+@pytest.mark.slow
 def test_diagnose_out_an_existing_file_names_the_flag(capsys, tmp_path):
     """Before: the run was read and its trials looked at first ('no failed trials …'), and
     with failures the file would have been replaced by a folder's worth of output."""
@@ -115,6 +116,7 @@ def test_state_source_with_a_map_policy_is_refused(capsys, command):
     assert_user_error(code, err, "--state-source lidar", "--planner policy")
 
 
+@pytest.mark.slow
 def test_sim_json_records_the_state_source(capsys, tmp_path):
     for source in ("truth", "lidar"):
         out = tmp_path / f"{source}.json"

@@ -31,6 +31,7 @@ def runs(tmp_path_factory):
     return root, a, b
 
 
+@pytest.mark.slow
 def test_two_runs_compare_as_one_on_the_seeds_they_share(runs, tmp_path, capsys):
     root, a, b = runs
     settings, trials = combine_runs([a, b])
@@ -52,6 +53,7 @@ def test_two_runs_compare_as_one_on_the_seeds_they_share(runs, tmp_path, capsys)
     assert settings["merged"] == {"dwa": {"runs": [str(a), str(b)], "shared_trials": 1}}
 
 
+@pytest.mark.slow
 def test_runs_of_other_trials_or_clashing_names_are_refused(runs, tmp_path, capsys):
     root, a, _ = runs
     other = _run(tmp_path / "n", "dwa", config=load_setting("no_emotion"))

@@ -115,6 +115,7 @@ def test_a_run_records_the_sensor_and_rebuilds_its_flags():
     assert "sensor" not in old and "deployable" not in old
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("planner", ["mpc", "policy"])
 def test_an_episode_runs_on_the_noisy_scan(tmp_path, capsys, planner):
     """The same seed with the exact scan and deployable: the planner sees another crowd
@@ -138,6 +139,7 @@ def test_an_episode_runs_on_the_noisy_scan(tmp_path, capsys, planner):
     assert deployable["path_length"] != exact["path_length"]
 
 
+@pytest.mark.slow
 def test_eval_says_what_the_robot_sensed(tmp_path, capsys):
     config = tmp_path / "short.yaml"
     config.write_text("episode: {max_steps: 10}\n")

@@ -2,9 +2,12 @@
 
 import json
 
+import pytest
+
 from emonav_drake.cli import main
 
 
+@pytest.mark.slow
 def test_diagnose_explains_the_failures_of_a_digit_run(tmp_path):
     cfg = tmp_path / "short.yaml"
     cfg.write_text("episode: {max_steps: 4}\n")
@@ -89,6 +92,7 @@ def _listed(text: str) -> list[tuple[int, str, int, str]]:
     return rows
 
 
+@pytest.mark.slow
 def test_diagnose_lists_the_failures_of_a_lip_run_and_how_to_rerun_them(tmp_path, capsys):
     import shlex
 
@@ -134,6 +138,7 @@ def test_diagnose_lists_the_failures_of_a_lip_run_and_how_to_rerun_them(tmp_path
     assert _listed(out) == [] and f"dwa: 0 of {len(won)} trials failed" in out
 
 
+@pytest.mark.slow
 def test_diagnose_re_simulates_a_lip_run_and_skips_the_digit_comparison(tmp_path, capsys):
     run, trials = _lip_run(tmp_path)
     out = tmp_path / "diag"

@@ -26,6 +26,7 @@ def _short(steps: int) -> EmoNavConfig:
     return cfg
 
 
+@pytest.mark.slow
 def test_the_env_checker_passes_and_the_spaces_are_the_lip_envs():
     env = gym.make("emonav_drake:EmoNavDigit-v0", config=_short(3)).unwrapped
     assert isinstance(env, EmoNavDigitEnv)
@@ -35,6 +36,7 @@ def test_the_env_checker_passes_and_the_spaces_are_the_lip_envs():
     check_env(env, skip_render_check=True)
 
 
+@pytest.mark.slow
 def test_same_seed_and_actions_give_the_diagrams_trajectory():
     cfg = _short(6)
     seed = 7

@@ -17,6 +17,7 @@ from emonav_drake.planners.variants import CONFIG_DIR as ROUTES
 from emonav_drake.typed_yaml import load_typed_yaml
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "route", ["emobipednav_digit", "emobipednav_digit_mpc", "emobipednav_distilled"]
 )
@@ -91,6 +92,7 @@ def test_resuming_the_rounds_from_a_damaged_state_names_it_and_the_changed_setti
     assert "settings that differ from the saved ones: episodes: 7 → 2" in caplog.text
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "expert",
     [

@@ -30,6 +30,7 @@ def built(tmp_path_factory) -> tuple[subprocess.CompletedProcess, Path]:
     return proc, site
 
 
+@pytest.mark.slow
 def test_the_site_builds_strictly(built):
     proc, site = built
     assert proc.returncode == 0, proc.stderr[-4000:]

@@ -91,6 +91,7 @@ def test_a_lip_episode_records_what_the_planner_perceived():
         assert np.array_equal(seen, truth)
 
 
+@pytest.mark.slow
 def test_the_study_on_ray_equals_the_serial_run_and_the_script_writes_its_table(tmp_path, capsys):
     from emonav_drake.evaluation.emotion_timing_study import study
     from scripts.emotion_timing_study import main

@@ -122,6 +122,7 @@ def _short_config(tmp_path, steps: int):
     return str(path)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("planner", ["toy_straight", "toy_sectors"])
 def test_a_registered_planner_runs_in_sim_on_both_plants(toys, tmp_path, planner):
     lip = [tmp_path / f"lip{i}.json" for i in range(2)]
@@ -137,6 +138,7 @@ def test_a_registered_planner_runs_in_sim_on_both_plants(toys, tmp_path, planner
     assert json.loads(digit.read_text())["steps"] == 4
 
 
+@pytest.mark.slow
 def test_a_registered_planner_and_observation_run_in_benchmark_on_both_plants(toys, tmp_path):
     methods = method_specs("toy_straight,toy_sectors")
     assert [(m.name, m.planner, m.checkpoint) for m in methods] == [
@@ -214,6 +216,7 @@ def half_speed_plant():
     unregister_plant("lip_half")
 
 
+@pytest.mark.slow
 def test_a_registered_plant_runs_in_sim_eval_and_benchmark(half_speed_plant, tmp_path, capsys):
     runs = {}
     for plant in ("lip", "lip_half"):
@@ -275,6 +278,7 @@ def half_speed_plant_with_outputs():
     unregister_plant("lip_half_sim")
 
 
+@pytest.mark.slow
 def test_a_registered_plant_with_viewers_gets_the_sim_outputs_and_replays(
     half_speed_plant, half_speed_plant_with_outputs, tmp_path
 ):

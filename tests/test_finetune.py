@@ -120,6 +120,7 @@ def test_one_update_changes_the_actor_and_critics_but_not_the_encoder():
     assert agent.updates == 1
 
 
+@pytest.mark.slow
 def test_a_run_writes_a_policy_that_the_planner_runs_as_selected(tmp_path):
     out = tmp_path / "run"
     env = _env()
@@ -158,6 +159,7 @@ def test_a_run_writes_a_policy_that_the_planner_runs_as_selected(tmp_path):
     assert summarize(records) == prov["eval"] == selected["eval"]
 
 
+@pytest.mark.slow
 def test_with_the_warmup_covering_every_update_the_actor_stays(tmp_path):
     out = tmp_path / "run"
     train_finetune(out, _cfg(critic_warmup=10**6), init="shipped", env_cfg=_env(), progress=False)
@@ -212,6 +214,7 @@ def reference(tmp_path_factory):
     return _result(out), calls
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("phase", ["collect", "update", "eval"])
 def test_ctrl_c_then_resume_is_bit_exact(tmp_path, monkeypatch, reference, phase):
     expected, calls = reference
@@ -259,6 +262,7 @@ TINY = dict(
 )
 
 
+@pytest.mark.slow
 def test_the_cli_runs_stops_and_resumes(tmp_path, capsys, monkeypatch):
     cfg, out = _yaml(tmp_path / "ft.yaml", TINY), tmp_path / "run"
     seen = []

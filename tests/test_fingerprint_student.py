@@ -32,6 +32,7 @@ print(json.dumps(behaviour_fingerprint._dagger(Path(sys.argv[2]))))
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kernels", ["native", "default"])
 def test_the_tiny_dagger_student_decides_as_recorded(tmp_path, kernels):
     """Trained with this processor's own torch kernels, and with torch's portable ones

@@ -92,6 +92,7 @@ def _full(path: Path) -> str:
 # --------------------------------------------------------------------------- export
 
 
+@pytest.mark.slow
 def test_export_on_a_full_disk_keeps_the_previous_file(tmp_path):
     staged = tmp_path / "staged"
     staged.mkdir()
@@ -162,6 +163,7 @@ print("RESULT " + json.dumps({"code": code, "errors": errors, "after": digest(di
 """
 
 
+@pytest.mark.slow
 def test_train_on_a_full_disk_keeps_the_run_directory(tmp_path):
     """`train --resume` whose checkpoint.pt no longer fits; then policy.pt and
     dagger_state.pt saves on the same full disk."""
@@ -297,6 +299,7 @@ except OSError as e:
 """
 
 
+@pytest.mark.slow
 def test_a_learning_curve_row_that_does_not_fit_is_not_torn(tmp_path):
     """The SAC learning curve's append on a disk that fills mid-row (a file size limit)."""
     import types

@@ -101,6 +101,7 @@ def test_no_route_is_an_error_that_says_why():
         plan_route([1, 1], [11, 1], m, 0.65)
 
 
+@pytest.mark.slow
 def test_segment_distances_match_a_brute_force():
     rng = np.random.default_rng(5)
     p0, p1 = rng.uniform(-2, 2, (40, 2)), rng.uniform(-2, 2, (40, 2))
@@ -254,6 +255,7 @@ def test_the_route_and_its_subgoal_are_drawn_in_meshcat():
     assert len(route) > 2  # round the corner
 
 
+@pytest.mark.slow
 def test_sim_global_route_flag_builds_the_route_layer_and_says_so(tmp_path):
     """`emonav sim` on the office floor: the route layer runs by default (and with
     `--global-route`), the JSON says so, and the robot walks from its room into the goal's
@@ -327,6 +329,7 @@ def _doorway_scene(appears_at: float):
     )
 
 
+@pytest.mark.slow
 def test_a_robot_whose_only_door_is_closed_ends_its_trial_with_no_route():
     from emonav_drake.crowd.crowd import Crowd
     from emonav_drake.diagrams.episode import EpisodeRequest, run_navigation_episode
@@ -353,6 +356,7 @@ def test_a_robot_whose_only_door_is_closed_ends_its_trial_with_no_route():
         make_route_planner(_doorway_scene(appears_at=0.0), routed)
 
 
+@pytest.mark.slow
 def test_the_closed_door_example_replans_through_the_other_door(tmp_path):
     """The shipped `closed_door`: a cart closes the robot's door at 3 s; DWA with the route
     layer goes round through the other door and arrives, DWA alone does not."""

@@ -109,6 +109,7 @@ def _alias_bomb(levels: int, where: str = "robot: {max_speed: *a%d}") -> str:
     return "\n".join(lines) + "\n"
 
 
+@pytest.mark.slow
 def test_a_yaml_alias_bomb_is_refused_in_a_child_with_little_memory(tmp_path):
     # 9 levels: 10**10 values from 532 bytes. Before: 42 s and 4 GB (here: the 1.5 GB limit
     # hit, a traceback); now refused from the parser's events, nothing expanded
@@ -249,6 +250,7 @@ def test_any_list_is_capped_before_the_typed_load(tmp_path, tiny, capsys, text, 
 # --- Message length ---------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_a_huge_value_is_cut_in_the_message(tmp_path, capsys):
     # before: robot.max_speed = [0, 0, … 50 000 times] echoed whole (150 kB on one line)
     f = tmp_path / "c.yaml"
@@ -340,6 +342,7 @@ def _declaring(folder: Path, w: int, h: int) -> dict[str, Path]:
     return paths
 
 
+@pytest.mark.slow
 def test_a_huge_hdr_image_is_refused_from_its_header_in_bounded_memory(tmp_path):
     # before: image_header_size knew no HDR: 16500 x 16500 decoded to 4.3 GB (here the
     # 2 GB limit: a failed allocation, OpenCV's lines on stderr, "not a readable image")
@@ -454,6 +457,7 @@ def _damaged_mp4(path: Path, tmp: Path) -> Path:
     return path
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["png", "mp4"])
 def test_a_damaged_image_or_video_gives_only_our_line(tmp_path, kind):
     # before: "libpng error: IDAT: CRC error" / "[mov,mp4,… @ 0x…] error reading header"
@@ -473,6 +477,7 @@ def test_a_damaged_image_or_video_gives_only_our_line(tmp_path, kind):
     assert p.stderr.strip() == line, p.stderr
 
 
+@pytest.mark.slow
 def test_a_damaged_jpeg_is_classified_with_our_warning(tmp_path):
     # libjpeg decodes what it can of a JPEG with damaged bits and says "Corrupt JPEG data"
     # on stderr by itself; now our warning says it instead of the library's line

@@ -105,6 +105,7 @@ def _bad_seed(t):
     t["seed"] = -4
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "edit, culprit",
     [
@@ -318,6 +319,7 @@ def test_the_largest_seed_is_accepted():
     assert sample_scenario(2**64 - 1).seed == 2**64 - 1
 
 
+@pytest.mark.slow
 def test_huge_episode_and_trial_counts_are_refused_at_once(tmp_path):
     """Before: minutes of pre-sampling with memory growing; now: one line, at once."""
     code, err = emonav("eval", "--episodes", 10**9, timeout=60)
@@ -398,6 +400,7 @@ FULL_DISK_SCRIPT = textwrap.dedent(
 )
 
 
+@pytest.mark.slow
 def test_a_full_disk_names_the_file(tmp_path):
     """A 4 KiB tmpfs in a private mount namespace (unshare): every writer fills it."""
     full = tmp_path / "full"

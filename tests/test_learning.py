@@ -95,6 +95,7 @@ def _tiny_cfg(**kw):
     return SacConfig(**base)
 
 
+@pytest.mark.slow
 def test_tiny_sac_run_resumes_bit_for_bit(tmp_path):
     cfg = _tiny_cfg(total_steps=300, random_steps=100, eval_every=150)
     full = train_sac(tmp_path / "full", cfg, progress=False)
@@ -113,12 +114,14 @@ def test_tiny_sac_run_resumes_bit_for_bit(tmp_path):
     assert 0 <= u[0] <= 0.4 and abs(u[1]) <= 0.2
 
 
+@pytest.mark.slow
 def test_scan_variant_runs(tmp_path):
     cfg = _tiny_cfg(grid_kind="scan", total_steps=60, random_steps=30, eval_every=60)
     agent = train_sac(tmp_path / "scan", cfg, progress=False)
     assert agent.updates == 30
 
 
+@pytest.mark.slow
 def test_a_distillation_step_lowers_the_imitation_loss_on_held_out_labels():
     torch.manual_seed(0)
     env_cfg = EmoNavConfig()
@@ -198,6 +201,7 @@ def test_policy_drives_the_drake_diagram_within_bounds(tmp_path):
     assert (np.abs(cmds[:, 1]) <= 0.2).all()
 
 
+@pytest.mark.slow
 def test_shipped_policy_navigates(tmp_path):
     """`emonav sim --planner policy` works out of the box and the policy reaches the goal."""
     import json
@@ -227,6 +231,7 @@ def test_torchscript_export_matches_the_checkpoint(tmp_path):
         assert torch.allclose(scripted(obs, state), model(obs, state), atol=1e-5)
 
 
+@pytest.mark.slow
 def test_drlvo_variant_observation_and_training(tmp_path):
     from emonav_drake.sensing.kinematic_maps import pedestrian_velocity_map
 
@@ -242,6 +247,7 @@ def test_drlvo_variant_observation_and_training(tmp_path):
     assert agent.updates == 30 and agent.critic.encoder.convs[0].in_channels == 3
 
 
+@pytest.mark.slow
 def test_lndnl_variant_shares_its_lstm_and_trains(tmp_path):
     cfg = _tiny_cfg(
         grid_kind="scan", encoder="lstm", total_steps=60, random_steps=30, eval_every=60
@@ -516,6 +522,7 @@ def test_a_shielded_mpc_nearby_expert_chooses_only_what_the_shield_admits():
     assert cut > 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["policy_mpc_digit", "policy_mpc_shield_digit"])
 def test_the_mpc_steered_planners_run_a_seeded_episode_on_both_plants(sim_on_both_plants, name):
     """By name through `emonav sim`: a whole LIP episode and 6 Digit steps, twice each to

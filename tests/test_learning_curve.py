@@ -41,6 +41,7 @@ def runs(tmp_path_factory) -> tuple[Path, Path, Path]:
     )
 
 
+@pytest.mark.slow
 def test_points_are_summarised_on_their_common_seeds(runs):
     a, b, _ = runs
     points = [parse_point(f"first={a}:mpc"), parse_point(f"second={b}:dwa")]

@@ -140,6 +140,7 @@ def test_a_dagger_state_an_earlier_version_saved_reads_with_its_expert(tmp_path,
     assert old.expert == DwaSpec(margin=0.05)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "change, culprit",
     [
@@ -301,6 +302,7 @@ def _sac_cfg(**kw):
     return SacConfig(**(TINY_SAC | {"seed": 5} | kw))
 
 
+@pytest.mark.slow
 def test_a_sac_checkpoint_grows_with_the_filled_buffer_not_its_capacity(tmp_path):
     capacity = 5000
     sizes = {}
@@ -381,6 +383,7 @@ def test_a_damaged_saved_buffer_is_refused(change, match):
         FrameReplayBuffer(20, (3,), np.float32, 2).load_state_dict(state)
 
 
+@pytest.mark.slow
 def test_sac_resume_across_a_wrapped_buffer_is_bit_exact(tmp_path):
     cfg = _sac_cfg(total_steps=90, replay_size=25, checkpoint_every=1000)
     reference = train_sac(tmp_path / "full", cfg, progress=False).state_dict()
@@ -404,6 +407,7 @@ def sac_run(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "damage, culprit",
     [
@@ -478,6 +482,7 @@ def test_the_resume_hint_of_a_variant_is_the_variant(tmp_path, capsys, monkeypat
     assert _hint(err) == hint
 
 
+@pytest.mark.slow
 def test_the_resume_hint_of_a_dagger_config_runs_to_the_end(tmp_path, capsys, monkeypatch):
     cfg = _yaml(tmp_path / "tiny.yaml", TINY_DAGGER | {"grid_kind": "scan"})
     out = tmp_path / "run"

@@ -528,6 +528,7 @@ def test_out_argument_is_filled_in_place():
 # --------------------------------------------------------------------------- figure
 
 
+@pytest.mark.slow
 def test_grid_map_figure_writes_a_png(tmp_path):
     from emonav_drake.evaluation.grid_map_figure import render_grid_map_figure
 

@@ -537,6 +537,7 @@ def test_an_unknown_sensor_name_is_refused_by_argparse(capsys):
         assert "invalid choice: 'lidar9000'" in err and "vlp16" in err and "Traceback" not in err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("preset", REAL)
 @pytest.mark.parametrize("planner", ["dwa", "policy"])
 def test_a_lip_episode_runs_with_a_real_sensor(tmp_path, capsys, preset, planner):

@@ -226,6 +226,7 @@ def test_the_state_based_planners_are_the_ones_sim_accepts_lidar_for() -> None:
     assert "policy" not in STATE_PLANNERS
 
 
+@pytest.mark.slow
 def test_corner_traffic_seed_6001_dwa_on_lidar_ends_with_an_outcome() -> None:
     """The reported command, the whole episode (it crashed at 27.9 s simulated)."""
     cfg = EmoNavConfig()
@@ -235,7 +236,9 @@ def test_corner_traffic_seed_6001_dwa_on_lidar_ends_with_an_outcome() -> None:
     runner = TrialRunner(BenchmarkSpec(method_specs("dwa"), "lip", dump_config(cfg)))
     rec = runner.run("dwa", 6001)["record"]
     assert rec["outcome"] in OUTCOMES
-    assert rec["steps"] > 70  # past the scan that crashed
+    # past the scan that crashed (step 70) — or, since the tracker drops the known walls'
+    # returns and gives the planner the walls, at the goal before it (step 62)
+    assert rec["steps"] > 70 or rec["outcome"] == "success", rec
 
 
 def test_the_wall_families_run_longest() -> None:
@@ -245,6 +248,7 @@ def test_the_wall_families_run_longest() -> None:
     assert {t[3] for t in _trials("paper")} == {LIP_STEPS, DIGIT_MAX_STEPS}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("family", list(FAMILIES))
 def test_every_state_planner_on_lidar_ends_with_an_outcome(family: str) -> None:
     """Every state-based planner on `family` with `--state-source lidar`, on LIP and on

@@ -130,6 +130,7 @@ def test_gets_out_of_a_pocket_formed_by_discs():
     assert np.abs(robots[:, 1]).max() > 1.0  # round one of them
 
 
+@pytest.mark.slow
 def test_commands_stay_within_bounds_over_many_random_problems():
     cfg = EmoNavConfig()
     mpc = MpcPlanner(cfg)
@@ -175,6 +176,7 @@ def test_degenerate_problems_give_a_valid_command():
             assert _in_bounds(mpc.plan(obs), cfg)
 
 
+@pytest.mark.slow
 def test_commands_stay_within_bounds_in_random_episodes():
     cfg = EmoNavConfig()
     mpc = MpcPlanner(cfg)
@@ -221,6 +223,7 @@ def test_pedestrian_on_collision_course_is_avoided():
     assert record.min_ped_distance > cfg.robot.radius + cfg.crowd.pedestrian_radius
 
 
+@pytest.mark.slow
 def test_deterministic_and_replanning_the_same_step_gives_the_same_command():
     cfg = EmoNavConfig()
     sc = sample_scenario(5, cfg)
@@ -248,6 +251,7 @@ def test_deterministic_and_replanning_the_same_step_gives_the_same_command():
         world.step(u1)
 
 
+@pytest.mark.slow
 def test_works_as_a_policy_on_the_gymnasium_env_and_in_the_diagram():
     env = EmoNavLIPEnv(goal_radius=0.2)
     env.reset(seed=4)

@@ -25,6 +25,7 @@ import threading
 import time
 
 import numpy as np
+import pytest
 
 # The driver: one reference episode, then episodes in a loop compared with it, each
 # command checked as it is planned. It prints READY once the reference is known, KI for
@@ -96,6 +97,7 @@ def _summary(line: str) -> tuple[int, int]:
     return int(words[1]), int(words[3])
 
 
+@pytest.mark.slow
 def test_sigints_while_sigint_is_ignored_change_no_command():
     """SIGINT ignored (as in a script's background job): a SIGINT every 3 ms while the
     MPC plans four episodes; every command equals the uninterrupted one, and some of the
@@ -111,6 +113,7 @@ def test_sigints_while_sigint_is_ignored_change_no_command():
     assert interrupted > 0
 
 
+@pytest.mark.slow
 def test_every_sigint_inside_or_outside_a_solve_interrupts_planning():
     """Python's default handler: of 40 SIGINTs, sent one at a time while the MPC plans,
     each becomes a KeyboardInterrupt (at most 2 lost: a loaded machine can deschedule the

@@ -14,6 +14,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from emonav_drake.diagrams.trials import method_specs
 from emonav_drake.evaluation.benchmark import run_benchmark
 from emonav_drake.evaluation.run_directory import comparable, read_trials
@@ -65,6 +67,7 @@ def _eval(out: Path, load: str | None) -> bytes:
     return out.read_bytes()
 
 
+@pytest.mark.slow
 def test_mpc_eval_is_byte_identical_beside_a_cpu_hog_and_under_stalls(tmp_path):
     quiet = _eval(tmp_path / "quiet.json", None)
     assert json.loads(quiet)["episodes"][0]["seed"] == SEED
@@ -76,6 +79,7 @@ def _records(run: Path) -> set[str]:
     return {json.dumps(comparable(t), sort_keys=True) for t in read_trials(run / "trials.jsonl")}
 
 
+@pytest.mark.slow
 def test_benchmark_mpc_on_ray_beside_a_cpu_hog_equals_serial(tmp_path):
     kwargs = dict(methods=method_specs("mpc"), plant="lip", trials=3, first_seed=SEED)
     run_benchmark(

@@ -134,6 +134,7 @@ def test_episode_records_are_identical(seed):
     assert record.to_json() == env.world.record.to_json()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("family", "seed"),
     [("corner_traffic", 6001), ("doorway", 3), ("office", 3), ("t_junction", 5)],
@@ -185,6 +186,7 @@ def test_a_saved_lip_world_continues_on_its_route():
     assert paper.route is None and not paper.planner_input().goal_is_subgoal
 
 
+@pytest.mark.slow
 def test_the_lip_world_replans_when_a_door_closes_as_the_diagram_does():
     from emonav_drake.navigation.lip_world import NavigationWorld
     from emonav_drake.scenarios import scenario_path

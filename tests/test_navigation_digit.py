@@ -4,6 +4,7 @@ import json
 import math
 
 import numpy as np
+import pytest
 from pydrake.systems.analysis import Simulator
 
 from emonav_drake.cli import main
@@ -34,6 +35,7 @@ def test_digit_stands_at_the_scenario_start_in_a_default_context():
     assert np.hypot(x + 4.0, y - 0.5) < 0.05 and abs(th - 0.3) < 1e-9 and v == 0.0
 
 
+@pytest.mark.slow
 def test_two_runs_from_fresh_default_contexts_give_identical_records():
     cfg = _short_config(5)
     nd = build_digit_navigation_diagram(sample_scenario(3, cfg), cfg, DwaPlanner(cfg))

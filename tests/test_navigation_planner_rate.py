@@ -203,6 +203,7 @@ def test_over_an_episode_the_planner_plans_exactly_at_each_step():
 # ------------------------------------------------------- (b) fresh contexts, no reset()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["dwa", "mpc", "policy"])
 def test_two_simulations_of_the_same_diagram_are_identical_without_reset(name):
     cfg = _config()
@@ -232,6 +233,7 @@ def test_two_simulations_of_the_same_diagram_are_identical_without_reset(name):
 # ------------------------------------------------------------- (c) cloned contexts
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["mpc", "dwa"])
 def test_a_cloned_context_continues_independently(name):
     cfg = _config(max_steps=40)
@@ -280,6 +282,7 @@ def test_a_cloned_context_continues_independently(name):
 # --------------------------------------------- (d) MPC: a function of (input, memory)
 
 
+@pytest.mark.slow
 def test_mpc_command_and_memory_depend_only_on_input_and_memory():
     cfg = _config()
     # an episode in the numpy world: (input, memory) → (command, next memory) per step

@@ -62,6 +62,7 @@ def test_loopback_host_names():
     assert not is_loopback_host("192.0.2.7") and not is_loopback_host("example.org")
 
 
+@pytest.mark.slow
 def test_every_meshcat_the_package_starts_goes_through_make_meshcat():
     """No module constructs `Meshcat(...)` itself: the one constructor picks loopback."""
     offenders = []
@@ -78,6 +79,7 @@ def test_every_meshcat_the_package_starts_goes_through_make_meshcat():
     assert [o for o in offenders if o.split(":")[0] not in allowed] == []
 
 
+@pytest.mark.slow
 def test_local_ray_listens_on_loopback_only():
     pytest.importorskip("ray")
     from emonav_drake.parallel import init_ray, ray_node_address
@@ -106,6 +108,7 @@ def _tiny_config(tmp_path: Path) -> str:
     return str(path)
 
 
+@pytest.mark.slow
 def test_sim_meshcat_host_opens_only_on_request_and_warns(tmp_path, caplog):
     from emonav_drake.cli import main
 

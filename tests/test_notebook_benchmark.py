@@ -1,9 +1,12 @@
 """The benchmark notebook runs headless in its short mode: a tiny benchmark, its tables,
 the bar charts and the re-simulated trajectories of a success and a failure."""
 
+import pytest
+
 from tests.notebook_runner import run_short
 
 
+@pytest.mark.slow
 def test_benchmark_notebook_runs_in_short_mode(monkeypatch):
     outputs, cells = run_short("benchmark.ipynb", monkeypatch)
     assert "6 trials of dwa, policy on lip" in outputs
@@ -15,6 +18,7 @@ def test_benchmark_notebook_runs_in_short_mode(monkeypatch):
     assert len(images) == 2  # the bar charts and the trajectories
 
 
+@pytest.mark.slow
 def test_benchmark_notebook_reads_the_user_s_run_from_any_directory(monkeypatch, tmp_path):
     from emonav_drake.diagrams.trials import method_specs
     from emonav_drake.evaluation.benchmark import run_benchmark

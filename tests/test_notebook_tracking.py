@@ -3,11 +3,14 @@ one short Digit navigation episode, statistics tables, figures; outputs are not 
 
 import re
 
+import pytest
+
 from tests.notebook_runner import run_short
 
 NAME = "tracking_errors.ipynb"
 
 
+@pytest.mark.slow
 def test_tracking_notebook_runs_in_short_mode(monkeypatch, tmp_path):
     monkeypatch.setenv("EMONAV_FIGURES", str(tmp_path))
     text, cells = run_short(NAME, monkeypatch)

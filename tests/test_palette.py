@@ -263,6 +263,7 @@ ring_radius = (0.2, 0.35, 0.5)
     assert colour_literals(good) == []
 
 
+@pytest.mark.slow
 def test_no_colour_is_written_outside_the_palette():
     offences = [
         f"{name}:{line}: {what}"

@@ -46,6 +46,7 @@ def test_image_without_a_face_is_neutral(tmp_path, capsys):
     assert "no face found: neutral" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_video_with_smoothing_json_and_annotation(tmp_path, capsys):
     video = tmp_path / "walk.avi"
     writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 10, (640, 480))

@@ -117,6 +117,7 @@ def test_the_guard_compares_paths_resolved_and_names_as_strings(tmp_path, monkey
         require_named_on_command_line("mine.py", ["mine.py"], "f")
 
 
+@pytest.mark.slow
 def test_diagnose_simulates_a_run_of_ones_own_planners_only_with_their_modules(
     tmp_path, probe, short, capsys, monkeypatch
 ):
@@ -152,6 +153,7 @@ def test_diagnose_simulates_a_run_of_ones_own_planners_only_with_their_modules(
     assert not probe.imported()
 
 
+@pytest.mark.slow
 def test_a_dagger_route_naming_a_module_is_refused_unless_given(
     tmp_path, dagger_run, capsys, monkeypatch
 ):
@@ -246,6 +248,7 @@ def test_digit_rounds_from_a_run_with_a_module_needs_the_module(tmp_path, dagger
     probe.forget()
 
 
+@pytest.mark.slow
 def test_a_benchmark_continued_with_a_changed_plug_in_file_is_refused(
     tmp_path, probe, short, capsys
 ):

@@ -25,6 +25,7 @@ def short(tmp_path):
     return path
 
 
+@pytest.mark.slow
 def test_sim_runs_a_planner_named_by_its_module_on_both_plants(tmp_path, short):
     for plant in ("lip", "digit"):
         records = []
@@ -39,6 +40,7 @@ def test_sim_runs_a_planner_named_by_its_module_on_both_plants(tmp_path, short):
     assert is_registered("cautious")
 
 
+@pytest.mark.slow
 def test_benchmark_workers_import_the_module_and_equal_the_serial_run(tmp_path, short):
     runs = {}
     for workers in (1, 2):
@@ -56,6 +58,7 @@ def test_benchmark_workers_import_the_module_and_equal_the_serial_run(tmp_path, 
     assert {k[0] for k, _ in runs[1]} == {"cautious", "dwa"}
 
 
+@pytest.mark.slow
 def test_a_registered_planner_of_ones_own_is_a_dagger_expert(tmp_path):
     from emonav_drake.learning.config import DaggerConfig
     from emonav_drake.learning.dagger import train_dagger
@@ -89,6 +92,7 @@ def test_a_registered_planner_of_ones_own_is_a_dagger_expert(tmp_path):
     assert meta["provenance"]["config"]["planner_modules"] == [str(EXAMPLE.resolve())]
 
 
+@pytest.mark.slow
 def test_a_planner_of_ones_own_labels_the_digit_rounds_on_ray_workers_too():
     """The Digit rounds label with the calibrated run's expert: a planner of the user's own
     (its module recorded in the run) is imported by every Ray worker, and two workers give
@@ -116,6 +120,7 @@ def test_a_planner_of_ones_own_labels_the_digit_rounds_on_ray_workers_too():
             assert np.array_equal(a[key], b[key]), key
 
 
+@pytest.mark.slow
 def test_a_planner_of_ones_own_is_sarls_imitation_expert(tmp_path):
     """SARL imitates a planner named by its module (`--planner-module`, recorded in the
     run's configuration, so `--resume` finds the expert again)."""

@@ -68,6 +68,7 @@ def test_the_catalog_matches_every_shipped_checkpoint():
         assert catalog[catalog_key(path)] == expected, path.name
 
 
+@pytest.mark.slow
 def test_the_listing_reads_no_checkpoint_and_groups_the_planners():
     import subprocess
     import sys

@@ -43,6 +43,7 @@ def _namespaces_work() -> str | None:
     return None if p.returncode == 0 else p.stderr.decode().strip() or "unshare failed"
 
 
+@pytest.mark.slow
 def test_a_benchmark_on_a_two_node_cluster_equals_the_serial_run_and_survives_a_lost_node(
     tmp_path,
 ):

@@ -3,6 +3,8 @@ method reads and whether a robot could run it."""
 
 from __future__ import annotations
 
+import pytest
+
 from emonav_drake.cli import main
 from emonav_drake.evaluation.tables import READS_HEADER, method_reads
 
@@ -20,6 +22,7 @@ def test_what_each_kind_of_method_reads():
     assert method_reads("LGM", "lidar", "vlp16", steered=True).endswith("— deployable")
 
 
+@pytest.mark.slow
 def test_a_benchmark_table_says_what_each_row_reads(tmp_path, capsys):
     out = tmp_path / "run"
     argv = ["benchmark", "--planners", "dwa,policy", "--plant", "lip", "--trials", "1"]

@@ -561,6 +561,7 @@ def test_an_unexpected_exception_is_one_line_exit_1(capsys, monkeypatch):
     assert err.strip().startswith("emonav: internal error: IndexError") and "--debug" in err
 
 
+@pytest.mark.slow
 def test_exit_code_and_streams_of_the_real_process(tmp_path):
     cfg = tmp_path / "c.yaml"
     cfg.write_text("")

@@ -331,6 +331,7 @@ def _config_file(tmp_path: Path, steps: int) -> Path:
     return cfg
 
 
+@pytest.mark.slow
 def test_sim_record_is_quiet_and_the_caption_has_the_outcome(tmp_path):
     html = tmp_path / "r.html"
     args = ["sim", "--planner", "dwa", "--seed", "3", "--rays", "--record", str(html)]
@@ -378,6 +379,7 @@ def connect_websocket(port: int) -> socket.socket:
     return s
 
 
+@pytest.mark.slow
 def test_wait_for_browser_times_out_then_sees_a_client():
     # an ephemeral port: a browser tab left open on another Meshcat's URL (they
     # reconnect) cannot connect to this one
@@ -399,6 +401,7 @@ def test_wait_for_browser_times_out_then_sees_a_client():
             c.close()
 
 
+@pytest.mark.slow
 def test_sim_meshcat_no_wait_returns_at_once(tmp_path):
     t0 = time.monotonic()
     p = subprocess.run(
@@ -442,6 +445,7 @@ def _read_until(q: queue.Queue, text: str, timeout: float) -> list[str]:
     raise AssertionError(f"no {text!r} within {timeout} s: {seen}")
 
 
+@pytest.mark.slow
 def test_sim_meshcat_waits_for_a_browser_and_serves_until_ctrl_c(tmp_path):
     proc = subprocess.Popen(
         [EMONAV, "sim", "--planner", "dwa", "--seed", "3", "--meshcat"]

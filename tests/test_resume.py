@@ -283,6 +283,7 @@ def sac_reference(tmp_path_factory):
     return agent.state_dict(), calls, (out / "learning_curve.csv").read_text()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("phase", ["train", "eval"])
 def test_sac_ctrl_c_at_a_random_step_then_resume_is_bit_exact(
     tmp_path, monkeypatch, sac_reference, phase
@@ -389,6 +390,7 @@ def dagger_reference(tmp_path_factory):
     return _dagger_result(out), calls
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("phase", ["collect", "train", "eval"])
 def test_dagger_ctrl_c_at_a_random_point_then_resume_is_bit_exact(
     tmp_path, monkeypatch, dagger_reference, phase
@@ -419,6 +421,7 @@ def test_dagger_ctrl_c_at_a_random_point_then_resume_is_bit_exact(
         assert np.array_equal(array, demos[key]), key
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "expert",
     [

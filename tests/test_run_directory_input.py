@@ -87,6 +87,7 @@ def _edit_settings(run_dir: Path, edit) -> None:
 
 
 # ------------------------------------------------------------------ 1. nested JSON
+@pytest.mark.slow
 def test_deeply_nested_json_is_refused_by_every_command_naming_the_file(
     tmp_path, tiny, fresh, capsys
 ):
@@ -199,6 +200,7 @@ def test_meshcat_on_ipv6_loopback_prints_a_url_with_brackets(capsys):
 
 
 # --------------------------------------------------------------- 4. --ray-address
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("address", "culprits"),
     [
@@ -298,6 +300,7 @@ def test_records_that_disagree_with_themselves_or_the_run_are_refused(
     assert _snapshot(mine) == before
 
 
+@pytest.mark.slow
 def test_every_committed_run_still_loads():
     """The checks refuse no record of a real run (benchmarks/results, all of them)."""
     runs = sorted(Path(p).parent for p in glob.glob(f"{COMMITTED}/**/trials.jsonl", recursive=True))
@@ -385,6 +388,7 @@ FULL_DISK_BENCH = textwrap.dedent(
 )
 
 
+@pytest.mark.slow
 def test_a_full_disk_while_appending_a_trial_names_trials_jsonl_and_cuts_the_torn_line(
     tmp_path, tiny
 ):

@@ -23,6 +23,7 @@ def two_runs(tmp_path_factory):
     return root / "paper", root / "blocker"
 
 
+@pytest.mark.slow
 def test_a_benchmark_writes_its_figures_beside_its_tables(two_runs):
     for run in two_runs:
         for name in ("summary.png", "social.png"):
@@ -30,6 +31,7 @@ def test_a_benchmark_writes_its_figures_beside_its_tables(two_runs):
             assert data.startswith(PNG) and len(data) > 10_000, (run, name)
 
 
+@pytest.mark.slow
 def test_report_compares_runs_with_a_heat_map_when_families_differ(two_runs, tmp_path):
     from emonav_drake.evaluation.run_directory import load_run
     from emonav_drake.evaluation.run_figures import plot_report
@@ -47,6 +49,7 @@ def test_report_compares_runs_with_a_heat_map_when_families_differ(two_runs, tmp
     assert "SR per family" not in [ax.get_title() for ax in plot_report(same).axes]
 
 
+@pytest.mark.slow
 def test_plot_draws_one_trial_of_a_trials_file_as_it_ran(two_runs, tmp_path, capsys):
     from emonav_drake.diagrams.trials import TrialRunner
     from emonav_drake.evaluation.run_directory import load_run

@@ -20,6 +20,7 @@ def _sim(tmp_path, name: str, *argv: str) -> dict:
     return json.loads(out.read_text())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "argv",
     [
@@ -42,6 +43,7 @@ def test_a_sim_replayed_from_its_json_gives_the_identical_record(tmp_path, argv)
     )
 
 
+@pytest.mark.slow
 def test_a_digit_sim_replayed_from_its_json_gives_the_identical_record(tmp_path):
     short = tmp_path / "short.yaml"
     short.write_text("episode: {max_steps: 6}\n")
@@ -52,6 +54,7 @@ def test_a_digit_sim_replayed_from_its_json_gives_the_identical_record(tmp_path)
     assert _sim(tmp_path, "b", "--spec", str(tmp_path / "a.json")) == a
 
 
+@pytest.mark.slow
 def test_eval_replayed_from_its_json_gives_the_identical_json(tmp_path):
     a, b = tmp_path / "a.json", tmp_path / "b.json"
     argv = ["eval", "--planner", "mpc", "--episodes", "3", "--first-seed", "10", "--quiet"]
@@ -61,6 +64,7 @@ def test_eval_replayed_from_its_json_gives_the_identical_json(tmp_path):
     assert json.loads(a.read_text())["spec"]["episodes"] == 3
 
 
+@pytest.mark.slow
 def test_a_benchmark_replayed_from_its_settings_runs_the_identical_trials(tmp_path):
     a, b = tmp_path / "a", tmp_path / "b"
     argv = ["--trials", "3", "--first-seed", "5", "--workers", "1", "--quiet"]
@@ -146,6 +150,7 @@ def test_a_changed_checkpoint_is_refused_naming_it(tmp_path, capsys):
         load_run_spec(tmp_path / "a.json")
 
 
+@pytest.mark.slow
 def test_a_settings_file_given_to_sim_says_which_command_runs_it(tmp_path, capsys):
     d = tmp_path / "b"
     assert (

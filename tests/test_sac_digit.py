@@ -49,6 +49,7 @@ def test_the_plant_is_validated_and_selects_the_digit_env():
     assert env.observation_space["lgm"].shape == (2, 50, 50)
 
 
+@pytest.mark.slow
 def test_a_saved_digit_episode_continues_exactly():
     cfg = EmoNavConfig()
     cfg.episode.max_steps = 8
@@ -76,6 +77,7 @@ def test_a_saved_digit_episode_continues_exactly():
         EmoNavDigitEnv(cfg).load_state_dict(too_many)
 
 
+@pytest.mark.slow
 def test_tiny_sac_on_digit_writes_a_loadable_actor_and_resumes_bit_for_bit(tmp_path):
     whole = train_sac(tmp_path / "whole", _tiny(), progress=False)
     state, _ = read_run_state(tmp_path / "whole" / "checkpoint.pt", SAC_FORMAT)

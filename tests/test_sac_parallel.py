@@ -34,6 +34,7 @@ def serial(tmp_path_factory):
     return out, agent
 
 
+@pytest.mark.slow
 def test_two_envs_step_together_and_evaluate_on_crossings(serial):
     out, _ = serial
     state, _ = read_run_state(out / "checkpoint.pt", SAC_FORMAT)
@@ -44,6 +45,7 @@ def test_two_envs_step_together_and_evaluate_on_crossings(serial):
     assert [int(r.split(",")[0]) for r in rows] == [18, 34]  # crossings of 17 and 34
 
 
+@pytest.mark.slow
 def test_ray_equals_serial(serial, tmp_path):
     out, agent = serial
     ray_agent = train_sac(tmp_path / "ray", _cfg(), progress=False, parallel=True)
@@ -53,6 +55,7 @@ def test_ray_equals_serial(serial, tmp_path):
     ).read_text()
 
 
+@pytest.mark.slow
 def test_an_interrupted_two_env_run_resumes_bit_for_bit(serial, tmp_path):
     _, agent = serial
     train_sac(tmp_path / "run", _cfg(), stop_at=20, progress=False, parallel=False)

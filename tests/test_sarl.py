@@ -141,6 +141,7 @@ def tiny_runs(tmp_path_factory, request):
     return root, cfg
 
 
+@pytest.mark.slow
 def test_tiny_training_writes_a_loadable_checkpoint_and_resumes_bit_identically(tiny_runs):
     root, cfg = tiny_runs
     history = json.loads((root / "whole" / "history.json").read_text())
@@ -178,6 +179,7 @@ def test_a_resume_refuses_another_configuration(tiny_runs, tmp_path):
         train_sarl(root / "whole", other, resume=True, progress=False)
 
 
+@pytest.mark.slow
 def test_sarl_runs_on_both_plants_through_emonav_sim_deterministically(
     tiny_runs, sim_on_both_plants
 ):
@@ -188,6 +190,7 @@ def test_sarl_runs_on_both_plants_through_emonav_sim_deterministically(
         assert record["steps"] >= 1, plant
 
 
+@pytest.mark.slow
 def test_a_benchmark_runs_sarl_beside_a_policy(tiny_runs, tmp_path):
     from emonav_drake.diagrams.trials import method_specs
     from emonav_drake.evaluation.benchmark import run_benchmark
@@ -202,6 +205,7 @@ def test_a_benchmark_runs_sarl_beside_a_policy(tiny_runs, tmp_path):
     assert settings["methods"]["sarl"]["observation"] == "state"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["sarl", "rgl"])
 def test_the_shipped_value_planner_runs_by_name_on_both_plants(sim_on_both_plants, name):
     """SARL's and RGL's shipped checkpoints load as their value network and run by name
@@ -227,6 +231,7 @@ def test_sarl_without_a_checkpoint_says_how_to_train(tmp_path, capsys, monkeypat
     assert "emonav train --algo sarl" in err and name in err
 
 
+@pytest.mark.slow
 def test_an_old_sarl_state_resumes_as_sarl(tmp_path):
     """A run saved before `network` existed (no such key) resumes as the SARL it was."""
     from emonav_drake.learning.run_state import read_run_state, write_run_state

@@ -29,6 +29,7 @@ def _family_config(name: str) -> EmoNavConfig:
     return cfg.validate()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", SCENARIO_FAMILIES)
 def test_every_family_is_seeded_valid_and_reachable(name):
     cfg = _family_config(name)
@@ -133,6 +134,7 @@ def test_a_family_scene_walks_through_the_crowd():
     assert dc.is_dataclass(b) and isinstance(b, PedestrianSpec)
 
 
+@pytest.mark.slow
 def test_a_family_benchmark_trial_replays_with_its_sim_command(tmp_path):
     """`emonav benchmark --family` records the family; `diagnose`'s re-run command names
     it, and `emonav sim` with that command plays the very trial again."""

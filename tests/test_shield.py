@@ -170,6 +170,7 @@ def test_the_shield_refuses_a_policy_it_cannot_shield():
             ShieldedPolicy(policy, cfg)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", [n + s for n in SHIELDED for s in ("", "_digit")])
 def test_shielded_planners_run_a_seeded_episode_on_both_plants(sim_on_both_plants, name):
     """By name through `emonav sim`: a whole LIP episode and 6 Digit steps, twice each to

@@ -268,6 +268,7 @@ def test_a_restored_world_keeps_measuring_and_an_old_state_does_not():
     }
 
 
+@pytest.mark.slow
 def test_committed_lip_trials_re_run_bit_identical_in_their_old_fields():
     """The paper's setting (lip_table2): DWA seeds 0–2 and the policy's seed 0, re-run now,
     give every field the run recorded exactly, plus the new ones."""
@@ -367,6 +368,7 @@ def test_a_trial_with_impossible_field_metrics_is_refused(edit, words):
     assert problem is not None and words in problem
 
 
+@pytest.mark.slow
 def test_compare_joins_a_run_recorded_before_the_metrics_with_a_new_one(tmp_path):
     import shutil
 

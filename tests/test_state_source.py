@@ -36,6 +36,7 @@ def _sim(tmp_path, config, planner, source, plant="lip", seed=3):
     return data
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("planner", ["dwa", "mpc", "sarl", "rgl"])
 def test_every_state_based_planner_runs_on_the_tracked_crowd_deterministically(tmp_path, planner):
     first = _sim(tmp_path, None, planner, "lidar")  # a whole LIP episode
@@ -45,6 +46,7 @@ def test_every_state_based_planner_runs_on_the_tracked_crowd_deterministically(t
     assert first["trajectory"]["robot"] != truth["trajectory"]["robot"]  # it reads other state
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("planner", ["dwa", "mpc", "sarl", "rgl"])
 def test_digit_runs_on_the_tracked_crowd_deterministically(tmp_path, short, planner):
     first = _sim(tmp_path, short, planner, "lidar", plant="digit", seed=5)
@@ -109,6 +111,7 @@ def test_the_still_duration_decides_when_a_disc_is_a_static_obstacle(still, stat
     assert np.min(np.linalg.norm(disc - [-1.5, 1.5], axis=1)) < 0.05  # tracked either way
 
 
+@pytest.mark.slow
 def test_a_benchmark_records_its_state_source(tmp_path, short):
     out = tmp_path / "run"
     argv = ["benchmark", "--planners", "dwa", "--trials", "2", "--workers", "1", "--quiet"]
@@ -120,6 +123,7 @@ def test_a_benchmark_records_its_state_source(tmp_path, short):
     assert "--state-source lidar" in settings["config_source"]
 
 
+@pytest.mark.slow
 def test_eval_takes_the_state_source(tmp_path):
     runs = {}
     for source in ("truth", "lidar"):
@@ -131,6 +135,7 @@ def test_eval_takes_the_state_source(tmp_path):
     assert runs["truth"]["episodes"] != runs["lidar"]["episodes"]  # the MPC read other state
 
 
+@pytest.mark.slow
 def test_a_parallel_lidar_benchmark_equals_the_serial_one(tmp_path, short):
     """The tracker lives in each trial's diagram: two Ray workers give the serial trials."""
     from emonav_drake.evaluation.run_directory import comparable, read_trials

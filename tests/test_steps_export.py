@@ -96,6 +96,7 @@ def test_walk_steps_out_one_row_per_step(tmp_path, capsys):
     assert 0.0 < rms_x < 0.1
 
 
+@pytest.mark.slow
 def test_sim_digit_steps_out_matches_the_trace(tmp_path, capsys):
     cfg_file = tmp_path / "short.yaml"
     cfg_file.write_text("episode:\n  max_steps: 5\n")

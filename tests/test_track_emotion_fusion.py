@@ -76,6 +76,7 @@ def tracks_run():
     return run("camera_tracks")
 
 
+@pytest.mark.slow
 def test_a_tracks_emotion_outlives_the_frame_its_face_was_in(tracks_run):
     kept = [s for s in tracks_run if (s["emotions"] != NEUTRAL).any() and s["faces"] == 0]
     assert kept, "no emotion was kept through a classification without a face"
@@ -96,6 +97,7 @@ def test_every_kept_emotion_was_read_on_its_own_persons_face(tracks_run):
     assert checked >= 10
 
 
+@pytest.mark.slow
 def test_the_same_episode_twice_gives_the_same_emotions(tracks_run):
     again = run("camera_tracks", until=10.0)
     for a, b in zip(tracks_run, again, strict=False):
@@ -115,6 +117,7 @@ def test_camera_tracks_needs_the_lidar_tracker():
         )
 
 
+@pytest.mark.slow
 def test_a_benchmark_with_kept_emotions_on_ray_equals_the_serial_run(tmp_path):
     from emonav_drake.diagrams.trials import method_specs
     from emonav_drake.evaluation.benchmark import run_benchmark

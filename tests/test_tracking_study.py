@@ -163,6 +163,7 @@ def test_a_pedestrian_hidden_behind_a_disc_coasts_is_deleted_and_comes_back_as_a
     assert rows[f">={coast + 1}"]["samples"] == b - a - coast
 
 
+@pytest.mark.slow
 def test_study_on_two_short_episodes_runs_and_repeats_exactly():
     cfg = dc.replace(CFG, episode=dc.replace(CFG.episode, max_steps=15))
     seeds = [700_000, 700_001]
@@ -192,6 +193,7 @@ def test_script_refuses_evaluation_seeds(tmp_path, capsys):
     assert list(tmp_path.iterdir()) == []  # nothing written
 
 
+@pytest.mark.slow
 def test_script_writes_every_result_and_the_tables_the_docs_quote(tmp_path, capsys):
     from emonav_drake.evaluation.results_doc import section_of
     from scripts.tracking_study import main
@@ -233,6 +235,7 @@ def test_a_track_of_a_pedestrian_outside_the_scored_region_is_dont_care():
     assert empty.tolist() == [True, False]
 
 
+@pytest.mark.slow
 def test_the_sensor_table_runs_each_study_once_and_refuses_the_tuning_seeds(tmp_path, capsys):
     from scripts.tracking_sensors import main
 

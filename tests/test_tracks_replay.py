@@ -185,6 +185,7 @@ def _record(tmp_path, state_source: str):
     return Recording(html.read_text())
 
 
+@pytest.mark.slow
 def test_sim_record_draws_tracks_only_with_the_lidar_state(tmp_path):
     truth = _record(tmp_path, "truth")
     assert not [p for p in truth.objects if p.startswith(f"{PREFIX}/tracks")]

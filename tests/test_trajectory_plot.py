@@ -99,6 +99,7 @@ def test_time_varying_emotions_follow_the_crowd_schedule(varying_run):
 # --------------------------------------------------------------------------- plot
 
 
+@pytest.mark.slow
 def test_plot_png_draws_the_episode(lip_run, tmp_path):
     png = tmp_path / "plot.png"
     assert main(["plot", str(lip_run["path"]), "--png", str(png), "--times", "0,8,16"]) == 0
@@ -121,6 +122,7 @@ def test_plot_shows_every_emotion_of_a_time_varying_pedestrian(varying_run, tmp_
         assert _pixels_near(png, EMOTION_RGB[e]) > 100, EMOTION_NAMES[e]
 
 
+@pytest.mark.slow
 def test_plot_gif_one_frame_per_step(tmp_path):
     # a short hand-made episode: 4 steps, so the animation test stays quick
     out = tmp_path / "short.json"
@@ -239,6 +241,7 @@ def test_plot_flag_errors(tmp_path, capsys, lip_run):
 # --------------------------------------------------------------------------- Digit
 
 
+@pytest.mark.slow
 def test_digit_sim_json_has_the_same_trajectory_section(tmp_path):
     """Three walking steps of the full-order Digit through `emonav sim --json`."""
     cfg_file = tmp_path / "c.yaml"
@@ -262,6 +265,7 @@ def test_digit_sim_json_has_the_same_trajectory_section(tmp_path):
 # --------------------------------------------------------------------------- lgm
 
 
+@pytest.mark.slow
 def test_lgm_figure_colours_pedestrians_by_emotion_and_shows_the_goal(tmp_path):
     png = tmp_path / "lgm.png"
     assert main(["lgm", "--seed", "5", "--time-varying", "--steps", "4", "--png", str(png)]) == 0

@@ -41,6 +41,7 @@ def _tiny_run(root, name: str):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(VARIANTS))
 def test_each_variant_trains_and_its_checkpoint_runs_on_both_plants(tiny_variants, name):
     out = _tiny_run(tiny_variants, name)
@@ -156,6 +157,7 @@ def test_the_mirrored_batch_is_the_mirrored_world_for_scans():
     assert student.mirror_augment and student.grid_kind == "scan"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", [n for n, v in VARIANTS.items() if v.is_shipped])
 def test_each_shipped_variant_runs_a_seeded_episode_on_both_plants_deterministically(
     sim_on_both_plants, name

@@ -28,12 +28,14 @@ JSON_FIELDS = {
 }
 
 
+@pytest.mark.slow
 def test_standing_still_for_5_s():
     r = run_walk(5.0, command="stand")
     assert not r.fell and r.sim_seconds == pytest.approx(5.0)
     assert len(r.steps) == 0
 
 
+@pytest.mark.slow
 def test_10_s_of_seeded_random_walking_without_falling():
     r = run_walk(10.0, seed=7, command="random")
     out = r.to_json()
@@ -51,6 +53,7 @@ def test_10_s_of_seeded_random_walking_without_falling():
     assert [s.x for s in r2.steps] == [s.x for s in r.steps[: len(r2.steps)]]
 
 
+@pytest.mark.slow
 def test_straight_walking_at_the_commanded_speed():
     r = run_walk(8.0, command="straight", speed=0.4)
     assert not r.fell, r.fall_reason
@@ -58,6 +61,7 @@ def test_straight_walking_at_the_commanded_speed():
     assert abs(r.steps[-1].heading) < 0.05 and abs(r.steps[-1].y) < 0.3
 
 
+@pytest.mark.slow
 def test_turning_in_place_past_pi():
     # u_v = 0, u_Δθ = 0.2 rad per step: more than half a turn, through the ±π wrap of yaw
     r = run_walk(7.2, command="turn", heading_change=0.2)
@@ -137,6 +141,7 @@ def _walk_fields(r) -> str:
     return json.dumps(fields, sort_keys=True)
 
 
+@pytest.mark.slow
 def test_the_progress_bar_changes_no_walk(capsys):
     """`progress=True` advances the simulator in chunks under a bar on stderr: the same
     walk bit for bit, also when a fall ends it early (the bar then ends at the fall)."""

@@ -173,6 +173,7 @@ def _walk(pos, goals, walls, steps, rng, radius=0.3, dt=0.1) -> tuple[int, float
     return crossings, closest, pos
 
 
+@pytest.mark.slow
 def test_orca_pedestrians_pass_the_door_never_the_wall() -> None:
     """Pedestrians whose goals are behind a wall with a door: over 120 s none crosses the
     wall, none comes closer to it than its radius, and they do get through the door."""

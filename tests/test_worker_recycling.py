@@ -4,10 +4,13 @@ are really started (pydrake keeps every diagram alive, so long camera runs need 
 
 from __future__ import annotations
 
+import pytest
+
 import emonav_drake.evaluation.emotion_timing_study as ets
 import emonav_drake.parallel as parallel
 
 
+@pytest.mark.slow
 def test_recycled_workers_give_the_serial_results(monkeypatch):
     started = []
     real = parallel.start_actors

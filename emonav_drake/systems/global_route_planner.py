@@ -36,9 +36,15 @@ class GlobalRoutePlanner(LeafSystem):
     """Route and sub-goal on a static map (module docstring).
 
     Args:
-        static_map, goal, clearance, min_clearance, lookahead, stray, appear_times,
-            line_of_sight: the `RouteFollower`'s (its docstring), built here.
+        static_map: the walls and static discs (`RouteFollower`, as the five below).
+        goal: the goal [m, world].
+        clearance: the route's clearance(s) from every obstacle [m], tried in order.
+        min_clearance: the clearance tried last [m] (the robot's radius).
         period: replanning check period [s].
+        lookahead: sub-goal distance along the route [m].
+        stray: replan when the robot is farther than this from the route [m].
+        appear_times: when each of the map's discs is put in place [s] (None: all at 0).
+        line_of_sight: keep the sub-goal in the robot's line of sight.
         follower: a `RouteFollower` to use instead of the arguments above (all but
             `period`; `of_follower`).
     """
