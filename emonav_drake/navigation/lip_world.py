@@ -8,7 +8,11 @@ The timing is the diagram's, step for step (`diagrams/navigation.py`):
   LIP model has it at t_k + j·dt (`robot_at_substep`): for j = 0 the end of the previous
   step (p_k, walking along θ_k at v_k), for j ≥ 1 the current step's CoM trajectory;
 * the robot reaches its next foot switch (p_{k+1}, θ_{k+1}, v_{k+1} = u_v);
-* reward and termination are evaluated on (p_{k+1}, crowd at t_{k+1}).
+* reward and termination are evaluated on (p_{k+1}, crowd at t_{k+1});
+* in a scene with walls (the global route on) the planner's goal at t_k is the sub-goal
+  along the route as planned up to t_{k−1}; the route is checked at t_k with the robot at
+  p_k before it moves, and a route that closes ends the step "no_route"
+  (`navigation/route_following.py`, as the diagram's `GlobalRoutePlanner`).
 
 `NavigationWorld` is what the Gymnasium environment wraps; the Drake systems call the
 same functions (`robot_at_substep`, `Crowd.step`, `observation_frame`, `evaluate_step`).
