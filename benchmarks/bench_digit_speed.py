@@ -73,92 +73,82 @@ def main() -> None:
             ]
         )
     if args.single:  # one walk and the navigation seeds, as a JSON line (a --trees run)
-        print(json.dumps(_one_run(args.configs[0], args.seed, args)))
+        print(json.dumps(_one_run(args.configs[0], args.seed, args, "")))
         return
-    if args.trees:
-        _compare_trees(args, core)
-        return
-    cfgs = {c: load_config() if c == "default" else load_config(c) for c in args.configs}
-    walk = {c: [] for c in cfgs}
-    nav = {c: [] for c in cfgs}
-    for k in range(args.repeats):
-        for name, cfg in cfgs.items():
-            r = run_walk(args.walk_seconds, seed=k, command="random", config=cfg)
-            walk[name].append(r)
-            print(
-                f"{Path(name).stem}: walk seed {k}: {'FELL ' if r.fell else ''}"
-                f"{r.real_time_factor:.2f}x real time, RMS x {100 * r.tracking_rms['x']:.2f} cm "
-                f"y {100 * r.tracking_rms['y']:.2f} cm heading "
-                f"{1000 * r.tracking_rms['heading']:.1f} mrad",
-                flush=True,
-            )
-            for seed in args.nav_seeds:
-                t0 = time.perf_counter()
-                rec, _ = run_digit_episode(sample_scenario(seed, cfg), cfg, DwaPlanner(cfg))
-                wall = time.perf_counter() - t0
-                sim = rec.steps * cfg.robot.step_time
-                nav[name].append(sim / wall)
-                print(
-                    f"{Path(name).stem}: navigation seed {seed}: {rec.outcome} after "
-                    f"{rec.steps} steps, {sim / wall:.2f}x real time",
-                    flush=True,
-                )
-    base = args.configs[0]
-    b_walk = statistics.median(r.real_time_factor for r in walk[base])
-    b_nav = statistics.median(nav[base])
-    print(f"\ncore {core}, {args.repeats} repeats; medians (ratio to {Path(base).stem}):")
-    for name in cfgs:
-        rw = statistics.median(r.real_time_factor for r in walk[name])
-        rn = statistics.median(nav[name])
-        rms = {
-            key: statistics.median(r.tracking_rms[key] for r in walk[name])
-            for key in ("x", "y", "heading")
-        }
-        falls = sum(r.fell for r in walk[name])
-        print(
-            f"  {Path(name).stem}: walk {rw:.2f}x ({rw / b_walk:.2f}), navigation {rn:.2f}x "
-            f"({rn / b_nav:.2f}); RMS x {100 * rms['x']:.2f} cm, y {100 * rms['y']:.2f} cm, "
-            f"heading {1000 * rms['heading']:.1f} mrad; falls {falls}"
-        )
+    if args.trees:  # every run a fresh process importing that tree's package
+        runs = {tree: [] for tree in args.trees}
+        for k in range(args.repeats):
+            for tree in args.trees:
+                runs[tree].append(_run_in_tree(tree, k, core, args))
+    else:  # every configuration in this process
+        runs = {name: [] for name in args.configs}
+        for k in range(args.repeats):
+            for name in args.configs:
+                runs[name].append(_one_run(name, k, args, Path(name).stem))
+    _summary(runs, core, args.repeats)
 
 
-def _one_run(config: str, seed: int, args: argparse.Namespace) -> dict:
+def _one_run(config: str, seed: int, args: argparse.Namespace, label: str) -> dict:
+    """One walk of `seed` and a DWA episode per navigation seed on `config`, printed under
+    `label` ("": silent): real-time factors, the walk's fall and tracking RMS."""
     cfg = load_config() if config == "default" else load_config(config)
     r = run_walk(args.walk_seconds, seed=seed, command="random", config=cfg)
+    if label:
+        rms = r.tracking_rms
+        print(
+            f"{label}: walk seed {seed}: {'FELL ' if r.fell else ''}"
+            f"{r.real_time_factor:.2f}x real time, RMS x {100 * rms['x']:.2f} cm "
+            f"y {100 * rms['y']:.2f} cm heading {1000 * rms['heading']:.1f} mrad",
+            flush=True,
+        )
     nav = []
     for s in args.nav_seeds:
         t0 = time.perf_counter()
         rec, _ = run_digit_episode(sample_scenario(s, cfg), cfg, DwaPlanner(cfg))
         nav.append(rec.steps * cfg.robot.step_time / (time.perf_counter() - t0))
+        if label:
+            print(
+                f"{label}: navigation seed {s}: {rec.outcome} after {rec.steps} steps, "
+                f"{nav[-1]:.2f}x real time",
+                flush=True,
+            )
     return {"walk": r.real_time_factor, "fell": r.fell, "rms": r.tracking_rms, "nav": nav}
 
 
-def _compare_trees(args: argparse.Namespace, core: int) -> None:
-    """Each tree's runs in fresh processes importing that tree's package, interleaved."""
-    runs: dict[str, list[dict]] = {t: [] for t in args.trees}
-    script = str(Path(__file__).resolve())
-    for k in range(args.repeats):
-        for tree in args.trees:
-            cmd = [sys.executable, script, "--single", "--seed", str(k), "--core", str(core)]
-            cmd += ["--configs", args.configs[0], "--walk-seconds", str(args.walk_seconds)]
-            cmd += ["--nav-seeds", *map(str, args.nav_seeds)]
-            env = {**os.environ, "PYTHONPATH": str(Path(tree).resolve())}
-            out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
-            r = json.loads(out.stdout.strip().splitlines()[-1])
-            runs[tree].append(r)
-            nav = ", ".join(f"{x:.2f}x" for x in r["nav"])
-            print(f"{tree}: seed {k}: walk {r['walk']:.2f}x, navigation {nav}", flush=True)
-    base = args.trees[0]
-    b_walk = statistics.median(r["walk"] for r in runs[base])
-    b_nav = statistics.median(x for r in runs[base] for x in r["nav"]) if args.nav_seeds else 1.0
-    print(f"\ncore {core}, {args.repeats} repeats; medians (ratio to {base}):")
-    for tree, rs in runs.items():
-        w = statistics.median(r["walk"] for r in rs)
-        n = statistics.median(x for r in rs for x in r["nav"]) if args.nav_seeds else float("nan")
-        falls = sum(r["fell"] for r in rs)
+def _run_in_tree(tree: str, seed: int, core: int, args: argparse.Namespace) -> dict:
+    """`_one_run` of the first configuration in a fresh process importing `tree`."""
+    cmd = [sys.executable, str(Path(__file__).resolve()), "--single", "--seed", str(seed)]
+    cmd += ["--core", str(core), "--configs", args.configs[0]]
+    cmd += ["--walk-seconds", str(args.walk_seconds), "--nav-seeds", *map(str, args.nav_seeds)]
+    env = {**os.environ, "PYTHONPATH": str(Path(tree).resolve())}
+    out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True)
+    r = json.loads(out.stdout.strip().splitlines()[-1])
+    nav = ", ".join(f"{x:.2f}x" for x in r["nav"])
+    print(f"{tree}: seed {seed}: walk {r['walk']:.2f}x, navigation {nav}", flush=True)
+    return r
+
+
+def _summary(runs: dict[str, list[dict]], core: int, repeats: int) -> None:
+    """Per configuration (or tree): medians and their ratio to the first one's."""
+
+    def medians(rs: list[dict]) -> tuple[float, float, dict]:
+        nav = [x for r in rs for x in r["nav"]]
+        rms = {k: statistics.median(r["rms"][k] for r in rs) for k in ("x", "y", "heading")}
+        return (
+            statistics.median(r["walk"] for r in rs),
+            (statistics.median(nav) if nav else float("nan")),
+            rms,
+        )
+
+    base = next(iter(runs))
+    b_walk, b_nav, _ = medians(runs[base])
+    print(f"\ncore {core}, {repeats} repeats; medians (ratio to {Path(base).stem or base}):")
+    for name, rs in runs.items():
+        w, n, rms = medians(rs)
         print(
-            f"  {tree}: walk {w:.2f}x ({w / b_walk:.2f}), navigation {n:.2f}x "
-            f"({n / b_nav:.2f}); falls {falls}"
+            f"  {Path(name).stem or name}: walk {w:.2f}x ({w / b_walk:.2f}), navigation {n:.2f}x "
+            f"({n / b_nav:.2f}); RMS x {100 * rms['x']:.2f} cm, y {100 * rms['y']:.2f} cm, "
+            f"heading {1000 * rms['heading']:.1f} mrad; falls {sum(r['fell'] for r in rs)}"
         )
 
 

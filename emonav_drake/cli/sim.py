@@ -37,6 +37,7 @@ from emonav_drake.diagrams.episode import EpisodeRequest
 from emonav_drake.diagrams.plants import DEFAULT_PLANT, PLANTS, Plant, plant_named
 from emonav_drake.diagrams.run_spec import RunSpec, load_run_spec, run_spec_plain
 from emonav_drake.navigation.metrics import format_idt
+from emonav_drake.navigation.route_following import uses_route
 from emonav_drake.params import ConfigError, is_deployable
 from emonav_drake.planners import planner_names
 
@@ -159,7 +160,7 @@ def cmd_sim(args: argparse.Namespace) -> int:
     out["sensor"] = cfg.sensor.preset  # the LiDAR the scan came from (ideal: exact)
     out["deployable"] = is_deployable(cfg)
     out["emotion_source"] = "truth" if estimate is None else estimate.mode
-    out["global_route"] = bool(cfg.route.enabled and scenario.walls)
+    out["global_route"] = uses_route(scenario, cfg)
     if rates is not None and rates.report is not None:
         out.update(rates.report.to_json())
         print(_format_rates(rates.report))
@@ -233,7 +234,7 @@ def _open_viewer(
                 rays=args.rays,
                 footsteps=robot.footsteps,
                 tracks=cfg.perception.state_source == "lidar",
-                route=bool(cfg.route.enabled and scenario.walls),
+                route=uses_route(scenario, cfg),
                 scene=_scene_label(spec, scenario.seed, caption=True),
             )
             start_live_view(meshcat, wait=not args.no_wait, caption=caption)

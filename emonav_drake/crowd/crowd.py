@@ -138,9 +138,7 @@ class Crowd:
         # sees or meets it.
         self.static_appear_times = np.array([o.appears_at for o in scenario.obstacles], dtype=float)
         self._all_static_present = not bool((self.static_appear_times > 0).any())
-        self.wall_segments = np.array(
-            [[w.start, w.end] for w in scenario.walls], dtype=float
-        ).reshape(-1, 2, 2)
+        self.wall_segments = scenario.wall_segments()
         # Emotion schedule: row i = codes of every pedestrian during period i.
         base = np.array([EMOTION_NAMES.index(p.emotion) for p in peds], dtype=np.int64)
         length = max([len(p.emotion_schedule) for p in peds], default=0)

@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 
 from emonav_drake.navigation.episode_trace import EpisodeTrace, perceived_emotions
 from emonav_drake.navigation.metrics import EpisodeRecord
+from emonav_drake.navigation.route_following import uses_route
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.perception.noisy_emotions import EmotionEstimateParams
 from emonav_drake.planners.protocol import Planner
@@ -185,7 +186,7 @@ def run_navigation_episode(
             rays=req.show_rays,
             footsteps=systems.footsteps,
             tracks=req.config.perception.state_source == "lidar",
-            route=req.config.route.enabled and bool(req.scenario.walls),
+            route=uses_route(req.scenario, req.config),
             scene=req.scene,
         )
         write_replay_html(meshcat, req.record_html, caption)

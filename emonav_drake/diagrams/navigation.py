@@ -43,7 +43,6 @@ import dataclasses as dc
 import logging
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
 from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 
@@ -168,8 +167,9 @@ def AddNavigationStack(
     planner_crowd = plan.GetInputPort("crowd")
     tracker = None
     if config.perception.state_source == "lidar":  # the planner reads the tracked crowd
-        walls = np.array([[w.start, w.end] for w in scenario.walls], float).reshape(-1, 2, 2)
-        tracker = b.AddNamedSystem("crowd_tracker", CrowdTrackerSystem(config, known_walls=walls))
+        tracker = b.AddNamedSystem(
+            "crowd_tracker", CrowdTrackerSystem(config, known_walls=scenario.wall_segments())
+        )
         b.Connect(robot_state, tracker.GetInputPort("robot_state"))
         b.Connect(maps.GetOutputPort("scan"), tracker.GetInputPort("scan"))
         b.Connect(tracker.GetOutputPort("crowd"), planner_crowd)

@@ -214,7 +214,7 @@ def build_trajectory(
         seed=int(scenario.seed),
         outcome=record.outcome,
         step_time=float(config.robot.step_time),
-        walls=np.array([[w.start, w.end] for w in scenario.walls], dtype=float).reshape(-1, 2, 2),
+        walls=scenario.wall_segments(),
     )
     if record.outcome == COLLISION:
         traj.collision = collision_contact(traj)

@@ -204,6 +204,7 @@ class NavigationWorld:
         self.response_rng = np.random.default_rng([RESPONSE_SEED_SALT, s.seed % 2**64])
         self.step_count = 0
         self.route_plan: RoutePlan | None = None
+        self._subgoal: np.ndarray | None = None  # this step's, once asked for
         if self.route is not None:  # planned once at the start, as the diagram initialises
             self.route_plan = self.route.replan(self.route.initial_plan(), self._xy(), 0.0)
         self.goal_distance = float(goal_state(self.robot, self.goal_xy)[0])
@@ -232,8 +233,10 @@ class NavigationWorld:
         """The planner's view of the current walking step: with a global route, its goal
         is the sub-goal along the route (`goal_is_subgoal`)."""
         goal = self.goal_xy
-        if self.route is not None:
-            goal = self.route.subgoal(self.route_plan, self._xy(), self._time())
+        if self.route is not None:  # computed once per walking step, however often asked
+            if self._subgoal is None:
+                self._subgoal = self.route.subgoal(self.route_plan, self._xy(), self._time())
+            goal = self._subgoal
         return PlannerInput(
             robot=self.robot,
             goal_xy=goal,
@@ -313,6 +316,7 @@ class NavigationWorld:
             self.response_rng.bit_generator.state = state["response_rng"]
         self.step_count = state["step_count"]
         self.goal_distance = state["goal_distance"]
+        self._subgoal = None
         if self.route is not None:  # a state saved without a route: planned from here
             saved = state.get("route_plan")
             self.route_plan = (
@@ -388,6 +392,7 @@ class NavigationWorld:
             ),
             no_route=self.route_plan is not None and not self.route_plan.found,
         )
+        self._subgoal = None
         if self.frames is not None:
             self.frames.push(self._frame())
         return ev, outcome

@@ -193,7 +193,7 @@ def route_follower(scenario: Scenario, config: EmoNavConfig) -> RouteFollower:
     the map at t = 0 (a disc put in place later, `appears_at` > 0, may close the route
     during the episode: the outcome "no_route")."""
     static_map = StaticMap.of(
-        [[w.start, w.end] for w in scenario.walls],
+        scenario.wall_segments(),
         [o.center for o in scenario.obstacles],
         [o.radius for o in scenario.obstacles],
     )

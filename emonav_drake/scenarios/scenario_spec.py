@@ -179,6 +179,10 @@ class Scenario:
         "walls": MAX_WALLS,
     }
 
+    def wall_segments(self) -> np.ndarray:
+        """The walls as (W, 2, 2) segments [m, world]: wall k from [k, 0] to [k, 1]."""
+        return np.array([[w.start, w.end] for w in self.walls], dtype=float).reshape(-1, 2, 2)
+
     def validate(
         self, robot_radius: float = 0.3, pedestrian_radius: float = 0.3, goal_radius: float = 0.2
     ) -> "Scenario":
