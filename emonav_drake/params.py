@@ -39,6 +39,7 @@ from emonav_drake.params_crowd import (
 )
 from emonav_drake.params_planners import DwaParams, MpcParams, RouteParams
 from emonav_drake.params_robot import (
+    MAP_RINGS,
     NUM_BEAMS,
     PEOPLE_AS,
     SENSOR_NAMES,
@@ -71,6 +72,7 @@ __all__ = [
     "SENSOR_NAMES",
     "SENSOR_PRESETS",
     "DEPLOYABLE_SENSOR",
+    "MAP_RINGS",
     "STATE_SOURCES",
     "ConfigError",
     "CrowdParams",
@@ -172,6 +174,14 @@ class EmoNavConfig:
         )
         source = self.perception.state_source
         require(source in STATE_SOURCES, "perception.state_source", source, '"truth" or "lidar"')
+        rings = self.perception.map_rings
+        require(rings in MAP_RINGS, "perception.map_rings", rings, '"truth" or "tracks"')
+        require(
+            rings == "truth" or source == "lidar",
+            "perception.map_rings",
+            rings,
+            '"truth" unless perception.state_source is "lidar" (no tracks to ring otherwise)',
+        )
         self._validate_sensor()
         w = self.walking
         require(w.arms in ("welded", "held"), "walking.arms", w.arms, '"welded" or "held"')

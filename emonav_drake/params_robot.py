@@ -61,6 +61,8 @@ class LidarParams:
 
 # Where the model-based planners' crowd state comes from (`PerceptionParams.state_source`).
 STATE_SOURCES = ("truth", "lidar")
+# Whom the grid maps' discomfort rings go round (`PerceptionParams.map_rings`).
+MAP_RINGS = ("truth", "tracks")
 
 
 @dc.dataclass
@@ -82,6 +84,14 @@ class PerceptionParams:
         "seconds; docs/perception.md)",
         "s",
         (0.1, 60.0),
+    )
+    map_rings: str = setting(
+        "truth",
+        'whom the grid maps\' discomfort rings (their inflated layer) go round: "truth", the '
+        'simulator\'s pedestrians with their emotions, or "tracks", the pedestrians the LiDAR '
+        'tracker finds with the emotions associated with them (needs state_source "lidar"; '
+        "the camera's emotions per track always ring the tracks). The real scan is the "
+        "world's either way",
     )
 
 

@@ -407,7 +407,7 @@ def test_the_tracker_system_drops_the_known_walls_returns_and_keeps_a_person_by_
     person = scan_discs(xy, heading, [[3.0, 0.6]], [0.3], *args, segments=walls)
 
     def found(ranges):
-        d = detect_scan(ranges, xy, heading, cfg.lidar.max_range, system._detection)
+        d = detect_scan(ranges, xy, heading, cfg.lidar.max_range, system.perception.detection)
         return np.asarray(d.centers).reshape(-1, 2)
 
     assert len(found(empty)) > 0  # unfiltered, the walls are objects

@@ -202,3 +202,106 @@ def test_the_lip_world_replans_when_a_door_closes_as_the_diagram_does():
     assert w.route_points.shape != first.shape or not np.allclose(w.route_points, first)
     record, _ = run_episode(scenario, cfg, DwaPlanner(cfg), goal_radius=0.2)
     assert record.to_json() == w.record.to_json()
+
+
+def _deployable(family="paper", rings="truth"):
+    from emonav_drake.params import apply_deployable
+
+    cfg = EmoNavConfig()
+    cfg.crowd.family = family
+    apply_deployable(cfg)  # VLP-16 scan with its faults, planners on LiDAR tracks
+    cfg.perception.map_rings = rings
+    return cfg.validate()
+
+
+@pytest.mark.parametrize(
+    ("family", "seed"), [("paper", 5), pytest.param("office", 3, marks=pytest.mark.slow)]
+)
+def test_the_lip_world_perceives_through_the_tracker_as_the_diagram_does(family, seed):
+    """With LiDAR tracks the LIP world scans and tracks at the diagram's instants
+    (`sensing/crowd_perception.py`): DWA, which reads the tracked crowd, walks the same
+    episode step for step in both, and what it read were tracks, not the true crowd."""
+    cfg = _deployable(family)
+    env = EmoNavLIPEnv(cfg, goal_radius=0.2, grid_kind="lgm")
+    env.reset(seed=seed)
+    w = env.world
+    dwa, robots, differs = DwaPlanner(cfg), [np.array(w.robot)], False
+    while not w.tracker.done:
+        inp = env.planner_input()
+        truth = w.crowd.snapshot(w.crowd_state)
+        seen = inp.crowd.positions
+        differs |= seen.shape != truth.positions.shape or not np.allclose(seen, truth.positions)
+        env.step(dwa.plan(inp))
+        robots.append(np.array(w.robot))
+    assert differs
+    record, log = run_episode(
+        sample_scenario(seed, cfg), cfg, DwaPlanner(cfg), goal_radius=0.2, trace=True
+    )
+    assert record.to_json() == w.record.to_json()
+    assert np.array_equal(np.array(log.robot), np.array(robots))
+
+
+def test_grid_maps_ring_the_tracked_people_in_both_worlds():
+    """`perception.map_rings: tracks`: the maps' discomfort rings go round the tracked
+    pedestrians — the same stacks in the LIP world and the diagram, and not the stacks
+    of rings round the true crowd."""
+    seed, steps = 5, 8
+    cfg, truth_cfg = _deployable(rings="tracks"), _deployable()
+    env, env_truth = (EmoNavLIPEnv(c, goal_radius=0.2, grid_kind="lgm") for c in (cfg, truth_cfg))
+    obs, _ = env.reset(seed=seed)
+    obs_truth, _ = env_truth.reset(seed=seed)
+    dwa, stacks, truth_stacks, actions = DwaPlanner(cfg), [obs["lgm"]], [obs_truth["lgm"]], []
+    for _ in range(steps):
+        actions.append(dwa.plan(env.planner_input()))
+        stacks.append(env.step(actions[-1])[0]["lgm"])
+        truth_stacks.append(env_truth.step(actions[-1])[0]["lgm"])
+    assert any(not np.array_equal(a, b) for a, b in zip(stacks, truth_stacks, strict=True))
+    nav = build_navigation_diagram(
+        sample_scenario(seed, cfg), cfg, ReplayPlanner(np.array(actions)), goal_radius=0.2
+    )
+    sim = Simulator(nav.diagram)
+    sim.Initialize()
+    ctx = sim.get_mutable_context()
+    port = nav.grid_maps.GetOutputPort("lgm_stack")
+    for k in range(steps):
+        if k > 0:
+            sim.AdvanceTo(k * cfg.robot.step_time)
+        assert np.array_equal(port.Eval(nav.grid_maps.GetMyContextFromRoot(ctx)), stacks[k])
+
+
+def test_a_saved_lip_world_keeps_its_tracks():
+    from emonav_drake.navigation.lip_world import NavigationWorld
+
+    cfg = _deployable()
+    scenario = sample_scenario(5, cfg)
+    a, dwa = NavigationWorld(scenario, cfg), DwaPlanner(cfg)
+    for _ in range(6):
+        a.step(dwa.plan(a.planner_input()))
+    state = a.state_dict()
+    assert state["lidar_tracker"]["tracks"]
+    b = NavigationWorld.from_state_dict(state, cfg)
+    for _ in range(6):
+        ua, ub = dwa.plan(a.planner_input()), dwa.plan(b.planner_input())
+        assert np.array_equal(ua, ub)
+        a.step(ua)
+        b.step(ub)
+    assert a.record.to_json() == b.record.to_json()
+    # a state perceived from tracks does not load into a world that reads the true crowd
+    plain = NavigationWorld(scenario, EmoNavConfig())
+    before = plain.state_dict()
+    with pytest.raises(ValueError, match="perceived from LiDAR tracks"):
+        plain.load_state_dict(state)
+    assert plain.state_dict()["robot"] == before["robot"]
+
+
+def test_rings_round_tracks_need_tracks_and_a_grid_map():
+    from emonav_drake.navigation.lip_world import NavigationWorld
+    from emonav_drake.typed_yaml import ConfigError
+
+    cfg = EmoNavConfig()
+    cfg.perception.map_rings = "tracks"
+    with pytest.raises(ConfigError, match="perception.map_rings"):
+        cfg.validate()
+    cfg = _deployable(rings="tracks")
+    with pytest.raises(ValueError, match="drlvo"):
+        NavigationWorld(sample_scenario(0, cfg), cfg, grid_kind="drlvo")

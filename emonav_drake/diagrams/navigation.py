@@ -175,6 +175,9 @@ def AddNavigationStack(
         b.Connect(tracker.GetOutputPort("crowd"), planner_crowd)
         planner_crowd = tracker.GetInputPort("crowd")  # its emotion reports
     perceivers = [maps.GetInputPort("crowd"), planner_crowd]
+    ring_tracks = ""  # why the maps ring the tracked people ("": they ring the crowd's)
+    if tracker is not None and config.perception.map_rings == "tracks":
+        ring_tracks = "perception.map_rings = tracks"
     perception = None
     if emotion_estimate is not None and emotion_estimate.mode in CAMERA_MODES:
         from emonav_drake.diagrams.camera_perception import AddCameraPerception
@@ -194,13 +197,7 @@ def AddNavigationStack(
             tracker,
         )
         if tracker is not None and emotion_estimate.mode == "camera_tracks":
-            if grid_kind == "drlvo":
-                raise ConfigError(
-                    "emotion source camera_tracks rings the tracked pedestrians in the grid "
-                    "maps; the drlvo observation cannot take them"
-                )
-            # the maps' discomfort rings: around the tracked people, their kept emotions
-            b.Connect(tracker.GetOutputPort("crowd"), maps.GetInputPort("perceived_crowd"))
+            ring_tracks = "emotion source camera_tracks"
     elif emotion_estimate is not None and emotion_estimate.mode != "ground_truth":
         AddEmotionEstimateSource(
             b, crowd.GetOutputPort("crowd"), perceivers, config, emotion_estimate
@@ -208,6 +205,13 @@ def AddNavigationStack(
     else:
         for port in perceivers:
             b.Connect(crowd.GetOutputPort("crowd"), port)
+    if ring_tracks:  # the maps' discomfort rings: round the tracked people, their emotions
+        if grid_kind == "drlvo":
+            raise ConfigError(
+                f"{ring_tracks} rings the tracked pedestrians in the grid maps; the drlvo "
+                "observation cannot take them"
+            )
+        b.Connect(tracker.GetOutputPort("crowd"), maps.GetInputPort("perceived_crowd"))
     b.Connect(crowd.GetOutputPort("crowd"), monitor.GetInputPort("crowd"))
     b.Connect(plan.GetOutputPort("command"), monitor.GetInputPort("command"))  # for the jerk
     b.Connect(maps.GetOutputPort("lgm_stack"), plan.GetInputPort("lgm_stack"))

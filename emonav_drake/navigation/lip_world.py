@@ -42,7 +42,7 @@ import numpy as np
 from emonav_drake.crowd.crowd import Crowd, CrowdSnapshot, CrowdState, with_wall_discs
 from emonav_drake.navigation.goal_input import goal_state, policy_goal_state
 from emonav_drake.navigation.metrics import EpisodeRecord, EpisodeTracker
-from emonav_drake.navigation.observations import observation_kind
+from emonav_drake.navigation.observations import observation_frame, observation_kind
 from emonav_drake.navigation.reward import StepEvaluation, evaluate_step
 from emonav_drake.navigation.route_following import (
     RouteFollower,
@@ -55,6 +55,9 @@ from emonav_drake.params import EmoNavConfig, RobotParams
 from emonav_drake.robot.lip import LipState, lip_in_step, lip_step, lip_velocity
 from emonav_drake.robot.step_response import StepResponseModel
 from emonav_drake.scenarios.scenario import PedestrianSpec, Scenario, StaticDiscSpec, WallSpec
+from emonav_drake.sensing.crowd_perception import CrowdPerception, perceived_inflation
+from emonav_drake.sensing.crowd_tracker import CrowdTracker
+from emonav_drake.sensing.lidar_sensor import sensed_ranges
 
 
 @dc.dataclass(frozen=True)
@@ -166,6 +169,14 @@ class NavigationWorld:
             does, bit for bit): the planner's goal is the sub-goal along it, and an
             episode with no route left ends "no_route". None: `config.route.enabled`
             (on by default); never in a scene without walls.
+
+    With `perception.state_source` "lidar" the world perceives the crowd as the diagram's
+    `CrowdTrackerSystem` does (`sensing/crowd_perception.py`): at every crowd period it
+    scans (the configured sensor, from where the crowd sees the robot) and updates a
+    tracker, and the planner input's `crowd` is the tracked crowd (emotions associated
+    from the simulator's pedestrians); with `perception.map_rings` "tracks" the grid maps'
+    discomfort rings go round the tracked pedestrians too. Camera emotions are the
+    diagram's only.
     """
 
     def __init__(
@@ -187,6 +198,15 @@ class NavigationWorld:
         self.goal_xy = np.asarray(scenario.robot_goal, dtype=float)
         self.crowd = Crowd(scenario, config)
         self._substeps = substeps_per_step(config)
+        self.perception: CrowdPerception | None = None
+        if config.perception.state_source == "lidar":
+            self.perception = CrowdPerception(config, scenario.wall_segments())
+        self._rings_tracks = self.perception is not None and config.perception.map_rings == "tracks"
+        if self._rings_tracks and grid_kind == "drlvo":
+            raise ValueError(
+                "perception.map_rings = tracks rings the tracked pedestrians in the grid maps; "
+                "the drlvo observation cannot take them"
+            )
         self.route: RouteFollower | None = None
         if uses_route(scenario, config, global_route):
             self.route = route_follower(scenario, config)
@@ -203,6 +223,10 @@ class NavigationWorld:
         self.command_before = np.zeros(2)  # u_{k−2}: the calibrated robot still feels it
         self.response_rng = np.random.default_rng([RESPONSE_SEED_SALT, s.seed % 2**64])
         self.step_count = 0
+        # the LiDAR tracker's state (`perception.state_source` "lidar"), else None
+        self.lidar_tracker: CrowdTracker | None = None
+        if self.perception is not None:
+            self.lidar_tracker = self.perception.new_tracker()
         self.route_plan: RoutePlan | None = None
         self._subgoal: np.ndarray | None = None  # this step's, once asked for
         if self.route is not None:  # planned once at the start, as the diagram initialises
@@ -220,8 +244,24 @@ class NavigationWorld:
     def _frame(self) -> np.ndarray:
         """The current frame, as its stack stores it (DRL-VO*: the whole (1, 3, M, M))."""
         kind = observation_kind(self.grid_kind or "lgm")
-        frame = kind.frame(self.robot, self.crowd.snapshot(self.crowd_state), self.config)
+        crowd = self.crowd.snapshot(self.crowd_state)
+        if self._rings_tracks:  # the real scan is the world's, the rings the tracked crowd's
+            inflation = perceived_inflation(crowd, self._perceived(crowd))
+            frame = observation_frame(self.robot, crowd, self.config, kind.name, inflation)
+        else:
+            frame = kind.frame(self.robot, crowd, self.config)
         return kind.stack_item(frame)
+
+    def _perceived(self, crowd: CrowdSnapshot) -> CrowdSnapshot:
+        """The tracked crowd now (emotions associated from `crowd`, the simulator's)."""
+        return self.perception.snapshot(self.lidar_tracker, self._time(), reported=crowd)
+
+    def _scan(self, crowd: CrowdState, seen: LipState) -> None:
+        """The tracker's update with the scan of `crowd` (at its time) from `seen`."""
+        snap = self.crowd.snapshot(crowd)
+        xy = np.array([seen.x, seen.y])
+        ranges = sensed_ranges(xy, seen.heading, snap, self.config)
+        self.perception.update(self.lidar_tracker, snap.time, ranges, xy, seen.heading)
 
     def _xy(self) -> np.ndarray:
         return np.array([self.robot.x, self.robot.y])
@@ -241,11 +281,15 @@ class NavigationWorld:
             robot=self.robot,
             goal_xy=goal,
             last_command=self.last_command.copy(),
-            crowd=with_wall_discs(self.crowd.snapshot(self.crowd_state)),
+            crowd=with_wall_discs(self._planner_crowd()),
             lgm_stack=None if self.frames is None else self.frames.array,
             step=self.step_count,
             goal_is_subgoal=self.route is not None,
         )
+
+    def _planner_crowd(self) -> CrowdSnapshot:
+        crowd = self.crowd.snapshot(self.crowd_state)
+        return crowd if self.perception is None else self._perceived(crowd)
 
     @property
     def route_points(self) -> np.ndarray:
@@ -261,7 +305,8 @@ class NavigationWorld:
 
         The scenario, goal radius and map kind (what the world was built from) and
         everything that changes: robot, crowd state, last command, counters, the
-        episode tracker and record, and the frame stack. `from_state_dict` with the same
+        episode tracker and record, the frame stack, the route and the LiDAR tracker
+        (with `perception.state_source` "lidar"). `from_state_dict` with the same
         configuration rebuilds a world that continues exactly as this one would.
         """
         t = self.tracker
@@ -285,6 +330,9 @@ class NavigationWorld:
             },
             "frames": None if self.frames is None else self.frames.array,
             "route_plan": None if self.route_plan is None else self.route_plan.to_plain(),
+            "lidar_tracker": None
+            if self.lidar_tracker is None
+            else self.lidar_tracker.state_dict(),
         }
 
     @classmethod
@@ -305,6 +353,14 @@ class NavigationWorld:
             raise ValueError(f"saved map kind {state['grid_kind']!r} != {self.grid_kind!r}")
         if dc.asdict(self.scenario) != state["scenario"]:
             raise ValueError("the saved episode is of another scenario")
+        saved_tracks = state.get("lidar_tracker")
+        if (saved_tracks is None) != (self.lidar_tracker is None):
+            source = self.config.perception.state_source
+            raise ValueError(
+                "the saved episode was perceived "
+                + ("from LiDAR tracks" if saved_tracks is not None else "from the true crowd")
+                + f", this world's perception.state_source is {source!r}"
+            )
         self.goal_radius = state["goal_radius"]
         self.robot = LipState(*state["robot"])
         self.crowd_state = CrowdState.from_plain(state["crowd_state"])
@@ -324,6 +380,8 @@ class NavigationWorld:
                 if saved is not None
                 else self.route.replan(self.route.initial_plan(), self._xy(), self._time())
             )
+        if saved_tracks is not None:
+            self.lidar_tracker.load_state_dict(saved_tracks)
         tr = state["tracker"]
         self.tracker = EpisodeTracker(tr["max_steps"], tr["step_time"])
         self.tracker.record = EpisodeRecord(**tr["record"])
@@ -358,6 +416,8 @@ class NavigationWorld:
         if self.response is None:
             for j in range(self._substeps):
                 seen = robot_at_substep(start, u, j, self.config)
+                if self.perception is not None:
+                    self._scan(crowd, seen)
                 crowd = self.crowd.step(crowd, np.array([seen.x, seen.y]), lip_velocity(seen))
             self.robot = lip_step(start, float(u[0]), float(u[1]), r.omega, r.step_time)
         else:
@@ -367,6 +427,9 @@ class NavigationWorld:
             delta = np.array([end.x - start.x, end.y - start.y])
             for j in range(self._substeps):
                 xy = np.array([start.x, start.y]) + delta * (j / self._substeps)
+                if self.perception is not None:  # the new heading from the switch on
+                    heading = start.heading if j == 0 else end.heading
+                    self._scan(crowd, LipState(float(xy[0]), float(xy[1]), heading, 0.0))
                 crowd = self.crowd.step(crowd, xy, delta / r.step_time)
             self.robot = end
         self.crowd_state = crowd

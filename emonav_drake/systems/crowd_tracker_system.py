@@ -1,12 +1,9 @@
 """`CrowdTrackerSystem`: the crowd as a robot estimates it from its LiDAR scan.
 
-At the scan's rate (every `crowd.dt`, 10 Hz) it first drops the returns the known map
-explains — a beam whose range is within `WALL_RETURN_TOLERANCE` of the range the map's
-walls alone give it (`known_walls`; map-based filtering, as a robot with a building's map
-does) — then segments the 1800-beam scan into objects
-and fits circles (`sensing/lidar_objects.py`), then updates a multi-target tracker
-(`sensing/crowd_tracker.py`: constant-velocity Kalman filters, gated Hungarian assignment,
-birth, confirmation, coasting through occlusions, deletion). Its output replaces the
+At the scan's rate (every `crowd.dt`, 10 Hz) it runs the perception pipeline of
+`sensing/crowd_perception.py` (the same code the fast LIP world runs): the returns the
+known map explains dropped (`known_walls`), people detected in the 1800-beam scan, and a
+multi-target tracker updated. Its output replaces the
 simulator's crowd on the planner's input when `perception.state_source` is "lidar":
 
     LidarGridMapBuilder ── scan ──► CrowdTrackerSystem ── crowd ──► NavigationPlanner
@@ -45,17 +42,23 @@ from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import Context, LeafSystem, State
 
 from emonav_drake.crowd.crowd import CrowdSnapshot
-from emonav_drake.params import EMOTION_NAMES, EmoNavConfig
-from emonav_drake.sensing.crowd_tracker import CrowdTracker, TrackerParams, tracker_params
-from emonav_drake.sensing.leg_detection import detect_scan, detection_params
-from emonav_drake.sensing.lidar import scan_discs
+from emonav_drake.params import EmoNavConfig
+from emonav_drake.sensing.crowd_perception import (
+    NEUTRAL,
+    WALL_RETURN_TOLERANCE,
+    CrowdPerception,
+)
+from emonav_drake.sensing.crowd_tracker import CrowdTracker, TrackerParams
 from emonav_drake.sensing.lidar_objects import DetectionParams
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
-NEUTRAL = EMOTION_NAMES.index("neutral")  # a track no emotion report is near
-# A return within this of the known walls' own range is the wall [m]: ~9 σ of the VLP-16's
-# range noise (0.01125 m), well inside a person's radius (legs stand ≥ 0.1 m off a wall).
-WALL_RETURN_TOLERANCE = 0.1
+__all__ = [
+    "NEUTRAL",
+    "WALL_RETURN_TOLERANCE",
+    "CrowdTrackerSystem",
+    "TrackEmotions",
+    "TrackedPeople",
+]
 
 
 @dc.dataclass(frozen=True)
@@ -87,6 +90,7 @@ class CrowdTrackerSystem(LeafSystem):
             `sensing/leg_detection.py`'s `detection_params` and `tracker_params` of the
             configuration: the disc detector, or legs paired into people for a sensor
             that sees legs; the configuration's `perception.still_duration`).
+        known_walls: (W, 2, 2) wall segments [m, world] of the known map (None: none).
     """
 
     def __init__(
@@ -96,21 +100,16 @@ class CrowdTrackerSystem(LeafSystem):
         tracking: TrackerParams | None = None,
         known_walls: np.ndarray | None = None,
     ) -> None:
-        """`known_walls`: (W, 2, 2) wall segments [m, world] of the known map (None: none)."""
         super().__init__()
         self._config = config
-        walls = np.zeros((0, 2, 2)) if known_walls is None else np.asarray(known_walls, float)
-        self._known_walls = walls.reshape(-1, 2, 2)
-        self._detection = detection or detection_params(config)
-        self._tracking = tracking or tracker_params(config)
-        self._distances = np.asarray(config.reward.emotion_distances(), dtype=float)
+        self.perception = CrowdPerception(config, known_walls, detection, tracking)
         self._robot_in = self.DeclareVectorInputPort("robot_state", 4)
         self._scan_in = self.DeclareVectorInputPort("scan", config.lidar.num_beams)
         self._crowd_in = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
         self._emotions_in = self.DeclareAbstractInputPort(
             "track_emotions", AbstractValue.Make(TrackEmotions({}))
         )
-        self._tracker = self.DeclareAbstractState(AbstractValue.Make(CrowdTracker(self._tracking)))
+        self._tracker = self.DeclareAbstractState(AbstractValue.Make(self.perception.new_tracker()))
         self.DeclareAbstractOutputPort(
             "crowd",
             lambda: AbstractValue.Make(object()),
@@ -137,36 +136,19 @@ class CrowdTrackerSystem(LeafSystem):
 
     def without_known_walls(self, ranges: np.ndarray, xy: np.ndarray, heading: float) -> np.ndarray:
         """`ranges` (K,) [m] with the returns of the known walls set to `max_range` (no
-        return): a beam within `WALL_RETURN_TOLERANCE` of the walls' own range there."""
-        if not len(self._known_walls):
-            return ranges
-        lidar = self._config.lidar
-        walls = scan_discs(
-            xy,
-            heading,
-            np.zeros((0, 2)),
-            np.zeros(0),
-            len(ranges),
-            lidar.max_range,
-            lidar.min_range,
-            segments=self._known_walls,
-        )
-        wall = (walls < lidar.max_range) & (np.abs(ranges - walls) < WALL_RETURN_TOLERANCE)
-        return np.where(wall, lidar.max_range, ranges)
+        return): `CrowdPerception.without_known_walls`."""
+        return self.perception.without_known_walls(ranges, xy, heading)
 
     def _scan(self, context: Context, state: State) -> None:
         robot = lip_state_from_vector(self._robot_in.Eval(context))
-        xy = np.array([robot.x, robot.y])
-        ranges = np.asarray(self._scan_in.Eval(context), dtype=float)
-        detections = detect_scan(
-            self.without_known_walls(ranges, xy, robot.heading),
-            xy,
-            robot.heading,
-            self._config.lidar.max_range,
-            self._detection,
-        )
         tracker = copy.deepcopy(self.tracker(context))
-        tracker.update(context.get_time(), detections)
+        self.perception.update(
+            tracker,
+            context.get_time(),
+            self._scan_in.Eval(context),
+            np.array([robot.x, robot.y]),
+            robot.heading,
+        )
         state.get_mutable_abstract_state(self._tracker).set_value(tracker)
 
     def _calc_crowd(self, context: Context, output: AbstractValue) -> None:
@@ -186,27 +168,8 @@ class CrowdTrackerSystem(LeafSystem):
 
     def perceived(self, context: Context) -> CrowdSnapshot:
         """The crowd snapshot of the tracks now (see the output port)."""
-        tracker = self.tracker(context)
-        kept = None
         if self._emotions_in.HasValue(context):
-            kept = self._emotions_in.Eval(context).codes
-            positions, codes = np.zeros((0, 2)), np.zeros(0, dtype=int)
+            kept, reported = self._emotions_in.Eval(context).codes, None
         else:
-            reported: CrowdSnapshot = self._crowd_in.Eval(context)
-            positions = np.asarray(reported.positions, dtype=float).reshape(-1, 2)
-            codes = np.asarray(reported.emotions, dtype=int).reshape(-1)
-        snap = tracker.snapshot(
-            positions,
-            codes,
-            self._distances,
-            self._config.crowd.pedestrian_radius,
-            self._config.reward.static_discomfort,
-            NEUTRAL,
-            track_emotions=kept,
-        )
-        lag = context.get_time() - tracker.time if tracker.time is not None else 0.0
-        if lag > 0 and len(snap.positions):  # the last scan's tracks, predicted to now
-            snap = dc.replace(snap, positions=snap.positions + snap.velocities * lag)
-        if len(self._known_walls):
-            snap = dc.replace(snap, wall_segments=self._known_walls)
-        return snap
+            kept, reported = None, self._crowd_in.Eval(context)
+        return self.perception.snapshot(self.tracker(context), context.get_time(), reported, kept)

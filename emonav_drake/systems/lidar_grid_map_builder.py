@@ -38,8 +38,6 @@ Abstract state: the stored frames, pushed at every walking step t_k = kT.
 
 from __future__ import annotations
 
-import dataclasses as dc
-
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, Context, LeafSystem, State, ValueProducer
@@ -51,6 +49,7 @@ from emonav_drake.navigation.observations import (
     observation_shape,
 )
 from emonav_drake.params import EmoNavConfig
+from emonav_drake.sensing.crowd_perception import perceived_inflation
 from emonav_drake.sensing.lidar_sensor import sensed_ranges
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
 
@@ -109,14 +108,7 @@ class LidarGridMapBuilder(LeafSystem):
         crowd = self._crowd_in.Eval(context)
         inflation = None
         if self._perceived_in.HasValue(context):
-            seen = self._perceived_in.Eval(context)
-            inflation = dc.replace(
-                crowd,
-                positions=seen.positions,
-                velocities=seen.velocities,
-                emotions=seen.emotions,
-                discomfort=seen.discomfort,
-            )
+            inflation = perceived_inflation(crowd, self._perceived_in.Eval(context))
         value.set_value(observation_frame(robot, crowd, self._config, self._kind, inflation))
 
     def _stack(self, context: Context) -> np.ndarray:
