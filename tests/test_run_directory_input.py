@@ -412,3 +412,19 @@ def test_a_full_disk_while_appending_a_trial_names_trials_jsonl_and_cuts_the_tor
     assert 1 < len(seeds) < 40 and seeds == list(range(4, 4 + len(seeds)))
     assert not [n for n in report["files"] if "tmp" in n], report["files"]
     assert report["loaded"] == len(seeds)  # the same command again continues from there
+
+
+def test_a_runs_summary_names_the_emotion_source_it_ran_with():
+    """The summary line of tables.md says how the robot perceived emotions: the camera
+    kept per track is not a "confusion model" (as camera_tracks runs were once labelled)."""
+    from emonav_drake.evaluation.run_directory import _estimate_label
+    from emonav_drake.perception.noisy_emotions import ESTIMATE_MODES
+
+    labels = {m: _estimate_label(f"mode: {m}\nperiod: 0.4\n") for m in ESTIMATE_MODES}
+    assert labels["camera_tracks"] == "head camera, emotion kept per LiDAR track (2.5 Hz)"
+    assert labels["camera"].startswith("head camera + face classifier (2.5 Hz")
+    assert len(set(labels.values())) == len(ESTIMATE_MODES)  # no two modes alike
+    assert _estimate_label(None) == "ground truth"
+    assert _estimate_label("mode: camera\nperiod: 2.0\n").startswith(
+        "head camera + face classifier (0.5 Hz"
+    )

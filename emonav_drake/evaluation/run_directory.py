@@ -433,18 +433,23 @@ def load_run(path: str | Path) -> tuple[dict, list[dict]]:
 
 
 def _estimate_label(estimate_yaml: str | None) -> str:
-    """How a run perceived emotions, for its summary line."""
+    """How a run perceived emotions, for its summary line (the camera's rate from the
+    estimate's `period`; an unknown mode is named as it is)."""
     if estimate_yaml is None:
         return "ground truth"
     import re
 
     mode = re.search(r"^mode:\s*(\w+)", estimate_yaml, re.M)
+    period = re.search(r"^period:\s*([0-9.eE+-]+)", estimate_yaml, re.M)
+    rate = f"{1.0 / float(period.group(1)):g} Hz" if period else "its period"
+    name = mode.group(1) if mode else "confusion"
     return {
-        "camera": "head camera + face classifier (0.5 Hz; unseen = neutral)",
+        "camera": f"head camera + face classifier ({rate}; unseen = neutral)",
+        "camera_tracks": f"head camera, emotion kept per LiDAR track ({rate})",
         "confusion": "confusion model",
         "classifier": "face classifier",
         "ground_truth": "ground truth",
-    }.get(mode.group(1) if mode else "", "confusion model")
+    }.get(name, name)
 
 
 def replay_outcomes(run: str | Path, method: str, outcome: str) -> tuple[TrialRunner, list[int]]:
