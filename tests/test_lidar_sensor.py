@@ -568,3 +568,28 @@ def test_training_takes_the_sensor():
     assert with_sensor(EmoNavConfig(), "ideal").sensor.is_exact()
     with pytest.raises(ConfigError, match="sensor"):
         DaggerConfig(sensor="nope").validate()
+
+
+def test_training_can_perceive_through_the_tracker():
+    """`perception: tracks` in a training configuration makes its world perceive as a
+    deployed robot does: the planner input holds the LiDAR tracks and the maps ring them
+    (`learning/config_common.py::with_run_world`); "truth" leaves the world's own."""
+    from emonav_drake.learning.config import DaggerConfig
+    from emonav_drake.learning.config_common import with_run_world
+    from emonav_drake.learning.env_pool import make_env
+    from emonav_drake.learning.sac_config import SacConfig
+    from emonav_drake.params import ConfigError
+
+    env = make_env(SacConfig(sensor="vlp16", perception="tracks"))
+    env.reset(seed=5)
+    w = env.world
+    assert w.config.perception.state_source == "lidar" and w.lidar_tracker is not None
+    for _ in range(4):  # tracks need a few scans to be confirmed
+        env.step(np.array([0.3, 0.0]))
+    tracked = env.planner_input().crowd.positions
+    truth = w.crowd.snapshot(w.crowd_state).positions
+    assert 0 < len(tracked) and (tracked.shape != truth.shape or not np.allclose(tracked, truth))
+    plain = with_run_world(EmoNavConfig(), DaggerConfig())
+    assert plain.perception.state_source == "truth" and plain.perception.map_rings == "truth"
+    with pytest.raises(ConfigError, match="perception"):
+        DaggerConfig(perception="oracle").validate()

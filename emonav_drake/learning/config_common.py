@@ -84,6 +84,30 @@ def with_sensor(env_cfg: EmoNavConfig, sensor: str) -> EmoNavConfig:
     return env_cfg
 
 
+# What the training world's robot knows of the crowd (`TrainingRunConfig.perception`).
+PERCEPTIONS = ("truth", "tracks")
+PERCEPTION_DOC = (
+    "what the training world's robot knows of the crowd: \"truth\" (the simulator's "
+    "pedestrians: a teacher that reads the crowd reads them, the grid maps ring them) or "
+    '"tracks" (the LiDAR tracker\'s, as a deployed robot has them: perception.state_source '
+    "lidar and map_rings tracks, docs/perception.md; with a real `sensor` this is the "
+    "deployable setting's perception, emotions associated from the simulator's)"
+)
+
+
+def with_run_world(env_cfg: EmoNavConfig, cfg: "TrainingRunConfig") -> EmoNavConfig:
+    """`env_cfg` (changed in place and returned) as the training run's world: its
+    `sensor` preset (`with_sensor`) and its `perception` ("tracks": the planners and the
+    maps' rings read the LiDAR tracker's crowd; "truth" leaves the world's own)."""
+    with_sensor(env_cfg, cfg.sensor)
+    check_choice("perception", cfg.perception, PERCEPTIONS)
+    if cfg.perception == "tracks":
+        env_cfg.perception.state_source = "lidar"
+        env_cfg.perception.map_rings = "tracks"
+        env_cfg.validate()
+    return env_cfg
+
+
 def check_choice(name: str, value: str, allowed: tuple[str, ...]) -> None:
     """`ConfigError` unless `value` is one of `allowed`."""
     if value not in allowed:
@@ -96,7 +120,8 @@ def check_choice(name: str, value: str, allowed: tuple[str, ...]) -> None:
 @dc.dataclass
 class TrainingRunConfig:
     """The fields every training configuration shares (DAgger, SAC, the SAC fine-tuning,
-    SARL): the run's seed, its torch device and the LiDAR sensor of its world. Each route's
+    SARL): the run's seed, its torch device, the LiDAR sensor of its world and what its
+    robot knows of the crowd. Each route's
     configuration adds its own fields after these."""
 
     seed: int = setting(
@@ -108,7 +133,9 @@ class TrainingRunConfig:
     )
     device: str = setting("cpu", "the torch device")
     sensor: str = setting("ideal", SENSOR_DOC)
+    perception: str = setting("truth", PERCEPTION_DOC)
 
     def check_common(self) -> None:
         """`ConfigError` naming the field for a shared field out of its range or choices."""
         check_sensor(self.sensor)
+        check_choice("perception", self.perception, PERCEPTIONS)

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from emonav_drake.learning.config_common import with_sensor
+from emonav_drake.learning.config_common import with_run_world
 from emonav_drake.learning.env import EmoNavLIPEnv
 from emonav_drake.learning.sac_config import SacConfig
 from emonav_drake.parallel import Worker, init_ray, ray_get, start_actors
@@ -58,7 +58,7 @@ def make_env(
 ) -> EmoNavLIPEnv | EmoNavDigitEnv:
     """The training environment of `cfg.plant` (`EmoNavLIP-v0` or `EmoNavDigit-v0`) for
     the configured observation variant."""
-    env_cfg = with_sensor(env_cfg or EmoNavConfig(), cfg.sensor)
+    env_cfg = with_run_world(env_cfg or EmoNavConfig(), cfg)
     env_cfg.lidar.num_frames = cfg.num_frames
     env_cfg.lidar.grid_size = cfg.grid_size
     env_class = env_class_for(cfg.plant)

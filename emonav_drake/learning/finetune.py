@@ -51,7 +51,7 @@ from tqdm import tqdm
 
 from emonav_drake.atomic_io import write_text_atomic
 from emonav_drake.errors import RunInterrupted
-from emonav_drake.learning.config_common import with_sensor
+from emonav_drake.learning.config_common import with_run_world
 from emonav_drake.learning.finetune_agent import DiscreteSac, check_observation, load_init
 from emonav_drake.learning.finetune_state import (
     STATE_FILE,
@@ -117,7 +117,7 @@ def train_finetune(
         RunInterrupted: after Ctrl-C, once the state is saved.
     """
     cfg = (cfg or FinetuneConfig()).validate()
-    env_cfg = with_sensor(copy.deepcopy(env_cfg or EmoNavConfig()), cfg.sensor)
+    env_cfg = with_run_world(copy.deepcopy(env_cfg or EmoNavConfig()), cfg)
     out = Path(out)
     device = resolve_device(cfg.device, "device")
     path = out / STATE_FILE

@@ -40,7 +40,7 @@ from tqdm import tqdm
 from emonav_drake.atomic_io import write_text_atomic
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import SarlConfig
-from emonav_drake.learning.config_common import with_sensor
+from emonav_drake.learning.config_common import with_run_world
 from emonav_drake.learning.run_state import (
     InterruptGuard,
     check_state,
@@ -86,7 +86,7 @@ def train_sarl(
     for a damaged or foreign state file, `ConfigError` for a bad configuration."""
     out = Path(out)
     cfg = (cfg or SarlConfig()).validate()
-    env_cfg = with_sensor(copy.deepcopy(env_cfg or EmoNavConfig()), cfg.sensor)
+    env_cfg = with_run_world(copy.deepcopy(env_cfg or EmoNavConfig()), cfg)
     if resume:
         state, tensors = read_run_state(out / STATE_FILE, SARL_STATE_FORMAT)
         # a run saved before a field existed ran with that field's value here
