@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import emonav_drake.systems.crowd_tracker_system as tracker_system
+import emonav_drake.sensing.crowd_perception as crowd_perception
 from emonav_drake.errors import UsageError, UserError
 from emonav_drake.typed_yaml import ConfigError
 from tests.cli_errors import run
@@ -24,12 +24,12 @@ SIM = ("sim", "--plant", "lip", "--planner", "dwa", "--seed", "1", "--state-sour
 )
 def test_an_exception_deep_inside_a_simulation_is_an_internal_error(capsys, monkeypatch, error):
     """The LiDAR detector raising inside the diagram's tracker (what a singular circle fit
-    did on a wall piece) ends `sim` with exit 1 and the bug message."""
+    did on a wall piece; the detector runs in `sensing/crowd_perception.py`) ends `sim` with exit 1 and the bug message."""
 
     def broken(*args, **kwargs):
         raise error
 
-    monkeypatch.setattr(tracker_system, "detect_scan", broken)
+    monkeypatch.setattr(crowd_perception, "detect_scan", broken)
     code, err = run(capsys, *SIM)
     assert code == 1, err
     assert err.startswith(f"emonav: internal error: {type(error).__name__}: ")
