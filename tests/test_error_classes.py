@@ -24,7 +24,8 @@ SIM = ("sim", "--plant", "lip", "--planner", "dwa", "--seed", "1", "--state-sour
 )
 def test_an_exception_deep_inside_a_simulation_is_an_internal_error(capsys, monkeypatch, error):
     """The LiDAR detector raising inside the diagram's tracker (what a singular circle fit
-    did on a wall piece; the detector runs in `sensing/crowd_perception.py`) ends `sim` with exit 1 and the bug message."""
+    did on a wall piece; the detector runs in `sensing/crowd_perception.py`) ends `sim` with
+    exit 1 and the bug message."""
 
     def broken(*args, **kwargs):
         raise error
