@@ -31,6 +31,8 @@ VARIANTS = {
     "lidar_sac": ("scan", 3, 100, {"type": "scan", "frames": 3}),
     "lndnl": ("scan", 3, 100, {"type": "scan_lstm", "frames": 3, "hidden": 8}),
     "drlvo": ("drlvo", 1, 50, {"type": "lgm", "frames": 3, "size": 50, "pool": 2}),
+    # ours (issue 53): 4 LGM frames + the two velocity planes
+    "lgm_vel": ("lgm_vel", 4, 50, {"type": "lgm", "frames": 6, "size": 50, "pool": 2}),
 }
 ENCODERS = {"lgm": LgmEncoder, "scan": ScanEncoder, "scan_lstm": ScanLstmEncoder}
 
@@ -90,7 +92,7 @@ def _env_observations(kind, cfg, seed, actions):
     return out
 
 
-@pytest.mark.parametrize("kind", ["scan", "drlvo", "ogm"])
+@pytest.mark.parametrize("kind", ["scan", "drlvo", "ogm", "lgm_vel"])
 def test_the_diagrams_observation_is_the_envs_bit_for_bit(kind):
     cfg = EmoNavConfig()
     cfg.lidar.num_frames = 4
@@ -111,7 +113,9 @@ def test_the_diagrams_observation_is_the_envs_bit_for_bit(kind):
         got = port.Eval(nav.grid_maps.GetMyContextFromRoot(ctx))
         assert got.dtype == expected[k].dtype and got.shape == expected[k].shape
         assert np.array_equal(got, expected[k]), f"{kind}: step {k}"
-    shape = {"scan": (4, 1800), "drlvo": (1, 3, 100, 100), "ogm": (4, 100, 100)}[kind]
+    shape = {"scan": (4, 1800), "drlvo": (1, 3, 100, 100), "ogm": (4, 100, 100)}
+    shape["lgm_vel"] = (6, 100, 100)
+    shape = shape[kind]
     assert expected[-1].shape == shape and len({f.tobytes() for f in expected}) == steps + 1
 
 

@@ -80,7 +80,10 @@ from emonav_drake.learning.run_state import (
     set_rng_state,
 )
 from emonav_drake.navigation.metrics import format_summary
-from emonav_drake.navigation.observations import observation_dtype, observation_shape
+from emonav_drake.navigation.observations import (
+    observation_dtype,
+    observation_kind,
+)
 from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.model_aware import load_response
@@ -223,7 +226,7 @@ def _start(
     if cfg.init_policy and not resume:
         student.load_weights(cfg.init_policy)
     n_frames = env_cfg.lidar.num_frames
-    frame_shape = observation_shape(cfg.grid_kind, env_cfg.lidar)[1:]
+    frame_shape = observation_kind(cfg.grid_kind).item_shape(env_cfg.lidar)
     demos = Demonstrations(FrameStore(frame_shape, dtype=observation_dtype(cfg.grid_kind).type))
     return DaggerRunState(cfg, env_cfg, student, demos, rng, n_frames), expert, response
 

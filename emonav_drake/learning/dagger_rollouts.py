@@ -16,6 +16,7 @@ from emonav_drake.learning.dagger_student import Student
 from emonav_drake.learning.demonstrations import Demonstrations, command_index
 from emonav_drake.navigation.lip_world import NavigationWorld
 from emonav_drake.navigation.metrics import summarize
+from emonav_drake.navigation.observations import observation_kind
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.policy import vector_state
@@ -43,11 +44,12 @@ def run_episode_collect(
     `goal_input` says (`navigation/goal_input.py`). With `soft` the expert's distribution over
     the grid (`last_distribution`, written by its `plan`) is stored as the soft label."""
     n = world.config.lidar.num_frames
+    kind = observation_kind(world.grid_kind or "lgm")
     expert.reset()  # a model-aware expert remembers the episode's commands
     obs = world.planner_input()
     frame_ids: list[int] = []
     if demos is not None:
-        frame_ids.append(demos.store.add(obs.lgm_stack[-1]))
+        frame_ids.append(demos.store.add(kind.newest(obs.lgm_stack)))
     if student is not None:
         commands = student.commands
     else:
@@ -74,7 +76,7 @@ def run_episode_collect(
             return outcome
         obs = world.planner_input()
         if demos is not None:
-            frame_ids.append(demos.store.add(obs.lgm_stack[-1]))
+            frame_ids.append(demos.store.add(kind.newest(obs.lgm_stack)))
         k += 1
 
 

@@ -62,7 +62,7 @@ class Student:
         ob = meta["observation"]
         if meta["kind"] != "categorical" or (ob["grid_kind"], ob["num_frames"]) != (
             self.grid_kind,
-            self.encoder_spec["frames"] // observation_kind(self.grid_kind).planes_per_frame,
+            observation_kind(self.grid_kind).frames_of(self.encoder_spec["frames"]),
         ):
             raise ConfigError(
                 f"init_policy {path}: a {meta['kind']} policy on {ob['grid_kind']} x "
@@ -97,7 +97,8 @@ class Student:
     ) -> torch.Tensor:
         """Cross-entropy on a batch — on the hard `labels`, or on the soft labels `targets`
         (B, C) when given; rows where `mirror` is True are mirrored left↔right."""
-        return self.loss_on_stacks(frames[windows], states, labels, mirror, targets)
+        stacks = observation_kind(self.grid_kind).from_items(frames[windows])
+        return self.loss_on_stacks(stacks, states, labels, mirror, targets)
 
     def loss_on_stacks(
         self,

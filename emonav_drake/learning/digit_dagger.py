@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from emonav_drake.learning.digit_rounds_config import DigitRoundsConfig, rounds_plain
+from emonav_drake.navigation.observations import observation_kind
 from emonav_drake.params import ConfigError
 from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.policy import vector_state
@@ -77,7 +78,7 @@ class LabellingPlanner:
 
         expert_cmd, memory = self.expert.plan_with_memory(obs, memory)
         label = command_index(self.commands, expert_cmd)
-        self.frames.append(np.array(obs.lgm_stack[-1]))
+        self.frames.append(np.array(observation_kind(self.grid_kind).newest(obs.lgm_stack)))
         self.states.append(
             vector_state(self.student.goal_state(obs), obs.last_command, self.student.bounds)
         )
@@ -387,7 +388,8 @@ def _train_mixed(student, calibrated, digit, cfg: DigitRoundsConfig, rng) -> lis
     for _ in range(cfg.grad_steps):
         i = rng.integers(0, len(dl), n_digit)
         j = rng.integers(0, len(cl), n_cal)
-        stacks = np.concatenate([digit.store.frames[dw[i]], calibrated.store.frames[cw[j]]])
+        items = np.concatenate([digit.store.frames[dw[i]], calibrated.store.frames[cw[j]]])
+        stacks = observation_kind(student.grid_kind).from_items(items)
         states = np.concatenate([ds[i], cs[j]])
         labels = np.concatenate([dl[i], cl[j]])
         targets = np.concatenate([dt[i], ct[j]]) if soft else None

@@ -11,9 +11,13 @@ they refer to: its size grows with the steps stored, not with the capacity.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
+
+if TYPE_CHECKING:
+    from emonav_drake.navigation.observations import ObservationKind
 
 
 class FrameReplayBuffer:
@@ -24,12 +28,22 @@ class FrameReplayBuffer:
         frame_shape: shape of one frame, e.g. (100, 100) (LGM) or (1800,) (LiDAR scan).
         frame_dtype: np.uint8 for grid maps, np.float32 for scans.
         num_frames: N, frames per observation window.
+        kind: the observation kind whose stacks are stored: one item per step
+            (`ObservationKind.newest`, `frame_shape` = its `item_shape`) and the stacks
+            rebuilt from windows of items (`from_items`); None: a frame is the stack's
+            last row and a window of N frames is the observation.
     """
 
     def __init__(
-        self, capacity: int, frame_shape: tuple[int, ...], frame_dtype: type, num_frames: int
+        self,
+        capacity: int,
+        frame_shape: tuple[int, ...],
+        frame_dtype: type,
+        num_frames: int,
+        kind: ObservationKind | None = None,
     ) -> None:
         self.capacity, self.num_frames = capacity, num_frames
+        self.kind = kind
         self.frames = np.zeros((2 * capacity + 2 * num_frames + 2, *frame_shape), frame_dtype)
         self.next_frame = 0
         self.obs_ids = np.zeros((capacity, num_frames), np.int64)
@@ -41,6 +55,14 @@ class FrameReplayBuffer:
         self.not_done = np.zeros((capacity, 1), np.float32)
         self.size = 0
         self.pos = 0
+
+    def newest(self, stack: np.ndarray) -> np.ndarray:
+        """The frame a buffer keeps of an observation `stack` (its newest item)."""
+        return stack[-1] if self.kind is None else self.kind.newest(stack)
+
+    def stack_of(self, windows: np.ndarray) -> np.ndarray:
+        """Observations from windows of frames (B, N, *frame_shape)."""
+        return windows if self.kind is None else self.kind.from_items(windows)
 
     def add_frame(self, frame: np.ndarray) -> int:
         """Store one frame; returns its id."""
@@ -77,11 +99,11 @@ class FrameReplayBuffer:
             return torch.from_numpy(a).to(device)
 
         return {
-            "obs": t(self.frames[self.obs_ids[idx]]),
+            "obs": t(self.stack_of(self.frames[self.obs_ids[idx]])),
             "state": t(self.state[idx]),
             "action": t(self.action[idx]),
             "reward": t(self.reward[idx]),
-            "next_obs": t(self.frames[self.next_ids[idx]]),
+            "next_obs": t(self.stack_of(self.frames[self.next_ids[idx]])),
             "next_state": t(self.next_state[idx]),
             "not_done": t(self.not_done[idx]),
         }

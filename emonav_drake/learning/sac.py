@@ -41,8 +41,8 @@ def make_encoder(cfg: SacConfig, beams: int = NUM_BEAMS, max_range: float = 6.0)
         return ScanLstmEncoder(cfg.num_frames, beams, max_range, cfg.features)
     if kind.scans:
         return ScanEncoder(cfg.num_frames, beams, max_range, cfg.features, cfg.filters)
-    # a 2-D CNN on the frames' planes (DRL-VO*: the image's 3 channels)
-    planes = kind.planes_per_frame * cfg.num_frames
+    # a 2-D CNN on the stack's planes (DRL-VO*: the image's 3 channels)
+    planes = kind.planes(cfg.num_frames)
     return LgmEncoder(planes, cfg.grid_size, cfg.features, cfg.filters, cfg.pool)
 
 

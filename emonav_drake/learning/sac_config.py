@@ -75,7 +75,8 @@ class SacConfig(TrainingRunConfig):
     grid_kind: str = setting(
         "lgm",
         'observation variant: "lgm" (paper), "ogm" (OGM baseline), "scan" (LiDAR-SAC; with '
-        'encoder "lstm": LNDNL), "drlvo" (DRL-VO*); num_frames 1 = Single-LGM',
+        'encoder "lstm": LNDNL), "drlvo" (DRL-VO*), "lgm_vel" (the LGM stack + the '
+        "pedestrians' velocities now); num_frames 1 = Single-LGM",
     )
     num_frames: int = setting(9, "N, frames in the stack", "", NUM_FRAMES)
     grid_size: int = setting(

@@ -60,6 +60,7 @@ from emonav_drake.learning.sac_curve import (
     truncate_curve,
 )
 from emonav_drake.navigation.metrics import record_from_json, summarize
+from emonav_drake.navigation.observations import observation_kind
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import encoder_spec, save_policy, vector_state
 from emonav_drake.progress import progress_bar
@@ -77,13 +78,13 @@ class _Episode:
     def __init__(self, replay: FrameReplayBuffer, obs: dict, bounds: tuple[float, float]):
         self.replay, self.bounds = replay, bounds
         self.key = next(k for k in ("scan", "image", "lgm") if k in obs)
-        fid = replay.add_frame(obs[self.key][-1])
+        fid = replay.add_frame(replay.newest(obs[self.key]))
         self.window = np.full(replay.num_frames, fid, np.int64)
         self.state = vector_state(obs["goal"], obs["last_action"], bounds)
         self.obs = obs[self.key]
 
     def advance(self, obs: dict) -> None:
-        fid = self.replay.add_frame(obs[self.key][-1])
+        fid = self.replay.add_frame(self.replay.newest(obs[self.key]))
         self.window = np.r_[self.window[1:], fid]
         self.state = vector_state(obs["goal"], obs["last_action"], self.bounds)
         self.obs = obs[self.key]
@@ -285,8 +286,13 @@ class _Run:
         self.bounds = (env.config.robot.max_speed, env.config.robot.max_heading_change)
         self.agent = SacAgent(cfg, self.bounds)
         space = env.observation_space[env.map_key]
+        kind = observation_kind(cfg.grid_kind)
         self.replay = FrameReplayBuffer(
-            cfg.replay_size, space.shape[1:], space.dtype.type, cfg.num_frames
+            cfg.replay_size,
+            kind.item_shape(env.config.lidar),
+            space.dtype.type,
+            cfg.num_frames,
+            kind,
         )
         self.curve = out / CURVE
         self.n_envs = len(envs)

@@ -202,10 +202,10 @@ class NavigationWorld:
         if config.perception.state_source == "lidar":
             self.perception = CrowdPerception(config, scenario.wall_segments())
         self._rings_tracks = self.perception is not None and config.perception.map_rings == "tracks"
-        if self._rings_tracks and grid_kind == "drlvo":
+        if self._rings_tracks and grid_kind and observation_kind(grid_kind).refuses_perceived:
             raise ValueError(
                 "perception.map_rings = tracks rings the tracked pedestrians in the grid maps; "
-                "the drlvo observation cannot take them"
+                f"the {grid_kind} observation cannot take them"
             )
         self.route: RouteFollower | None = None
         if uses_route(scenario, config, global_route):
@@ -397,12 +397,7 @@ class NavigationWorld:
                     f"saved frames are {frames.dtype} {frames.shape}, this world's "
                     f"{current.dtype} {current.shape}"
                 )
-            if observation_kind(self.grid_kind).single_frame:
-                self.frames.reset(np.array(frames))
-            else:  # reset to the oldest frame, then push the others: the same stack
-                self.frames.reset(frames[0])
-                for f in frames[1:]:
-                    self.frames.push(f)
+            self.frames.load(np.array(frames))
 
     def step(self, command: np.ndarray) -> tuple[StepEvaluation, str | None]:
         """Walk one step with a valid command; returns its evaluation and the outcome

@@ -9,6 +9,14 @@ t_k and the crowd at t_k, oldest first:
     "ogm"    OGM (Cartesian occupancy grid)   uint8 (M, M)      uint8 (N, M, M)
     "scan"   LiDAR-SAC, LNDNL (ranges [m])    float32 (K,)      float32 (N, K)
     "drlvo"  DRL-VO* (scan OGM + ped. v map)  uint8 (3, M, M)   uint8 (1, 3, M, M)
+    "lgm_vel" LGM + pedestrians' velocities   uint8 (3, M, M)   uint8 (N + 2, M, M)
+
+"lgm_vel" (ours, not the paper's) is the LGM stack followed by two planes of the current
+step on the LGM's polar grid: the v_x and v_y (robot frame) of the pedestrian covering
+each cell (`sensing/kinematic_maps.py::lgm_velocity_planes`) — of the tracked pedestrians
+when the maps ring the tracks (`perception.map_rings: tracks`), else of the simulator's.
+It tells the policy who is walking where, which the occupancy history shows only through
+its frames' differences.
 
 Everything that depends on the kind asks its `ObservationKind`: the environments
 (`NavigationWorld`, `EmoNavLIP-v0`, `EmoNavDigit-v0`), the diagram's
@@ -36,11 +44,18 @@ from emonav_drake.crowd.crowd import CrowdSnapshot, obstacle_discs
 from emonav_drake.params import EmoNavConfig, LidarParams
 from emonav_drake.registry import Registry
 from emonav_drake.sensing.grid_maps import FrameStack, lgm_frame, lgm_from_ranges, ogm_from_ranges
-from emonav_drake.sensing.kinematic_maps import drlvo_image, drlvo_image_from_ranges
+from emonav_drake.sensing.kinematic_maps import (
+    drlvo_image,
+    drlvo_image_from_ranges,
+    lgm_velocity_planes,
+)
 from emonav_drake.sensing.lidar_sensor import inflated_ranges, sensed_ranges
 
 if TYPE_CHECKING:
     from emonav_drake.robot.lip import LipState
+
+# `ringed_frame(robot, crowd, config, perceived)` (`ObservationKind.ringed_frame`)
+RingedFrame = Callable[["LipState", CrowdSnapshot, EmoNavConfig, CrowdSnapshot], np.ndarray]
 
 
 class ScanStack:
@@ -58,6 +73,10 @@ class ScanStack:
         self._scans[-1] = scan
         return self.array
 
+    def load(self, scans: np.ndarray) -> None:
+        """Restore a saved `array` (N, K)."""
+        self._scans[:] = scans
+
     @property
     def array(self) -> np.ndarray:
         return self._scans.copy()
@@ -72,9 +91,44 @@ class LatestFrame:
 
     push = reset
 
+    def load(self, frame: np.ndarray) -> None:
+        """Restore a saved `array`."""
+        self._frame = np.array(frame)
+
     @property
     def array(self) -> np.ndarray:
         return self._frame.copy()
+
+
+class PlanesStack:
+    """A grid stack with extra planes of the present (`ObservationKind.extra_planes`): the
+    first plane of the last N frames, oldest first, then the newest frame's other planes —
+    uint8 (N + E, M, M). An item is one (1 + E, M, M) frame ("lgm_vel": the LGM, then v_x
+    and v_y, `sensing/kinematic_maps.py::lgm_velocity_planes`)."""
+
+    def __init__(self, num_frames: int, grid_size: int, extra_planes: int) -> None:
+        self._frames = FrameStack(num_frames, grid_size)
+        self._extra = np.zeros((extra_planes, grid_size, grid_size), np.uint8)
+
+    def reset(self, item: np.ndarray) -> np.ndarray:
+        self._frames.reset(item[0])
+        self._extra = np.array(item[1:], np.uint8)
+        return self.array
+
+    def push(self, item: np.ndarray) -> np.ndarray:
+        self._frames.push(item[0])
+        self._extra = np.array(item[1:], np.uint8)
+        return self.array
+
+    def load(self, stack: np.ndarray) -> None:
+        """Restore a saved `array` (N + E, M, M)."""
+        n = self._frames.num_frames
+        self._frames.load(stack[:n])
+        self._extra = np.array(stack[n:], np.uint8)
+
+    @property
+    def array(self) -> np.ndarray:
+        return np.concatenate([self._frames.array, self._extra], axis=0)
 
 
 @dc.dataclass(frozen=True)
@@ -90,8 +144,9 @@ class ObservationKind:
         shape: `shape(lidar)` → the stack's shape (`LidarParams`: N, M, K).
         dtype: the stack's dtype.
         high: `high(lidar)` → the largest value (the observation space's bound; low is 0).
-        new_stack: `new_stack(lidar)` → an empty stack (`reset(item)`, `push(item)`,
-            `array`).
+        new_stack: `new_stack(lidar)` → an empty stack: `reset(item)` fills it with the
+            first item, `push(item)` appends one (`stack_item` of a frame), `array` the
+            observation (a copy), `load(array)` restores a saved `array`.
         mirror: the observation of the left-right mirrored world (y → −y in the robot
             frame), on a frame, a stack or a batch of stacks; returns a new array.
         lidar_for: `lidar_for(shape, lidar)` → the `LidarParams` fields (num_frames,
@@ -100,6 +155,16 @@ class ObservationKind:
         single_frame: the stack is the current frame only (no history; num_frames 1).
         planes_per_frame: input planes each frame gives a 2-D CNN encoder.
         scans: a 1-D range signal (scan encoders), not an image (2-D CNN).
+        extra_planes: a grid kind whose frame is (1 + extra_planes, M, M): its stack holds
+            the first plane of each of the N frames, then the newest frame's other planes
+            ("lgm_vel": the LGM of N steps, then v_x and v_y now). Stores that keep one
+            item per step (DAgger's frames, the SAC replay) keep the whole frame
+            (`item_shape`, `newest`) and rebuild the stack (`from_items`).
+        ringed_frame: `ringed_frame(robot, crowd, config, perceived)` → the frame whose
+            discomfort rings (and velocities) are those of the perceived crowd `perceived`
+            while the real scan stays `crowd`'s; None: the kind has no rings.
+        refuses_perceived: the kind cannot take a perceived crowd (`ValueError` when one
+            is given) rather than ignore it.
     """
 
     name: str
@@ -115,6 +180,32 @@ class ObservationKind:
     single_frame: bool = False
     planes_per_frame: int = 1
     scans: bool = False
+    extra_planes: int = 0
+    ringed_frame: RingedFrame | None = None
+    refuses_perceived: bool = False
+
+    def planes(self, num_frames: int) -> int:
+        """Input planes (channels) of a 2-D CNN encoder on a stack of `num_frames`."""
+        return num_frames * self.planes_per_frame + self.extra_planes
+
+    def frames_of(self, planes: int) -> int:
+        """The number of frames of a stack of `planes` planes (`planes` inverted)."""
+        return (planes - self.extra_planes) // self.planes_per_frame
+
+    def item_shape(self, lidar: LidarParams) -> tuple[int, ...]:
+        """The shape of what a store keeps per step (the stack holds N of them)."""
+        shape = self.shape(lidar)[1:]
+        return (1 + self.extra_planes, *shape) if self.extra_planes else shape
+
+    def newest(self, stack: np.ndarray) -> np.ndarray:
+        """The newest item of a stack (the frame seen now, as a store keeps it)."""
+        return stack[-1 - self.extra_planes :] if self.extra_planes else stack[-1]
+
+    def from_items(self, items: np.ndarray) -> np.ndarray:
+        """Stacks from windows of items (…, N, *item_shape), oldest first → (…, *shape)."""
+        if not self.extra_planes:
+            return items
+        return np.concatenate([items[..., 0, :, :], items[..., -1, 1:, :, :]], axis=-3)
 
     def stack_item(self, frame: np.ndarray) -> np.ndarray:
         """What one frame is in the stack (a single-frame kind stores the whole (1, …))."""
@@ -181,14 +272,16 @@ def observation_frame(
     `inflation`: the crowd whose discs (grown by their discomfort margins) make the grid
     maps' inflated layer instead of `crowd`'s — e.g. the pedestrians as the robot tracks
     them, with the emotions it keeps for them — while the real scan stays `crowd`'s (the
-    world the LiDAR sees). Grid kinds ("lgm", "ogm") only; kinds without an inflated
-    layer ignore it; "drlvo" refuses it."""
+    world the LiDAR sees); with "lgm_vel" the velocity planes are its pedestrians' too.
+    Kinds without rings ("scan") ignore it; "drlvo" refuses it."""
     k = observation_kind(kind)
-    if inflation is None or kind not in ("lgm", "ogm", "drlvo"):
+    if inflation is None:
         return k.frame(robot, crowd, config)
-    if kind == "drlvo":
-        raise ValueError("the drlvo kind's maps cannot take a perceived crowd's inflation")
-    return _grid_from_ranges(kind, robot, crowd, inflation, config)
+    if k.refuses_perceived:
+        raise ValueError(f"the {kind} kind's maps cannot take a perceived crowd's inflation")
+    if k.ringed_frame is None:
+        return k.frame(robot, crowd, config)
+    return k.ringed_frame(robot, crowd, config, inflation)
 
 
 def _grid_from_ranges(
@@ -274,6 +367,54 @@ def _drlvo_frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) ->
     )
 
 
+def _ringed_grid_frame(kind: str) -> RingedFrame:
+    def frame(
+        robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig, perceived: CrowdSnapshot
+    ) -> np.ndarray:
+        return _grid_from_ranges(kind, robot, crowd, perceived, config)
+
+    return frame
+
+
+def _velocity_planes(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
+    li = config.lidar
+    return lgm_velocity_planes(
+        np.array([robot.x, robot.y]),
+        robot.heading,
+        crowd.positions,
+        crowd.velocities,
+        crowd.radius,
+        li.num_beams,
+        li.grid_size,
+        li.max_range,
+    )
+
+
+def _lgm_vel_frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
+    lgm = _grid_frame("lgm")(robot, crowd, config)
+    return np.concatenate([lgm[None], _velocity_planes(robot, crowd, config)], axis=0)
+
+
+def _ringed_lgm_vel_frame(
+    robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig, perceived: CrowdSnapshot
+) -> np.ndarray:
+    lgm = _grid_from_ranges("lgm", robot, crowd, perceived, config)
+    return np.concatenate([lgm[None], _velocity_planes(robot, perceived, config)], axis=0)
+
+
+def _mirror_lgm_vel(x: np.ndarray) -> np.ndarray:
+    """ "lgm_vel" (…, N + 2, M, M): sectors reversed in every plane (`_mirror_rows`) and the
+    v_y plane (the last) negated about its zero, 128 (256 − value, at most 255)."""
+    out = _mirror_rows(x)
+    vy = out[..., -1, :, :]
+    out[..., -1, :, :] = np.minimum(256 - vy.astype(np.int16), 255).astype(np.uint8)
+    return out
+
+
+def _lgm_vel_lidar(shape: tuple[int, ...], li: LidarParams) -> dict[str, int]:
+    return {"num_frames": shape[0] - 2, "grid_size": shape[1]}
+
+
 def _mirror_rows(x: np.ndarray) -> np.ndarray:
     """LGM (…, M, M): sector i ↔ M − 1 − i (rows; beam i ↔ K − 1 − i)."""
     return np.ascontiguousarray(x[..., ::-1, :])
@@ -340,6 +481,7 @@ register_observation(
         _grid_stack,
         _mirror_rows,
         _grid_lidar,
+        ringed_frame=_ringed_grid_frame("lgm"),
     )
 )
 register_observation(
@@ -354,6 +496,7 @@ register_observation(
         _grid_stack,
         _mirror_last_axis,
         _grid_lidar,
+        ringed_frame=_ringed_grid_frame("ogm"),
     )
 )
 register_observation(
@@ -385,5 +528,22 @@ register_observation(
         _drlvo_lidar,
         single_frame=True,
         planes_per_frame=3,
+        refuses_perceived=True,
+    )
+)
+register_observation(
+    ObservationKind(
+        "lgm_vel",
+        "LiDAR grid maps + pedestrians' velocities",
+        "lgm",
+        _lgm_vel_frame,
+        lambda li: (li.num_frames + 2, li.grid_size, li.grid_size),
+        np.dtype(np.uint8),
+        _byte_max,
+        lambda li: PlanesStack(li.num_frames, li.grid_size, 2),
+        _mirror_lgm_vel,
+        _lgm_vel_lidar,
+        extra_planes=2,
+        ringed_frame=_ringed_lgm_vel_frame,
     )
 )

@@ -88,7 +88,8 @@ def encoder_spec(
     """The checkpoint's encoder description for an observation variant (`build_encoder`).
 
     "scan" with encoder "lstm" → LSTM over scans (LNDNL); "scan" → 1-D CNN (LiDAR-SAC);
-    every grid kind → the paper's 2-D CNN on N (DRL-VO*: 3 N) planes of M × M cells.
+    every grid kind → the paper's 2-D CNN on N (DRL-VO*: 3 N; "lgm_vel": N + 2) planes of
+    M × M cells.
     """
     kind = observation_kind(grid_kind)
     if kind.scans and encoder == "lstm":
@@ -97,7 +98,7 @@ def encoder_spec(
         return {"type": "scan", "frames": num_frames, "features": features, "filters": filters}
     return {
         "type": "lgm",
-        "frames": num_frames * kind.planes_per_frame,
+        "frames": kind.planes(num_frames),
         "size": grid_size,
         "features": features,
         "filters": filters,
@@ -172,7 +173,7 @@ def _check_meta(path: Path, blob: dict) -> None:
     ):
         raise bad("bounds", f"= {b!r} is invalid: must be [max_speed, max_heading_change] > 0")
     if enc["type"] == "lgm":
-        planes = ob["num_frames"] * observation_kind(ob["grid_kind"]).planes_per_frame
+        planes = observation_kind(ob["grid_kind"]).planes(ob["num_frames"])
         if "size" in enc and enc["size"] != ob["grid_size"]:
             raise bad(
                 "observation.grid_size",
@@ -250,7 +251,7 @@ def probe_input(meta: dict[str, Any]) -> tuple[torch.Tensor, torch.Tensor]:
     """A zero observation of the shape the checkpoint declares (uint8 stack, vector state)."""
     ob = meta["observation"]
     kind = observation_kind(ob["grid_kind"])
-    frames, size = ob["num_frames"] * kind.planes_per_frame, ob["grid_size"]
+    frames, size = kind.planes(ob["num_frames"]), ob["grid_size"]
     if kind.scans:
         beams = meta["encoder"].get("beams", NUM_BEAMS)
         return torch.zeros(1, frames, beams), torch.zeros(1, 4)

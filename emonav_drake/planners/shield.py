@@ -16,6 +16,7 @@ import dataclasses as dc
 import numpy as np
 
 from emonav_drake.navigation.lip_world import PlannerInput
+from emonav_drake.navigation.observations import observation_kind
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners.policy import (
     PolicyError,
@@ -104,12 +105,13 @@ class ShieldedPolicy(WrappedPolicy):
         response: StepResponseModel | None = None,
         params: ShieldParams | None = None,
     ) -> None:
-        if policy.meta["kind"] != "categorical" or policy.grid_kind != "lgm":
+        if policy.meta["kind"] != "categorical" or policy.grid_kind not in ("lgm", "lgm_vel"):
             raise PolicyError(
                 f"the LGM shield needs a categorical policy reading the LGM; {policy.path.name} "
                 f"is a {describe_policy(policy.meta)} reading {policy.grid_kind!r}"
             )
         self.policy = policy
+        self._newest_lgm = -1 - observation_kind(policy.grid_kind).extra_planes  # stack row
         self.config = config
         self.response = response
         self.params = params if params is not None else ShieldParams()
@@ -222,7 +224,7 @@ class ShieldedPolicy(WrappedPolicy):
         scores less the comfort penalty (`comfort_weight`), the next memory) for the
         checked observation `stack` and the policy's `scores` (C,)."""
         li = self.config.lidar
-        points = lgm_hit_points(stack[-1], li.num_beams, li.max_range)
+        points = lgm_hit_points(stack[self._newest_lgm], li.num_beams, li.max_range)
         rb = obs.robot
         pose = np.array([rb.x, rb.y, rb.heading])
         margins, world, moving = self.point_margins(points, pose, memory)

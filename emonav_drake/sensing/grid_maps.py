@@ -363,6 +363,14 @@ class FrameStack:
         self._frames[-1] = f
         return self.array
 
+    def load(self, frames: object) -> None:
+        """Restore a saved `array` (uint8 (N, M, M), oldest first)."""
+        f = np.asarray(frames)
+        if f.shape != self._frames.shape or f.dtype != np.uint8:
+            raise ValueError(f"frames must be uint8 {self._frames.shape}, got {f.dtype} {f.shape}")
+        self._frames[:] = f
+        self._started = True
+
     @property
     def array(self) -> np.ndarray:
         """The stack, uint8 (N, M, M), oldest first, newest last (a copy)."""

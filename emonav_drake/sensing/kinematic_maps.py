@@ -17,11 +17,13 @@ frame stack.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 
 from emonav_drake.params import NUM_BEAMS
 from emonav_drake.sensing.grid_maps import lgm_frame, ogm_from_ranges
+from emonav_drake.sensing.lidar import beam_table
 
 
 def pedestrian_velocity_map(
@@ -121,3 +123,60 @@ def drlvo_image_from_ranges(
         robot_xy, heading, ped_positions, ped_velocities, ped_radius, grid_size, max_range
     )
     return image
+
+
+# The velocity planes of the "lgm_vel" observation saturate at this speed [m/s]: above the
+# fastest crowd family's pedestrians, 1.6 cm/s per level.
+LGM_VELOCITY_MAX_SPEED = 2.0
+
+
+@lru_cache(maxsize=8)
+def _lgm_cell_centres(num_beams: int, grid_size: int, max_range: float) -> np.ndarray:
+    """(M, M, 2) robot-frame (x forward, y left) centre [m] of every LGM cell: row i the
+    mean beam angle of sector i, column j the middle of ring j. Read-only."""
+    angles, _, _ = beam_table(num_beams)
+    sector = angles.reshape(grid_size, num_beams // grid_size).mean(axis=1)  # (M,)
+    ring = (np.arange(grid_size) + 0.5) * (max_range / grid_size)  # (M,)
+    centres = np.empty((grid_size, grid_size, 2))
+    centres[..., 0] = np.cos(sector)[:, None] * ring[None, :]
+    centres[..., 1] = np.sin(sector)[:, None] * ring[None, :]
+    centres.flags.writeable = False
+    return centres
+
+
+def lgm_velocity_planes(
+    robot_xy: np.ndarray,
+    heading: float,
+    positions: np.ndarray,
+    velocities: np.ndarray,
+    radius: float,
+    num_beams: int = NUM_BEAMS,
+    grid_size: int = 100,
+    max_range: float = 6.0,
+    max_speed: float = LGM_VELOCITY_MAX_SPEED,
+) -> np.ndarray:
+    """uint8 (2, M, M): the pedestrians' velocities on the LGM's polar grid (row = angular
+    sector, column = ring; `sensing/grid_maps.py`). A cell whose centre lies inside a
+    pedestrian's disc (`radius` [m]) holds that pedestrian's velocity in the robot frame,
+    v_x forward in plane 0 and v_y left in plane 1, as 128 + 127·v/`max_speed` (clipped);
+    128 elsewhere (at rest or nobody). Where discs overlap, the later pedestrian's.
+    Positions [m] and velocities [m/s] (P, 2) in the world frame; the robot at `robot_xy`
+    [m] looking along `heading` [rad]."""
+    out = np.full((2, grid_size, grid_size), 128, np.uint8)
+    positions = np.asarray(positions, float).reshape(-1, 2)
+    if len(positions) == 0:
+        return out
+    c, s = math.cos(heading), math.sin(heading)
+    rot = np.array([[c, s], [-s, c]])  # world → robot
+    rel = (positions - np.asarray(robot_xy, float)) @ rot.T
+    vel = np.asarray(velocities, float).reshape(-1, 2) @ rot.T
+    centres = _lgm_cell_centres(num_beams, grid_size, float(max_range))
+    codes = np.clip(np.rint(128 + 127 * vel / max_speed), 0, 255).astype(np.uint8)
+    for p, code in zip(rel, codes, strict=True):
+        if math.hypot(p[0], p[1]) > max_range + radius:
+            continue
+        d = centres - p
+        inside = d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1] <= radius * radius
+        out[0][inside] = code[0]
+        out[1][inside] = code[1]
+    return out

@@ -15,7 +15,8 @@ Input ports:
         perceives them (the LiDAR tracker's crowd, with the emotions it keeps per track):
         when connected, the grid maps' inflated layer rings these pedestrians with their
         perceived discomfort distances (the static discs and walls stay `crowd`'s), while
-        the real scan stays `crowd`'s. Grid kinds ("lgm", "ogm") only.
+        the real scan stays `crowd`'s ("lgm_vel": its velocity planes too). Kinds with
+        rings only ("lgm", "ogm", "lgm_vel"; "drlvo" refuses it).
 Output ports:
     lgm_stack (abstract numpy array): the map observation, robot frame, oldest first —
         the N − 1 frames stored at the previous walking steps followed by the frame seen
@@ -27,16 +28,23 @@ Output ports:
             "scan"  float32 (N, K): raw ranges [m] in [min_range, max_range]
                     (LiDAR-SAC; LNDNL min-pools and normalises them in its encoder);
             "drlvo" uint8 (1, 3, M, M): scan OGM + pedestrian velocity map (DRL-VO*,
-                    `sensing/kinematic_maps.py`); no stack, the current image only.
+                    `sensing/kinematic_maps.py`); no stack, the current image only;
+            "lgm_vel" uint8 (N + 2, M, M): the LGM stack, then the v_x and v_y planes
+                    of the pedestrians now on the LGM's polar grid (robot frame).
     scan (K): the LiDAR ranges now [m], float64, clipped to [0.27, 6.0]: the configured
         sensor's scan (`sensing/lidar_sensor.py::sensed_ranges`, the same real scan as the
         maps' 255 layer and the "scan" observation; its noise is drawn from the sensor's
         seed and the crowd's scenario seed and time, so a re-evaluation gives the same
         ranges). The crowd tracker reads it; the visualiser draws it.
-Abstract state: the stored frames, pushed at every walking step t_k = kT.
+Abstract state: the kind's stack (`ObservationKind.new_stack`), the frame seen at every
+walking step t_k = kT pushed on it.
 """
 
 from __future__ import annotations
+
+import copy
+import dataclasses as dc
+from typing import Any
 
 import numpy as np
 from pydrake.common.value import AbstractValue
@@ -46,12 +54,21 @@ from emonav_drake.navigation.observations import (
     check_observation_kind,
     observation_dtype,
     observation_frame,
+    observation_kind,
     observation_shape,
 )
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.sensing.crowd_perception import perceived_inflation
 from emonav_drake.sensing.lidar_sensor import sensed_ranges
 from emonav_drake.systems.lip_robot_plant import lip_state_from_vector
+
+
+@dc.dataclass(frozen=True)
+class _Stored:
+    """The abstract state's value: the stack, None before the first walking step (a
+    wrapper, so that Drake holds one Python object whatever the kind's stack is)."""
+
+    stack: Any
 
 
 class LidarGridMapBuilder(LeafSystem):
@@ -68,11 +85,9 @@ class LidarGridMapBuilder(LeafSystem):
         self._config, self._kind = config, check_observation_kind(kind)
         self.shape = observation_shape(kind, config.lidar)  # of `lgm_stack`
         self.dtype = observation_dtype(kind)
-        frame_shape = self.shape[1:]  # one frame: the stack is (depth, *frame_shape)
-        # Stored frames (depth − 1 of them, oldest first); empty until the first step.
-        self._frames = self.DeclareAbstractState(
-            AbstractValue.Make(np.zeros((0, *frame_shape), self.dtype))
-        )
+        self._observation = observation_kind(kind)
+        # The kind's stack as it stood after the last walking step; None before the first.
+        self._stored = self.DeclareAbstractState(AbstractValue.Make(_Stored(None)))
         self._robot_in = self.DeclareVectorInputPort("robot_state", 4)
         self._crowd_in = self.DeclareAbstractInputPort("crowd", AbstractValue.Make(object()))
         self._perceived_in = self.DeclareAbstractInputPort(
@@ -80,9 +95,7 @@ class LidarGridMapBuilder(LeafSystem):
         )
         self._frame_cache = self.DeclareCacheEntry(
             "frame",
-            ValueProducer(
-                lambda: AbstractValue.Make(np.zeros(frame_shape, self.dtype)), self._calc_frame
-            ),
+            ValueProducer(lambda: AbstractValue.Make(np.zeros(0, self.dtype)), self._calc_frame),
             {self.all_input_ports_ticket()},
         )
         self.DeclareAbstractOutputPort(
@@ -111,18 +124,24 @@ class LidarGridMapBuilder(LeafSystem):
             inflation = perceived_inflation(crowd, self._perceived_in.Eval(context))
         value.set_value(observation_frame(robot, crowd, self._config, self._kind, inflation))
 
-    def _stack(self, context: Context) -> np.ndarray:
-        frame = self._frame_cache.Eval(context)
-        stored = context.get_abstract_state(self._frames).get_value()
-        if len(stored) == 0:
-            return np.repeat(frame[None], self.shape[0], axis=0)
-        return np.concatenate([stored, frame[None]], axis=0)
+    def _stacked(self, context: Context) -> Any:
+        """The kind's stack with the frame seen now pushed (a new object: the stored one
+        is not touched); the stack of the current frame repeated before the first step."""
+        item = self._observation.stack_item(self._frame_cache.Eval(context))
+        stored = context.get_abstract_state(self._stored).get_value().stack
+        if stored is None:
+            stack = self._observation.new_stack(self._config.lidar)
+            stack.reset(item)
+        else:
+            stack = copy.deepcopy(stored)
+            stack.push(item)
+        return stack
 
     def _calc_stack(self, context: Context, output: AbstractValue) -> None:
-        output.set_value(self._stack(context))
+        output.set_value(self._stacked(context).array)
 
     def _push(self, context: Context, state: State) -> None:
-        state.get_mutable_abstract_state(self._frames).set_value(self._stack(context)[1:].copy())
+        state.get_mutable_abstract_state(self._stored).set_value(_Stored(self._stacked(context)))
 
     def _calc_scan(self, context: Context, output: BasicVector) -> None:
         robot = lip_state_from_vector(self._robot_in.Eval(context))
