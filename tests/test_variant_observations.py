@@ -18,7 +18,13 @@ from emonav_drake.diagrams.navigation import build_navigation_diagram
 from emonav_drake.learning.env import EmoNavLIPEnv
 from emonav_drake.params import EmoNavConfig
 from emonav_drake.planners import configure_for
-from emonav_drake.planners.networks import Actor, LgmEncoder, ScanEncoder, ScanLstmEncoder
+from emonav_drake.planners.networks import (
+    Actor,
+    LgmEncoder,
+    LgmTracksEncoder,
+    ScanEncoder,
+    ScanLstmEncoder,
+)
 from emonav_drake.planners.policy import PolicyPlanner, save_policy
 from emonav_drake.planners.replay import ReplayPlanner
 from emonav_drake.scenarios.scenario import sample_scenario
@@ -33,8 +39,20 @@ VARIANTS = {
     "drlvo": ("drlvo", 1, 50, {"type": "lgm", "frames": 3, "size": 50, "pool": 2}),
     # ours (issue 53): 4 LGM frames + the two velocity planes
     "lgm_vel": ("lgm_vel", 4, 50, {"type": "lgm", "frames": 6, "size": 50, "pool": 2}),
+    # ours: 4 LGM frames + the pedestrians' table, read by its own MLP
+    "lgm_tracks": (
+        "lgm_tracks",
+        4,
+        50,
+        {"type": "lgm_tracks", "frames": 5, "size": 50, "pool": 2, "tracks": 8},
+    ),
 }
-ENCODERS = {"lgm": LgmEncoder, "scan": ScanEncoder, "scan_lstm": ScanLstmEncoder}
+ENCODERS = {
+    "lgm": LgmEncoder,
+    "lgm_tracks": LgmTracksEncoder,
+    "scan": ScanEncoder,
+    "scan_lstm": ScanLstmEncoder,
+}
 
 
 def make_checkpoint(path, name: str, seed: int = 0):
@@ -92,7 +110,7 @@ def _env_observations(kind, cfg, seed, actions):
     return out
 
 
-@pytest.mark.parametrize("kind", ["scan", "drlvo", "ogm", "lgm_vel"])
+@pytest.mark.parametrize("kind", ["scan", "drlvo", "ogm", "lgm_vel", "lgm_tracks"])
 def test_the_diagrams_observation_is_the_envs_bit_for_bit(kind):
     cfg = EmoNavConfig()
     cfg.lidar.num_frames = 4
@@ -114,7 +132,7 @@ def test_the_diagrams_observation_is_the_envs_bit_for_bit(kind):
         assert got.dtype == expected[k].dtype and got.shape == expected[k].shape
         assert np.array_equal(got, expected[k]), f"{kind}: step {k}"
     shape = {"scan": (4, 1800), "drlvo": (1, 3, 100, 100), "ogm": (4, 100, 100)}
-    shape["lgm_vel"] = (6, 100, 100)
+    shape["lgm_vel"], shape["lgm_tracks"] = (6, 100, 100), (5, 100, 100)
     shape = shape[kind]
     assert expected[-1].shape == shape and len({f.tobytes() for f in expected}) == steps + 1
 

@@ -90,7 +90,8 @@ class DaggerConfig(TrainingRunConfig):
         "lgm",
         'observation variant, as in `SacConfig`: "lgm" (paper), "ogm", "scan" (LiDAR-SAC; '
         'with encoder "lstm": LNDNL), "drlvo" (DRL-VO*, num_frames 1), "lgm_vel" (the LGM '
-        "stack + the pedestrians' velocities now)",
+        'stack + the pedestrians\' velocities now), "lgm_tracks" (the LGM stack + a table of '
+        "the nearest pedestrians, read by its own MLP)",
     )
     num_frames: int = _setting(9, "N, frames in the stack; 1 = Single-LGM", "", NUM_FRAMES)
     encoder: str = _setting("cnn", '"cnn"; "lstm" with grid_kind "scan" = LNDNL')

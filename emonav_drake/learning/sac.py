@@ -32,6 +32,7 @@ from emonav_drake.planners.networks import (
     ScanEncoder,
     ScanLstmEncoder,
 )
+from emonav_drake.planners.policy import build_encoder, encoder_spec
 
 
 def make_encoder(cfg: SacConfig, beams: int = NUM_BEAMS, max_range: float = 6.0) -> torch.nn.Module:
@@ -41,9 +42,18 @@ def make_encoder(cfg: SacConfig, beams: int = NUM_BEAMS, max_range: float = 6.0)
         return ScanLstmEncoder(cfg.num_frames, beams, max_range, cfg.features)
     if kind.scans:
         return ScanEncoder(cfg.num_frames, beams, max_range, cfg.features, cfg.filters)
-    # a 2-D CNN on the stack's planes (DRL-VO*: the image's 3 channels)
-    planes = kind.planes(cfg.num_frames)
-    return LgmEncoder(planes, cfg.grid_size, cfg.features, cfg.filters, cfg.pool)
+    # a 2-D CNN on the stack's planes (DRL-VO*: the image's 3 channels; lgm_tracks: and
+    # an MLP on its table)
+    spec = encoder_spec(
+        cfg.grid_kind,
+        cfg.encoder,
+        cfg.num_frames,
+        cfg.grid_size,
+        cfg.features,
+        cfg.filters,
+        cfg.pool,
+    )
+    return build_encoder(spec)
 
 
 class SacAgent:

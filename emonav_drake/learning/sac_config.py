@@ -76,7 +76,8 @@ class SacConfig(TrainingRunConfig):
         "lgm",
         'observation variant: "lgm" (paper), "ogm" (OGM baseline), "scan" (LiDAR-SAC; with '
         'encoder "lstm": LNDNL), "drlvo" (DRL-VO*), "lgm_vel" (the LGM stack + the '
-        "pedestrians' velocities now); num_frames 1 = Single-LGM",
+        'pedestrians\' velocities now), "lgm_tracks" (the LGM stack + a table of the nearest '
+        "pedestrians); num_frames 1 = Single-LGM",
     )
     num_frames: int = setting(9, "N, frames in the stack", "", NUM_FRAMES)
     grid_size: int = setting(

@@ -10,13 +10,17 @@ t_k and the crowd at t_k, oldest first:
     "scan"   LiDAR-SAC, LNDNL (ranges [m])    float32 (K,)      float32 (N, K)
     "drlvo"  DRL-VO* (scan OGM + ped. v map)  uint8 (3, M, M)   uint8 (1, 3, M, M)
     "lgm_vel" LGM + pedestrians' velocities   uint8 (3, M, M)   uint8 (N + 2, M, M)
+    "lgm_tracks" LGM + the pedestrians' table uint8 (2, M, M)   uint8 (N + 1, M, M)
 
 "lgm_vel" (ours, not the paper's) is the LGM stack followed by two planes of the current
 step on the LGM's polar grid: the v_x and v_y (robot frame) of the pedestrian covering
 each cell (`sensing/kinematic_maps.py::lgm_velocity_planes`) — of the tracked pedestrians
 when the maps ring the tracks (`perception.map_rings: tracks`), else of the simulator's.
 It tells the policy who is walking where, which the occupancy history shows only through
-its frames' differences.
+its frames' differences. "lgm_tracks" (ours) gives the same pedestrians as a second input
+instead: the LGM stack followed by one plane whose first row is a table of the nearest
+pedestrians (position and velocity in the robot frame, `track_table_plane`), which its
+encoder ("lgm_tracks", `planners/networks.py`) reads apart from the maps.
 
 Everything that depends on the kind asks its `ObservationKind`: the environments
 (`NavigationWorld`, `EmoNavLIP-v0`, `EmoNavDigit-v0`), the diagram's
@@ -45,9 +49,12 @@ from emonav_drake.params import EmoNavConfig, LidarParams
 from emonav_drake.registry import Registry
 from emonav_drake.sensing.grid_maps import FrameStack, lgm_frame, lgm_from_ranges, ogm_from_ranges
 from emonav_drake.sensing.kinematic_maps import (
+    TRACK_FIELDS,
+    TRACK_TABLE_ROWS,
     drlvo_image,
     drlvo_image_from_ranges,
     lgm_velocity_planes,
+    track_table_plane,
 )
 from emonav_drake.sensing.lidar_sensor import inflated_ranges, sensed_ranges
 
@@ -165,6 +172,8 @@ class ObservationKind:
             while the real scan stays `crowd`'s; None: the kind has no rings.
         refuses_perceived: the kind cannot take a perceived crowd (`ValueError` when one
             is given) rather than ignore it.
+        encoder: the encoder type of an image kind in a policy checkpoint
+            (`planners.policy.encoder_spec`), with `encoder_args` added to its spec.
     """
 
     name: str
@@ -183,6 +192,8 @@ class ObservationKind:
     extra_planes: int = 0
     ringed_frame: RingedFrame | None = None
     refuses_perceived: bool = False
+    encoder: str = "lgm"
+    encoder_args: dict[str, Any] = dc.field(default_factory=dict)
 
     def planes(self, num_frames: int) -> int:
         """Input planes (channels) of a 2-D CNN encoder on a stack of `num_frames`."""
@@ -402,9 +413,47 @@ def _ringed_lgm_vel_frame(
     return np.concatenate([lgm[None], _velocity_planes(robot, perceived, config)], axis=0)
 
 
+def _track_table(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
+    li = config.lidar
+    xy = np.array([robot.x, robot.y])
+    return track_table_plane(
+        xy, robot.heading, crowd.positions, crowd.velocities, li.grid_size, li.max_range
+    )
+
+
+def _lgm_tracks_frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
+    lgm = _grid_frame("lgm")(robot, crowd, config)
+    return np.stack([lgm, _track_table(robot, crowd, config)])
+
+
+def _ringed_lgm_tracks_frame(
+    robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig, perceived: CrowdSnapshot
+) -> np.ndarray:
+    lgm = _grid_from_ranges("lgm", robot, crowd, perceived, config)
+    return np.stack([lgm, _track_table(robot, perceived, config)])
+
+
+def _mirror_lgm_tracks(x: np.ndarray) -> np.ndarray:
+    """The "lgm_tracks" stack (…, N + 1, M, M): sectors reversed in the LGM planes (`_mirror_rows`);
+    in the table (the last plane's first row) y and v_y negated about 128."""
+    out = np.array(x, copy=True)
+    out[..., :-1, :, :] = x[..., :-1, ::-1, :]
+    row = out[..., -1, 0, : TRACK_TABLE_ROWS * TRACK_FIELDS]
+    table = row.reshape(*row.shape[:-1], TRACK_TABLE_ROWS, TRACK_FIELDS)
+    for field in (2, 4):
+        table[..., field] = np.minimum(256 - table[..., field].astype(np.int16), 255)
+    out[..., -1, 0, : TRACK_TABLE_ROWS * TRACK_FIELDS] = table.reshape(row.shape)
+    return out
+
+
+def _lgm_tracks_lidar(shape: tuple[int, ...], li: LidarParams) -> dict[str, int]:
+    return {"num_frames": shape[0] - 1, "grid_size": shape[1]}
+
+
 def _mirror_lgm_vel(x: np.ndarray) -> np.ndarray:
-    """ "lgm_vel" (…, N + 2, M, M): sectors reversed in every plane (`_mirror_rows`) and the
-    v_y plane (the last) negated about its zero, 128 (256 − value, at most 255)."""
+    """The "lgm_vel" stack (…, N + 2, M, M): sectors reversed in every plane
+    (`_mirror_rows`) and the v_y plane (the last) negated about its zero, 128 (256 − value,
+    at most 255)."""
     out = _mirror_rows(x)
     vy = out[..., -1, :, :]
     out[..., -1, :, :] = np.minimum(256 - vy.astype(np.int16), 255).astype(np.uint8)
@@ -545,5 +594,23 @@ register_observation(
         _lgm_vel_lidar,
         extra_planes=2,
         ringed_frame=_ringed_lgm_vel_frame,
+    )
+)
+register_observation(
+    ObservationKind(
+        "lgm_tracks",
+        "LiDAR grid maps + the pedestrians' table",
+        "lgm",
+        _lgm_tracks_frame,
+        lambda li: (li.num_frames + 1, li.grid_size, li.grid_size),
+        np.dtype(np.uint8),
+        _byte_max,
+        lambda li: PlanesStack(li.num_frames, li.grid_size, 1),
+        _mirror_lgm_tracks,
+        _lgm_tracks_lidar,
+        extra_planes=1,
+        ringed_frame=_ringed_lgm_tracks_frame,
+        encoder="lgm_tracks",
+        encoder_args={"tracks": TRACK_TABLE_ROWS},
     )
 )

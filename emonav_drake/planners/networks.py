@@ -5,6 +5,8 @@
   the uint8 grid-map stack (B, N, M, M), scaled by 1/255 inside. With `pool = 2` the
   stack is max-pooled 2 × 2 first (the CPU route's reduced resolution: 50 → 24 → 22 →
   20 → 18); max-pooling keeps every marked cell (255 wins over 127).
+* `LgmTracksEncoder`: `LgmEncoder` on the maps of the "lgm_tracks" observation and an
+  MLP on its table of the nearest pedestrians (ours: the tracks as a second input).
 * `ScanEncoder`: the LiDAR-SAC baseline's encoder over stacked raw scans (B, N, K):
   1-D convs with the same filter counts and strides, then FC → 50 → LayerNorm → tanh.
 * `Actor`: f_ψ, an MLP (two hidden layers of 1024) over [features, goal state, last
@@ -26,6 +28,7 @@ from torch import nn
 from torch.nn import functional as F
 
 from emonav_drake.params import NUM_BEAMS
+from emonav_drake.sensing.kinematic_maps import TRACK_FIELDS
 
 LOG_STD_MIN, LOG_STD_MAX = -10.0, 2.0
 
@@ -114,6 +117,52 @@ class LgmEncoder(_ConvEncoder):
         for conv in self.convs:
             x = F.relu(conv(x))
         return x.flatten(1)
+
+
+class LgmTracksEncoder(LgmEncoder):
+    """The LGM CNN on a stack's grid maps, and beside it an MLP on the pedestrians' table
+    (the "lgm_tracks" observation: N LGM planes, then a plane whose first row holds
+    `tracks` entries of TRACK_FIELDS bytes, `sensing/kinematic_maps.py::track_table_plane`).
+
+    Args:
+        frames: input planes, N + 1 (the convolutions read the first N).
+        size, features, filters, pool: the LGM CNN's (`LgmEncoder`); `features` map
+            features.
+        tracks: table entries read.
+        track_features: the table's features (two layers, tanh); the encoder's output is
+            `features` + `track_features`.
+    """
+
+    def __init__(
+        self,
+        frames: int = 10,
+        size: int = 100,
+        features: int = 50,
+        filters: int = 32,
+        pool: int = 1,
+        tracks: int = 8,
+        track_features: int = 32,
+    ) -> None:
+        super().__init__(frames - 1, size, features, filters, pool)
+        self.tracks = tracks
+        self.table = nn.Sequential(
+            nn.Linear(TRACK_FIELDS * tracks, track_features),
+            nn.ReLU(),
+            nn.Linear(track_features, track_features),
+            nn.Tanh(),
+        )
+        self.features = features + track_features
+
+    def conv_features(self, obs: torch.Tensor) -> torch.Tensor:
+        """(B, flat + 5·tracks): the flattened conv output of the maps, then the table
+        decoded to [−1, 1] ((byte − 128) / 127)."""
+        conv = super().conv_features(obs[:, :-1])
+        row = obs[:, -1, 0, : TRACK_FIELDS * self.tracks].float()
+        return torch.cat([conv, (row - 128.0) / 127.0], dim=1)
+
+    def head(self, conv: torch.Tensor) -> torch.Tensor:
+        maps, table = conv[:, : self.flat], conv[:, self.flat :]
+        return torch.cat([torch.tanh(self.norm(self.fc(maps))), self.table(table)], dim=1)
 
 
 class ScanEncoder(_ConvEncoder):

@@ -41,6 +41,7 @@ from emonav_drake.planners.networks import (
     Actor,
     CategoricalPolicy,
     LgmEncoder,
+    LgmTracksEncoder,
     ScanEncoder,
     ScanLstmEncoder,
 )
@@ -89,7 +90,8 @@ def encoder_spec(
 
     "scan" with encoder "lstm" → LSTM over scans (LNDNL); "scan" → 1-D CNN (LiDAR-SAC);
     every grid kind → the paper's 2-D CNN on N (DRL-VO*: 3 N; "lgm_vel": N + 2) planes of
-    M × M cells.
+    M × M cells; "lgm_tracks" → that CNN on its N maps and an MLP on its pedestrians'
+    table (`LgmTracksEncoder`).
     """
     kind = observation_kind(grid_kind)
     if kind.scans and encoder == "lstm":
@@ -97,12 +99,13 @@ def encoder_spec(
     if kind.scans:
         return {"type": "scan", "frames": num_frames, "features": features, "filters": filters}
     return {
-        "type": "lgm",
+        "type": kind.encoder,
         "frames": kind.planes(num_frames),
         "size": grid_size,
         "features": features,
         "filters": filters,
         "pool": pool,
+        **kind.encoder_args,
     }
 
 
@@ -110,6 +113,8 @@ def build_encoder(spec: dict[str, Any]) -> torch.nn.Module:
     args = {k: v for k, v in spec.items() if k != "type"}
     if spec["type"] == "lgm":
         return LgmEncoder(**args)
+    if spec["type"] == "lgm_tracks":
+        return LgmTracksEncoder(**args)
     if spec["type"] == "scan":
         return ScanEncoder(**args)
     if spec["type"] == "scan_lstm":
@@ -172,7 +177,7 @@ def _check_meta(path: Path, blob: dict) -> None:
         and all(isinstance(v, (int, float)) and math.isfinite(v) and v > 0 for v in b)
     ):
         raise bad("bounds", f"= {b!r} is invalid: must be [max_speed, max_heading_change] > 0")
-    if enc["type"] == "lgm":
+    if enc["type"] in ("lgm", "lgm_tracks"):
         planes = observation_kind(ob["grid_kind"]).planes(ob["num_frames"])
         if "size" in enc and enc["size"] != ob["grid_size"]:
             raise bad(

@@ -51,6 +51,10 @@ def default_shield_params(response: StepResponseModel | str | None) -> ShieldPar
     return ShieldParams(margin=0.2)
 
 
+# Observation kinds whose stack begins with the LGM frames (the shield reads the newest).
+LGM_KINDS = ("lgm", "lgm_vel", "lgm_tracks")
+
+
 @dc.dataclass(frozen=True)
 class ShieldMemory:
     """What the shield carries from one walking step to the next.
@@ -105,7 +109,7 @@ class ShieldedPolicy(WrappedPolicy):
         response: StepResponseModel | None = None,
         params: ShieldParams | None = None,
     ) -> None:
-        if policy.meta["kind"] != "categorical" or policy.grid_kind not in ("lgm", "lgm_vel"):
+        if policy.meta["kind"] != "categorical" or policy.grid_kind not in LGM_KINDS:
             raise PolicyError(
                 f"the LGM shield needs a categorical policy reading the LGM; {policy.path.name} "
                 f"is a {describe_policy(policy.meta)} reading {policy.grid_kind!r}"

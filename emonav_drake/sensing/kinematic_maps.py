@@ -180,3 +180,50 @@ def lgm_velocity_planes(
         out[0][inside] = code[0]
         out[1][inside] = code[1]
     return out
+
+
+# The track table of the "lgm_tracks" observation: the nearest pedestrians in range, each
+# a row of TRACK_FIELDS bytes (present; x, y [m]; v_x, v_y [m/s]) in the first row of a plane.
+TRACK_TABLE_ROWS = 8
+TRACK_FIELDS = 5
+
+
+def track_table_plane(
+    robot_xy: np.ndarray,
+    heading: float,
+    positions: np.ndarray,
+    velocities: np.ndarray,
+    grid_size: int = 100,
+    max_range: float = 6.0,
+    rows: int = TRACK_TABLE_ROWS,
+    max_speed: float = LGM_VELOCITY_MAX_SPEED,
+) -> np.ndarray:
+    """uint8 (M, M): the pedestrians as a table, written in the first row of a plane (the
+    rest 0) so that it travels with the grid maps. Entry i (bytes 5i … 5i + 4) is the
+    i-th nearest pedestrian within `max_range` [m] of the robot: 255 (present), then its
+    position x, y as 128 + 127·p/`max_range` and velocity v_x, v_y as 128 + 127·v/`max_speed`
+    (clipped), in the robot frame (x forward, y left); an absent entry is (0, 128, 128,
+    128, 128). Ties in distance keep the pedestrians' order. Positions [m] and velocities
+    [m/s] (P, 2) in the world frame; the robot at `robot_xy` [m] looking along `heading`."""
+    if rows * TRACK_FIELDS > grid_size:
+        raise ValueError(
+            f"{rows} table entries of {TRACK_FIELDS} bytes exceed a row of {grid_size}"
+        )
+    plane = np.zeros((grid_size, grid_size), np.uint8)
+    table = plane[0, : rows * TRACK_FIELDS].reshape(rows, TRACK_FIELDS)
+    table[:, 1:] = 128
+    positions = np.asarray(positions, float).reshape(-1, 2)
+    if len(positions) == 0:
+        return plane
+    c, s = math.cos(heading), math.sin(heading)
+    rot = np.array([[c, s], [-s, c]])  # world → robot
+    rel = (positions - np.asarray(robot_xy, float)) @ rot.T
+    vel = np.asarray(velocities, float).reshape(-1, 2) @ rot.T
+    distance = np.hypot(rel[:, 0], rel[:, 1])
+    near = np.flatnonzero(distance <= max_range)
+    near = near[np.argsort(distance[near], kind="stable")][:rows]
+    n = len(near)
+    table[:n, 0] = 255
+    table[:n, 1:3] = np.clip(np.rint(128 + 127 * rel[near] / max_range), 0, 255)
+    table[:n, 3:5] = np.clip(np.rint(128 + 127 * vel[near] / max_speed), 0, 255)
+    return plane
