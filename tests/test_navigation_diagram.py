@@ -15,6 +15,7 @@ from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.replay import ReplayPlanner
 from emonav_drake.scenarios.scenario import sample_scenario
 from emonav_drake.systems.episode_monitor import episode_monitor_callback
+from tests.diagram_stacks import diagram_stacks
 
 
 def _env_rollout(seed, config, actions=None, planner=None):
@@ -259,14 +260,8 @@ def test_grid_maps_ring_the_tracked_people_in_both_worlds():
     nav = build_navigation_diagram(
         sample_scenario(seed, cfg), cfg, ReplayPlanner(np.array(actions)), goal_radius=0.2
     )
-    sim = Simulator(nav.diagram)
-    sim.Initialize()
-    ctx = sim.get_mutable_context()
-    port = nav.grid_maps.GetOutputPort("lgm_stack")
-    for k in range(steps):
-        if k > 0:
-            sim.AdvanceTo(k * cfg.robot.step_time)
-        assert np.array_equal(port.Eval(nav.grid_maps.GetMyContextFromRoot(ctx)), stacks[k])
+    for k, got in enumerate(diagram_stacks(nav, cfg.robot.step_time, steps)):
+        assert np.array_equal(got, stacks[k]), k
 
 
 def test_a_saved_lip_world_keeps_its_tracks():

@@ -11,7 +11,6 @@ import dataclasses as dc
 
 import numpy as np
 import pytest
-from pydrake.systems.analysis import Simulator
 
 from emonav_drake.crowd.crowd import CrowdSnapshot
 from emonav_drake.diagrams.navigation import build_navigation_diagram
@@ -32,6 +31,7 @@ from emonav_drake.sensing.kinematic_maps import (
     lgm_velocity_planes,
     track_table_plane,
 )
+from tests.diagram_stacks import diagram_stacks
 
 KINDS = ("lgm_vel", "lgm_tracks")
 EXTRA = {"lgm_vel": 2, "lgm_tracks": 1}  # planes after the N LGM frames
@@ -163,14 +163,8 @@ def test_the_diagram_builds_the_worlds_stack_with_the_tracked_pedestrians(name):
     nav = build_navigation_diagram(
         scenario, cfg, ReplayPlanner(np.array(actions)), grid_kind=name, goal_radius=0.2
     )
-    sim = Simulator(nav.diagram)
-    sim.Initialize()
-    ctx = sim.get_mutable_context()
-    port = nav.grid_maps.GetOutputPort("lgm_stack")
-    for k in range(steps):
-        if k > 0:
-            sim.AdvanceTo(k * cfg.robot.step_time)
-        assert np.array_equal(port.Eval(nav.grid_maps.GetMyContextFromRoot(ctx)), stacks[k]), k
+    for k, got in enumerate(diagram_stacks(nav, cfg.robot.step_time, steps)):
+        assert np.array_equal(got, stacks[k]), k
 
 
 @pytest.mark.parametrize("name", KINDS)

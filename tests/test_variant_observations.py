@@ -11,7 +11,6 @@ import json
 import numpy as np
 import pytest
 import torch
-from pydrake.systems.analysis import Simulator
 
 from emonav_drake.cli import main
 from emonav_drake.diagrams.navigation import build_navigation_diagram
@@ -28,6 +27,7 @@ from emonav_drake.planners.networks import (
 from emonav_drake.planners.policy import PolicyPlanner, save_policy
 from emonav_drake.planners.replay import ReplayPlanner
 from emonav_drake.scenarios.scenario import sample_scenario
+from tests.diagram_stacks import diagram_stacks
 
 # name: (grid kind, num_frames, grid_size, encoder spec) — tiny networks, random weights.
 VARIANTS = {
@@ -121,14 +121,7 @@ def test_the_diagrams_observation_is_the_envs_bit_for_bit(kind):
     nav = build_navigation_diagram(
         sample_scenario(seed, cfg), cfg, ReplayPlanner(actions), grid_kind=kind, goal_radius=0.2
     )
-    sim = Simulator(nav.diagram)
-    sim.Initialize()
-    ctx = sim.get_mutable_context()
-    port = nav.grid_maps.GetOutputPort("lgm_stack")
-    for k in range(steps + 1):  # at t_k, before the updates at t_k: the planner's view
-        if k > 0:
-            sim.AdvanceTo(k * cfg.robot.step_time)
-        got = port.Eval(nav.grid_maps.GetMyContextFromRoot(ctx))
+    for k, got in enumerate(diagram_stacks(nav, cfg.robot.step_time, steps + 1)):
         assert got.dtype == expected[k].dtype and got.shape == expected[k].shape
         assert np.array_equal(got, expected[k]), f"{kind}: step {k}"
     shape = {"scan": (4, 1800), "drlvo": (1, 3, 100, 100), "ogm": (4, 100, 100)}

@@ -401,36 +401,36 @@ def _velocity_planes(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig
     )
 
 
-def _lgm_vel_frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
-    lgm = _grid_frame("lgm")(robot, crowd, config)
-    return np.concatenate([lgm[None], _velocity_planes(robot, crowd, config)], axis=0)
-
-
-def _ringed_lgm_vel_frame(
-    robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig, perceived: CrowdSnapshot
-) -> np.ndarray:
-    lgm = _grid_from_ranges("lgm", robot, crowd, perceived, config)
-    return np.concatenate([lgm[None], _velocity_planes(robot, perceived, config)], axis=0)
-
-
 def _track_table(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
     li = config.lidar
     xy = np.array([robot.x, robot.y])
-    return track_table_plane(
+    table = track_table_plane(
         xy, robot.heading, crowd.positions, crowd.velocities, li.grid_size, li.max_range
     )
+    return table[None]
 
 
-def _lgm_tracks_frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
-    lgm = _grid_frame("lgm")(robot, crowd, config)
-    return np.stack([lgm, _track_table(robot, crowd, config)])
+def _lgm_and(
+    planes: Callable[[LipState, CrowdSnapshot, EmoNavConfig], np.ndarray],
+) -> tuple[Callable[[LipState, CrowdSnapshot, EmoNavConfig], np.ndarray], RingedFrame]:
+    """(frame, ringed_frame) of a kind whose frame is the LGM followed by `planes` of the
+    pedestrians (E, M, M): of `crowd`, or — ringed — of the perceived crowd."""
+
+    def frame(robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig) -> np.ndarray:
+        lgm = _grid_frame("lgm")(robot, crowd, config)
+        return np.concatenate([lgm[None], planes(robot, crowd, config)])
+
+    def ringed(
+        robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig, perceived: CrowdSnapshot
+    ) -> np.ndarray:
+        lgm = _grid_from_ranges("lgm", robot, crowd, perceived, config)
+        return np.concatenate([lgm[None], planes(robot, perceived, config)])
+
+    return frame, ringed
 
 
-def _ringed_lgm_tracks_frame(
-    robot: LipState, crowd: CrowdSnapshot, config: EmoNavConfig, perceived: CrowdSnapshot
-) -> np.ndarray:
-    lgm = _grid_from_ranges("lgm", robot, crowd, perceived, config)
-    return np.stack([lgm, _track_table(robot, perceived, config)])
+_lgm_vel_frame, _ringed_lgm_vel_frame = _lgm_and(_velocity_planes)
+_lgm_tracks_frame, _ringed_lgm_tracks_frame = _lgm_and(_track_table)
 
 
 def _mirror_lgm_tracks(x: np.ndarray) -> np.ndarray:

@@ -26,6 +26,22 @@ from emonav_drake.sensing.grid_maps import lgm_frame, ogm_from_ranges
 from emonav_drake.sensing.lidar import beam_table
 
 
+def in_robot_frame(
+    robot_xy: np.ndarray, heading: float, positions: np.ndarray, velocities: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """World-frame positions [m] and velocities [m/s] (P, 2) → the robot frame (x forward,
+    y left) of a robot at `robot_xy` [m] looking along `heading` [rad]."""
+    c, s = math.cos(heading), math.sin(heading)
+    rot = np.array([[c, s], [-s, c]])  # world → robot
+    rel = (np.asarray(positions, float).reshape(-1, 2) - np.asarray(robot_xy, float)) @ rot.T
+    return rel, np.asarray(velocities, float).reshape(-1, 2) @ rot.T
+
+
+def byte_code(value: np.ndarray | float, scale: float) -> np.ndarray:
+    """A signed quantity as a byte about 128: 128 + 127·value/`scale`, rounded, clipped."""
+    return np.clip(np.rint(128 + 127 * np.asarray(value) / scale), 0, 255).astype(np.uint8)
+
+
 def pedestrian_velocity_map(
     robot_xy: np.ndarray,
     heading: float,
@@ -40,10 +56,7 @@ def pedestrian_velocity_map(
     out = np.full((2, grid_size, grid_size), 128, np.uint8)
     if len(positions) == 0:
         return out
-    c, s = math.cos(heading), math.sin(heading)
-    rot = np.array([[c, s], [-s, c]])  # world → robot
-    rel = (np.asarray(positions, float) - robot_xy) @ rot.T
-    vel = np.asarray(velocities, float) @ rot.T
+    rel, vel = in_robot_frame(robot_xy, heading, positions, velocities)
     cell = 2.0 * half_extent / grid_size
     centres = -half_extent + (np.arange(grid_size) + 0.5) * cell  # x of row i, also −y of col j
     for (px, py), (vx, vy) in zip(rel, vel, strict=True):
@@ -55,8 +68,8 @@ def pedestrian_velocity_map(
         dy = -centres[cols][None, :] - py
         inside = dx * dx + dy * dy <= radius * radius
         r, k = np.nonzero(inside)
-        out[0, rows[r], cols[k]] = np.uint8(np.clip(np.rint(128 + 127 * vx / max_speed), 0, 255))
-        out[1, rows[r], cols[k]] = np.uint8(np.clip(np.rint(128 + 127 * vy / max_speed), 0, 255))
+        out[0, rows[r], cols[k]] = byte_code(vx, max_speed)
+        out[1, rows[r], cols[k]] = byte_code(vy, max_speed)
     return out
 
 
@@ -163,15 +176,9 @@ def lgm_velocity_planes(
     Positions [m] and velocities [m/s] (P, 2) in the world frame; the robot at `robot_xy`
     [m] looking along `heading` [rad]."""
     out = np.full((2, grid_size, grid_size), 128, np.uint8)
-    positions = np.asarray(positions, float).reshape(-1, 2)
-    if len(positions) == 0:
-        return out
-    c, s = math.cos(heading), math.sin(heading)
-    rot = np.array([[c, s], [-s, c]])  # world → robot
-    rel = (positions - np.asarray(robot_xy, float)) @ rot.T
-    vel = np.asarray(velocities, float).reshape(-1, 2) @ rot.T
+    rel, vel = in_robot_frame(robot_xy, heading, positions, velocities)
     centres = _lgm_cell_centres(num_beams, grid_size, float(max_range))
-    codes = np.clip(np.rint(128 + 127 * vel / max_speed), 0, 255).astype(np.uint8)
+    codes = byte_code(vel, max_speed)
     for p, code in zip(rel, codes, strict=True):
         if math.hypot(p[0], p[1]) > max_range + radius:
             continue
@@ -212,18 +219,12 @@ def track_table_plane(
     plane = np.zeros((grid_size, grid_size), np.uint8)
     table = plane[0, : rows * TRACK_FIELDS].reshape(rows, TRACK_FIELDS)
     table[:, 1:] = 128
-    positions = np.asarray(positions, float).reshape(-1, 2)
-    if len(positions) == 0:
-        return plane
-    c, s = math.cos(heading), math.sin(heading)
-    rot = np.array([[c, s], [-s, c]])  # world → robot
-    rel = (positions - np.asarray(robot_xy, float)) @ rot.T
-    vel = np.asarray(velocities, float).reshape(-1, 2) @ rot.T
+    rel, vel = in_robot_frame(robot_xy, heading, positions, velocities)
     distance = np.hypot(rel[:, 0], rel[:, 1])
     near = np.flatnonzero(distance <= max_range)
     near = near[np.argsort(distance[near], kind="stable")][:rows]
     n = len(near)
     table[:n, 0] = 255
-    table[:n, 1:3] = np.clip(np.rint(128 + 127 * rel[near] / max_range), 0, 255)
-    table[:n, 3:5] = np.clip(np.rint(128 + 127 * vel[near] / max_speed), 0, 255)
+    table[:n, 1:3] = byte_code(rel[near], max_range)
+    table[:n, 3:5] = byte_code(vel[near], max_speed)
     return plane
