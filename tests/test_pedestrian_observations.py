@@ -244,3 +244,14 @@ def test_the_tracks_encoder_reads_the_table_apart_from_the_maps():
     a, b = enc(torch.from_numpy(stack)), enc(torch.from_numpy(moved))
     assert a.shape == (1, 40)
     assert torch.equal(a[:, :8], b[:, :8]) and not torch.equal(a[:, 8:], b[:, 8:])
+
+
+def test_the_tables_say_whose_pedestrians_the_new_kinds_read():
+    """The reads column: the pedestrian planes are the tracker's (deployable on a real
+    sensor) only when the maps ring the tracks; else the simulator's (privileged)."""
+    from emonav_drake.evaluation.tables import method_reads
+
+    tracked = method_reads("LGM_TRACKS", "lidar", "vlp16", maps_ring_tracks=True)
+    assert tracked.endswith("table of tracks in the vlp16 scan — deployable")
+    assert method_reads("LGM_VEL", "lidar", "vlp16").endswith("simulator's crowd — privileged")
+    assert method_reads("LGM_VEL", "truth", "ideal", maps_ring_tracks=True).endswith("privileged")

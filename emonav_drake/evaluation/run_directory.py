@@ -29,6 +29,7 @@ import contextlib
 import json
 import logging
 import os
+import re
 from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -360,8 +361,10 @@ def method_reads_of(settings: dict) -> dict | None:
     except (KeyError, ConfigError):
         return None
     source, sensor = config.perception.state_source, config.sensor.preset
+    rings = config.perception.map_rings == "tracks"  # or the camera kept per track:
+    rings = rings or _estimate_mode(settings.get("emotion_estimate_yaml")) == "camera_tracks"
     return {
-        m: tables.method_reads(obs, source, sensor, steered=m in MPC_STEERED)
+        m: tables.method_reads(obs, source, sensor, m in MPC_STEERED, rings)
         for m, obs in observations.items()
     }
 
@@ -432,17 +435,23 @@ def load_run(path: str | Path) -> tuple[dict, list[dict]]:
     return settings, _sorted_trials(trials, settings["planners"])
 
 
+def _estimate_mode(estimate_yaml: str | None) -> str | None:
+    """The `mode` of a run's recorded emotion estimate (None: ground truth; a recorded
+    estimate without one: "confusion", its default)."""
+    if estimate_yaml is None:
+        return None
+    mode = re.search(r"^mode:\s*(\w+)", estimate_yaml, re.M)
+    return mode.group(1) if mode else "confusion"
+
+
 def _estimate_label(estimate_yaml: str | None) -> str:
     """How a run perceived emotions, for its summary line (the camera's rate from the
     estimate's `period`; an unknown mode is named as it is)."""
-    if estimate_yaml is None:
+    name = _estimate_mode(estimate_yaml)
+    if name is None:
         return "ground truth"
-    import re
-
-    mode = re.search(r"^mode:\s*(\w+)", estimate_yaml, re.M)
     period = re.search(r"^period:\s*([0-9.eE+-]+)", estimate_yaml, re.M)
     rate = f"{1.0 / float(period.group(1)):g} Hz" if period else "its period"
-    name = mode.group(1) if mode else "confusion"
     return {
         "camera": f"head camera + face classifier ({rate}; unseen = neutral)",
         "camera_tracks": f"head camera, emotion kept per LiDAR track ({rate})",

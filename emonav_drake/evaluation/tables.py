@@ -194,14 +194,20 @@ READS_HEADER = "reads — could a robot run it?"
 
 
 def method_reads(
-    observation: str, state_source: str = "truth", sensor: str = "ideal", steered: bool = False
+    observation: str,
+    state_source: str = "truth",
+    sensor: str = "ideal",
+    steered: bool = False,
+    maps_ring_tracks: bool = False,
 ) -> str:
     """What a method reads and whether a robot could run it, for the tables' reads column.
 
     `observation`: "state" (the crowd state: DWA, MPC, SARL, RGL) or a learned policy's map
     kind ("LGM", "OGM", "SCAN", "DRLVO"); `state_source` and `sensor` the run's
     (`perception.state_source`, `sensor.preset`); `steered`: a policy that hands its
-    command to the MPC on the crowd state. Privileged: the simulator's crowd (or its
+    command to the MPC on the crowd state; `maps_ring_tracks`: the grid maps take the
+    tracked pedestrians (the pedestrian planes of "lgm_vel" and "lgm_tracks" are the
+    tracker's, else the simulator's). Privileged: the simulator's crowd (or its
     pedestrians' velocities, DRL-VO*); an exact scan is an upper bound (no sensor gives
     it); a real sensor's scan or the tracks in it: deployable."""
     scan = "the exact scan" if sensor == "ideal" else f"the {sensor} scan"
@@ -216,6 +222,13 @@ def method_reads(
         return f"{crowd[0]} — {crowd[1]}"
     if kind == "drlvo":
         return f"maps of {scan} + the simulator's pedestrian velocities — privileged"
+    if kind in ("lgm_vel", "lgm_tracks"):
+        what = "velocity planes" if kind == "lgm_vel" else "table"
+        tracked = state_source == "lidar" and maps_ring_tracks
+        peds = (
+            (f"tracks in {scan}", verdict) if tracked else ("the simulator's crowd", "privileged")
+        )
+        return f"LiDAR grid maps of {scan} + the {what} of {peds[0]} — {peds[1]}"
     maps = {"lgm": "LiDAR grid maps", "ogm": "occupancy grid maps", "scan": "LiDAR scans"}
     text = f"{maps.get(kind, kind)} of {scan}"
     if steered:  # the maps' scan and the crowd come from the same sensor

@@ -25,7 +25,7 @@ import numpy as np
 from gymnasium import spaces
 
 from emonav_drake.navigation.lip_world import NavigationWorld, PlannerInput
-from emonav_drake.navigation.observations import check_observation_kind, map_key, observation_kind
+from emonav_drake.navigation.observations import map_key, observation_kind, observation_kinds
 from emonav_drake.params import EmoNavConfig, load_config
 from emonav_drake.scenarios.scenario import Scenario, sample_scenario
 
@@ -61,7 +61,8 @@ def set_task(env: gym.Env, config, grid_kind: str, goal_radius: float | None) ->
     """The attributes both navigation envs share: `config` (an `EmoNavConfig`, a YAML path
     or None for the defaults; validated), `grid_kind`, `goal_radius`, `map_key` and the
     spaces of `navigation_spaces`. `ValueError` for an unknown grid kind."""
-    check_observation_kind(grid_kind)
+    if grid_kind not in observation_kinds():
+        raise ValueError(f"grid_kind = {grid_kind!r}: must be one of {list(observation_kinds())}")
     if config is None or isinstance(config, str):
         config = load_config(config)
     env.config = config.validate()
