@@ -361,8 +361,10 @@ def method_reads_of(settings: dict) -> dict | None:
     except (KeyError, ConfigError):
         return None
     source, sensor = config.perception.state_source, config.sensor.preset
-    rings = config.perception.map_rings == "tracks"  # or the camera kept per track:
-    rings = rings or _estimate_mode(settings.get("emotion_estimate_yaml")) == "camera_tracks"
+    # the maps ring the tracks when asked to, or when the camera's emotions are kept per track
+    rings = config.perception.map_rings == "tracks" or (
+        _estimate_mode(settings.get("emotion_estimate_yaml")) == "camera_tracks"
+    )
     return {
         m: tables.method_reads(obs, source, sensor, m in MPC_STEERED, rings)
         for m, obs in observations.items()

@@ -429,10 +429,6 @@ def _lgm_and(
     return frame, ringed
 
 
-_lgm_vel_frame, _ringed_lgm_vel_frame = _lgm_and(_velocity_planes)
-_lgm_tracks_frame, _ringed_lgm_tracks_frame = _lgm_and(_track_table)
-
-
 def _mirror_lgm_tracks(x: np.ndarray) -> np.ndarray:
     """The "lgm_tracks" stack (…, N + 1, M, M): sectors reversed in the LGM planes (`_mirror_rows`);
     in the table (the last plane's first row) y and v_y negated about 128."""
@@ -441,13 +437,9 @@ def _mirror_lgm_tracks(x: np.ndarray) -> np.ndarray:
     row = out[..., -1, 0, : TRACK_TABLE_ROWS * TRACK_FIELDS]
     table = row.reshape(*row.shape[:-1], TRACK_TABLE_ROWS, TRACK_FIELDS)
     for field in (2, 4):
-        table[..., field] = np.minimum(256 - table[..., field].astype(np.int16), 255)
+        table[..., field] = _negated_codes(table[..., field])
     out[..., -1, 0, : TRACK_TABLE_ROWS * TRACK_FIELDS] = table.reshape(row.shape)
     return out
-
-
-def _lgm_tracks_lidar(shape: tuple[int, ...], li: LidarParams) -> dict[str, int]:
-    return {"num_frames": shape[0] - 1, "grid_size": shape[1]}
 
 
 def _mirror_lgm_vel(x: np.ndarray) -> np.ndarray:
@@ -455,13 +447,8 @@ def _mirror_lgm_vel(x: np.ndarray) -> np.ndarray:
     (`_mirror_rows`) and the v_y plane (the last) negated about its zero, 128 (256 − value,
     at most 255)."""
     out = _mirror_rows(x)
-    vy = out[..., -1, :, :]
-    out[..., -1, :, :] = np.minimum(256 - vy.astype(np.int16), 255).astype(np.uint8)
+    out[..., -1, :, :] = _negated_codes(out[..., -1, :, :])
     return out
-
-
-def _lgm_vel_lidar(shape: tuple[int, ...], li: LidarParams) -> dict[str, int]:
-    return {"num_frames": shape[0] - 2, "grid_size": shape[1]}
 
 
 def _mirror_rows(x: np.ndarray) -> np.ndarray:
@@ -474,12 +461,17 @@ def _mirror_last_axis(x: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(x[..., ::-1])
 
 
+def _negated_codes(codes: np.ndarray) -> np.ndarray:
+    """Signed byte codes about 128 (`kinematic_maps.byte_code`) negated: 256 − code, at
+    most 255."""
+    return np.minimum(256 - codes.astype(np.int16), 255).astype(np.uint8)
+
+
 def _mirror_drlvo(x: np.ndarray) -> np.ndarray:
     """DRL-VO* (…, 3, M, M): columns reversed and the v_y plane negated about its zero,
-    128 (256 − value, at most 255)."""
+    128."""
     out = np.ascontiguousarray(x[..., ::-1])
-    vy = out[..., 2, :, :]
-    out[..., 2, :, :] = np.minimum(256 - vy.astype(np.int16), 255).astype(np.uint8)
+    out[..., 2, :, :] = _negated_codes(out[..., 2, :, :])
     return out
 
 
@@ -580,36 +572,48 @@ register_observation(
         refuses_perceived=True,
     )
 )
-register_observation(
-    ObservationKind(
-        "lgm_vel",
-        "LiDAR grid maps + pedestrians' velocities",
+
+
+def _lgm_and_planes_kind(
+    name: str,
+    description: str,
+    planes: Callable[[LipState, CrowdSnapshot, EmoNavConfig], np.ndarray],
+    extra: int,
+    mirror: Callable[[np.ndarray], np.ndarray],
+    **options: Any,
+) -> ObservationKind:
+    """A kind whose frame is the LGM followed by `extra` `planes` of the pedestrians: its
+    stack (N + extra, M, M) the LGM of N steps, then those planes now (`PlanesStack`)."""
+    frame, ringed = _lgm_and(planes)
+    return ObservationKind(
+        name,
+        description,
         "lgm",
-        _lgm_vel_frame,
-        lambda li: (li.num_frames + 2, li.grid_size, li.grid_size),
+        frame,
+        lambda li: (li.num_frames + extra, li.grid_size, li.grid_size),
         np.dtype(np.uint8),
         _byte_max,
-        lambda li: PlanesStack(li.num_frames, li.grid_size, 2),
-        _mirror_lgm_vel,
-        _lgm_vel_lidar,
-        extra_planes=2,
-        ringed_frame=_ringed_lgm_vel_frame,
+        lambda li: PlanesStack(li.num_frames, li.grid_size, extra),
+        mirror,
+        lambda shape, li: {"num_frames": shape[0] - extra, "grid_size": shape[1]},
+        extra_planes=extra,
+        ringed_frame=ringed,
+        **options,
+    )
+
+
+register_observation(
+    _lgm_and_planes_kind(
+        "lgm_vel", "LiDAR grid maps + pedestrians' velocities", _velocity_planes, 2, _mirror_lgm_vel
     )
 )
 register_observation(
-    ObservationKind(
+    _lgm_and_planes_kind(
         "lgm_tracks",
         "LiDAR grid maps + the pedestrians' table",
-        "lgm",
-        _lgm_tracks_frame,
-        lambda li: (li.num_frames + 1, li.grid_size, li.grid_size),
-        np.dtype(np.uint8),
-        _byte_max,
-        lambda li: PlanesStack(li.num_frames, li.grid_size, 1),
+        _track_table,
+        1,
         _mirror_lgm_tracks,
-        _lgm_tracks_lidar,
-        extra_planes=1,
-        ringed_frame=_ringed_lgm_tracks_frame,
         encoder="lgm_tracks",
         encoder_args={"tracks": TRACK_TABLE_ROWS},
     )

@@ -15,8 +15,9 @@ Input ports:
         perceives them (the LiDAR tracker's crowd, with the emotions it keeps per track):
         when connected, the grid maps' inflated layer rings these pedestrians with their
         perceived discomfort distances (the static discs and walls stay `crowd`'s), while
-        the real scan stays `crowd`'s ("lgm_vel": its velocity planes too). Kinds with
-        rings only ("lgm", "ogm", "lgm_vel"; "drlvo" refuses it).
+        the real scan stays `crowd`'s ("lgm_vel", "lgm_tracks": their pedestrian planes
+        too). Kinds with rings only ("lgm", "ogm", "lgm_vel", "lgm_tracks"; "drlvo"
+        refuses it).
 Output ports:
     lgm_stack (abstract numpy array): the map observation, robot frame, oldest first —
         the N − 1 frames stored at the previous walking steps followed by the frame seen
@@ -30,7 +31,9 @@ Output ports:
             "drlvo" uint8 (1, 3, M, M): scan OGM + pedestrian velocity map (DRL-VO*,
                     `sensing/kinematic_maps.py`); no stack, the current image only;
             "lgm_vel" uint8 (N + 2, M, M): the LGM stack, then the v_x and v_y planes
-                    of the pedestrians now on the LGM's polar grid (robot frame).
+                    of the pedestrians now on the LGM's polar grid (robot frame);
+            "lgm_tracks" uint8 (N + 1, M, M): the LGM stack, then a plane whose first
+                    row is the table of the nearest pedestrians now (robot frame).
     scan (K): the LiDAR ranges now [m], float64, clipped to [0.27, 6.0]: the configured
         sensor's scan (`sensing/lidar_sensor.py::sensed_ranges`, the same real scan as the
         maps' 255 layer and the "scan" observation; its noise is drawn from the sensor's
