@@ -119,3 +119,39 @@ def test_a_digit_round_collected_on_ray_equals_the_serial_one(expert):
         assert (a["targets"].argmax(axis=1) == a["labels"]).all()
         for key in ("frames", "states", "labels", "targets"):
             assert np.array_equal(a[key], b[key]), key
+
+
+@pytest.mark.slow
+def test_the_digit_rounds_walk_the_calibrated_runs_world(tmp_path):
+    """A student trained in buildings on the tracker's crowd of a real sensor's scan meets
+    them on Digit too: the rounds' episodes are the run's family (walls in every scene of
+    `doorway`), and every round's line of the history names the world it walked."""
+    cfg = DaggerConfig(grid_kind="lgm_tracks", num_frames=3, hidden=16, family="doorway")
+    cfg.sensor, cfg.perception = "vlp16", "tracks"
+    cfg.expert_episodes, cfg.episodes_per_round, cfg.rounds = 1, 1, 1
+    cfg.grad_steps_first, cfg.grad_steps_per_round, cfg.batch_size = 2, 2, 8
+    cfg.eval_episodes = 1
+    source = tmp_path / "calibrated"
+    train_dagger(source, cfg.validate(), command="test")
+    short = EmoNavConfig()
+    short.episode.max_steps = 3
+    rounds = DigitRoundsConfig(rounds=1, episodes=2, grad_steps=2, batch_size=8, beta=0.5)
+    policy = run_digit_rounds(tmp_path / "digit", source, rounds, env_config=short)
+    (entry,) = PolicyPlanner(policy).meta["provenance"]["history"]
+    assert entry["world"] == {"family": "doorway", "sensor": "vlp16", "perception": "tracks"}
+    assert entry["walled_episodes"] == 2 and entry["digit_samples"] >= 6
+
+
+def test_the_rounds_world_is_the_runs_and_refuses_another_family():
+    from emonav_drake.learning.digit_dagger import rounds_world
+    from emonav_drake.params import ConfigError
+
+    run = DaggerConfig(family="office", sensor="vlp16", perception="tracks")
+    world = rounds_world(run)
+    assert world.crowd.family == "office"
+    assert world.perception.state_source == "lidar" and world.perception.map_rings == "tracks"
+    assert rounds_world(DaggerConfig()).perception.state_source == "truth"
+    other = EmoNavConfig()
+    other.crowd.family = "doorway"
+    with pytest.raises(ConfigError, match="trained in family 'office'.*'doorway'"):
+        rounds_world(run, other)

@@ -8,7 +8,10 @@ The calibrated route (`configs/variants/emobipednav_digit.yaml`) learns in a red
 fitted to Digit; these rounds close what the fit misses. Each round:
 
 1. **collect** `episodes` Digit navigation episodes (the whole diagram: station, crowd,
-   LiDAR grid maps) on seeds `first_seed + round·episodes + i`, one per Ray task. The
+   LiDAR grid maps) on seeds `first_seed + round·episodes + i`, one per Ray task, in the
+   calibrated run's world (`rounds_world`: its scenario family, LiDAR sensor and
+   perception — a student trained in buildings on the tracker's crowd meets them on
+   Digit too). The
    planner is `LabellingPlanner`: at every t_k it asks the calibrated run's expert (its
    `DaggerConfig.teacher()`: a planner spec, e.g. the model-aware DWA or the MPC) for its
    command, records
@@ -117,14 +120,14 @@ def _labelled_episode(
     student, cfg, grid_kind = runner.planner(method)
     expert = rounds.expert.build(cfg)
     planner = LabellingPlanner(student, expert, beta, seed)
+    scenario = sample_scenario(seed, runner.config)
     t0 = time.perf_counter()
-    record, _ = run_digit_episode(
-        sample_scenario(seed, runner.config), cfg, planner, grid_kind=grid_kind
-    )
+    record, _ = run_digit_episode(scenario, cfg, planner, grid_kind=grid_kind)
     return {
         "method": method,
         "seed": seed,
         "outcome": record.outcome,
+        "walls": len(scenario.walls),
         "wall_seconds": time.perf_counter() - t0,
         "frames": np.asarray(planner.frames),
         "states": np.asarray(planner.states, np.float32).reshape(-1, 4),
@@ -195,10 +198,12 @@ def run_digit_rounds(
 ) -> Path:
     """Digit rounds after the calibrated run in `source` (module docstring); returns the
     last round's policy. `env_config`: the episodes' navigation configuration (default:
-    the setting the calibrated run trained in, `DaggerConfig.setting`).
+    the setting the calibrated run trained in, `DaggerConfig.setting`), made the calibrated
+    run's world (`rounds_world`).
 
     Raises:
-        ConfigError: a setting of `cfg` out of range (its flag named).
+        ConfigError: a setting of `cfg` out of range (its flag named); `env_config` of
+            another scenario family than the calibrated run's.
         RunStateError: `source` has no DAgger state, or one that `train --resume` would
             refuse (`dagger.read_dagger_state`); `resume` and `out` has no state of the
             rounds, or a damaged one.
@@ -210,10 +215,12 @@ def run_digit_rounds(
     n, calibrated, digit, student, start_policy, dcfg = _start_from(source)
     # the calibrated run's teacher labels here too
     cfg = dc.replace(cfg, expert=dcfg.teacher(), planner_modules=list(dcfg.planner_modules))
-    if env_config is None:  # the calibrated run's setting (var_dd unless it trained in another)
-        from emonav_drake.configs import load_setting
-
-        env_config = load_setting(dcfg.setting)
+    env_config = rounds_world(dcfg, env_config)
+    world = {  # in every round's line of the history
+        "family": env_config.crowd.family,
+        "sensor": dcfg.sensor,
+        "perception": dcfg.perception,
+    }
     rnd, history = _resume_rounds(out, cfg, digit, student, n) if resume else (0, [])
     out.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(cfg.seed + rnd)
@@ -229,6 +236,7 @@ def run_digit_rounds(
         losses = _train_mixed(student, calibrated, digit, cfg, rng)
         train_s = time.perf_counter() - t0
         entry = _round_entry(rnd, cfg, episodes, len(digit), losses, collect_s, train_s)
+        entry["world"] = world
         history.append(entry)
         print(
             f"Digit round {rnd}: {len(episodes)} episodes (student SR with β = "
@@ -239,6 +247,29 @@ def run_digit_rounds(
         policy = _save_round(out, source, cfg, rnd, history, base_meta, student, digit, n)
         rnd += 1
     return policy
+
+
+def rounds_world(dcfg, env_config=None):
+    """The Digit rounds' navigation configuration (a copy): `env_config` (default: the
+    setting the calibrated run trained in, `DaggerConfig.setting`) with the calibrated run
+    `dcfg`'s world — its LiDAR `sensor`, its `perception` (`with_run_world`) and its scenario
+    `family` — so that the student meets on Digit the world it learnt in. `ConfigError` if
+    `env_config` names another family than the run's (other than the paper's arena)."""
+    import copy
+
+    from emonav_drake.configs import load_setting
+    from emonav_drake.learning.config_common import with_run_world
+
+    env = copy.deepcopy(env_config) if env_config is not None else load_setting(dcfg.setting)
+    with_run_world(env, dcfg)
+    if dcfg.family != "paper":
+        if env.crowd.family not in ("paper", dcfg.family):
+            raise ConfigError(
+                f"the calibrated run trained in family {dcfg.family!r}, the rounds' "
+                f"configuration names {env.crowd.family!r}: give one"
+            )
+        env.crowd.family = dcfg.family
+    return env
 
 
 def _start_from(source: Path) -> tuple:
@@ -311,6 +342,7 @@ def _round_entry(
         "episodes": len(episodes),
         "seeds": [episodes[0]["seed"], episodes[-1]["seed"]],
         "rollout_success": outcomes.count("success") / len(outcomes),
+        "walled_episodes": sum(1 for e in episodes if e.get("walls")),
         "digit_samples": digit_samples,
         "loss": float(np.mean(losses[-100:])),
         "collect_s": round(collect_s, 1),
