@@ -14,7 +14,9 @@ evaluation of the SAC fine-tuning (`history.json` of `emonav train --algo finetu
 dashed line marks a reference measured on the same seeds (e.g. the teacher).
 
 `--dagger LABEL=HISTORY` again adds another route on the same seeds (e.g. the same route
-with hard and with soft labels), unlabelled, in the next colour.
+with hard and with soft labels), unlabelled, in the next colour. `--then LABEL=HISTORY`
+adds a DAgger stage that continues the first route's kept round (a shield distillation
+after the MPC's rounds), on the same seeds, after it on the time axis.
 
 `--digit-rounds HISTORY=RUN` adds the Digit rounds that continue the kept round (`emonav
 digit-rounds`; HISTORY: a JSON with their `rounds`, as benchmarks/results/
@@ -47,8 +49,8 @@ from emonav_drake import palette  # noqa: E402
 from emonav_drake.evaluation.tables import wilson_interval  # noqa: E402
 
 
-def _dagger(path: Path) -> tuple[list[float], list[float], list[str]]:
-    t, xs, sr, labels = 0.0, [], [], []
+def _dagger(path: Path, start: float = 0.0) -> tuple[list[float], list[float], list[str]]:
+    t, xs, sr, labels = start, [], [], []
     for e in json.loads(path.read_text()):
         t += (e["collect_s"] + e["train_s"] + e["eval_s"]) / 60.0
         xs.append(t)
@@ -101,6 +103,14 @@ def main() -> None:
         "more are routes compared with it on the same seeds (repeatable)",
     )
     ap.add_argument(
+        "--then",
+        action="append",
+        default=[],
+        metavar="[LABEL=]HISTORY",
+        help="a DAgger run that continues the first route's kept round (e.g. its shield "
+        "distillation), drawn after it on the time axis (repeatable: each after the last)",
+    )
+    ap.add_argument(
         "--finetune",
         action="append",
         default=[],
@@ -122,7 +132,7 @@ def main() -> None:
     ap.add_argument("--png", type=Path, required=True)
     args = ap.parse_args()
 
-    compared = len(args.dagger) > 1  # routes side by side: references and names below
+    compared = len(args.dagger) + len(args.then) > 1  # references and names below
     fig, ax = plt.subplots(figsize=(7.5, 4.8 if compared else 4.0), dpi=150)
     world = f", calibrated world ({args.n} seeds)" if args.digit_rounds else ""
     stages = []
@@ -131,6 +141,12 @@ def main() -> None:
         name = label if sep else f"DAgger rounds (MPC teacher){world}"
         xs, sr, labels = _dagger(Path(path))
         stages.append((name, (xs, sr, labels if not stages else [""] * len(labels))))
+    end = stages[0][1][0][-1]
+    for spec in args.then:
+        label, sep, path = spec.rpartition("=")
+        xs, sr, labels = _dagger(Path(path), end)
+        stages.append((label if sep else "the next DAgger stage", (xs, sr, labels)))
+        end = xs[-1]
     n_dagger = len(stages)
     for i, spec in enumerate(args.finetune):
         label, sep, path = spec.rpartition("=")
