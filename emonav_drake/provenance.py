@@ -9,6 +9,7 @@ trained from.
 from __future__ import annotations
 
 import hashlib
+import os
 import subprocess
 from pathlib import Path
 from typing import Any
@@ -70,6 +71,45 @@ def package_identity(with_commit: bool = True) -> dict:
         out["dirty"] = None if status is None else bool(status)
     out["code_sha256"] = code_hash()
     return out
+
+
+def numeric_kernels() -> dict:
+    """The kernel sets this process's numerics run on: every BLAS library numpy and SciPy
+    loaded, with its version and the architecture its kernels were chosen for
+    (OpenBLAS picks them by the processor at import, e.g. `Haswell` or `SkylakeX`, unless
+    `OPENBLAS_CORETYPE` names them), and that variable itself. Two machines whose BLAS
+    kernels differ give records that differ in their last bits (docs/reliability.md,
+    "OpenBLAS chooses its kernels by the processor")."""
+    import numpy  # noqa: F401  (loads numpy's BLAS)
+    import scipy.linalg  # noqa: F401  (and SciPy's)
+    from threadpoolctl import threadpool_info
+
+    blas = sorted(
+        {
+            (str(i.get("internal_api")), str(i.get("version")), str(i.get("architecture")))
+            for i in threadpool_info()
+            if i.get("user_api") == "blas"
+        }
+    )
+    return {
+        "blas": [{"library": a, "version": v, "architecture": k} for a, v, k in blas],
+        "OPENBLAS_CORETYPE": os.environ.get("OPENBLAS_CORETYPE"),
+    }
+
+
+def kernels_difference(old: dict | None, new: dict) -> str | None:
+    """How the BLAS kernels of `new` (`numeric_kernels`) differ from a run's recorded
+    `old`, as words with the variable that would match them; None when they agree or the
+    run recorded none."""
+    if not old or old.get("blas") == new.get("blas"):
+        return None
+    there = ", ".join(f"{b['library']} {b['architecture']}" for b in old.get("blas", []))
+    here = ", ".join(f"{b['library']} {b['architecture']}" for b in new.get("blas", []))
+    hint = ""
+    arch = {b["architecture"] for b in old.get("blas", []) if b["library"] == "openblas"}
+    if len(arch) == 1:
+        hint = f"; OPENBLAS_CORETYPE={arch.pop()} before Python starts runs its kernels"
+    return f"the BLAS kernels are {there or 'none'} there, {here or 'none'} here{hint}"
 
 
 # --------------------------------------------------------------------------- settings

@@ -428,3 +428,32 @@ def test_a_runs_summary_names_the_emotion_source_it_ran_with():
     assert _estimate_label("mode: camera\nperiod: 2.0\n").startswith(
         "head camera + face classifier (0.5 Hz"
     )
+
+
+def test_a_run_records_its_blas_kernels_and_a_resume_on_others_says_how_to_match(
+    tmp_path, tiny, fresh, caplog
+):
+    """OpenBLAS picks its kernels by the processor, and they round differently in the
+    last bits: a run's settings record the kernels (and OPENBLAS_CORETYPE) it ran on, and
+    continuing it on other kernels warns, naming the variable that would match them —
+    the trials done stay and the run goes on."""
+    from emonav_drake.provenance import numeric_kernels
+
+    settings = json.loads((fresh / "settings.json").read_text())
+    here = numeric_kernels()
+    assert settings["numerics"] == here
+    assert here["blas"] and all(b["architecture"] not in ("", "None") for b in here["blas"])
+    arch = here["blas"][0]["architecture"]
+    assert f"BLAS kernels {here['blas'][0]['library']} {arch}" in (fresh / "tables.md").read_text()
+    run_dir = _copy(fresh, tmp_path)
+    other = {"library": "openblas", "version": "0.3.0", "architecture": "Cooperlake"}
+    _edit_settings(run_dir, lambda s: s | {"numerics": {"blas": [other]}})
+    with caplog.at_level("WARNING"):
+        assert main(_bench_argv(run_dir, tiny, trials=3)) == 0
+    assert "OPENBLAS_CORETYPE=Cooperlake" in caplog.text
+    assert len((run_dir / "trials.jsonl").read_text().splitlines()) == 3
+    caplog.clear()
+    run_same = _copy(fresh, tmp_path, "same")
+    with caplog.at_level("WARNING"):
+        assert main(_bench_argv(run_same, tiny, trials=3)) == 0
+    assert "other numerics" not in caplog.text

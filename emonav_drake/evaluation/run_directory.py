@@ -49,6 +49,7 @@ from emonav_drake.evaluation.run_settings import (
 from emonav_drake.evaluation.trial_check import check_trial
 from emonav_drake.json_input import JsonInputError, parse_json, read_json
 from emonav_drake.params import ConfigError, load_config
+from emonav_drake.provenance import kernels_difference
 from emonav_drake.run_lock import RunDirectoryBusy, locked_directory
 
 log = logging.getLogger(__name__)
@@ -209,6 +210,14 @@ class RunDirectory:
                 f"--out {self.path}: holds a benchmark with other settings: {diff}; use another "
                 "--out, or the same settings to continue it"
             )
+        kernels = kernels_difference(old.get("numerics"), settings.get("numerics", {}))
+        if kernels is not None:  # the same trials, not the same last bits
+            log.warning(
+                "continuing %s on other numerics: %s; the trials run here may differ in "
+                "their last bits (and, among walls, in outcome) from the same seeds there",
+                self.path,
+                kernels,
+            )
         if settings["trials"] < old["trials"]:
             raise BenchmarkSettingsError(
                 f"--trials {settings['trials']}: {self.path} already plans {old['trials']} trials "
@@ -311,7 +320,8 @@ class RunDirectory:
             f"{settings['config_sha256'][:12]}; emotion estimate: "
             f"{_estimate_label(settings['emotion_estimate_yaml'])}",
             f"package {pkg.get('version')} commit {str(pkg.get('commit'))[:12]}"
-            + (" (with uncommitted changes)" if pkg.get("dirty") else ""),
+            + (" (with uncommitted changes)" if pkg.get("dirty") else "")
+            + _kernels_label(settings.get("numerics")),
         ]
         if "runs" in settings:  # `emonav compare`: the runs the trials come from
             notes[-1] = "combined from " + "; ".join(
@@ -444,6 +454,15 @@ def _estimate_mode(estimate_yaml: str | None) -> str | None:
         return None
     mode = re.search(r"^mode:\s*(\w+)", estimate_yaml, re.M)
     return mode.group(1) if mode else "confusion"
+
+
+def _kernels_label(numerics: dict | None) -> str:
+    """'; BLAS kernels …' of a run that recorded them (docs/reliability.md: the same
+    records on another machine need the same kernels), else ''."""
+    if not numerics or not numerics.get("blas"):
+        return ""
+    kinds = sorted({f"{b['library']} {b['architecture']}" for b in numerics["blas"]})
+    return "; BLAS kernels " + ", ".join(kinds)
 
 
 def _estimate_label(estimate_yaml: str | None) -> str:

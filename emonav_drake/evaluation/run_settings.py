@@ -40,7 +40,7 @@ from emonav_drake.params import (
     is_deployable,
     load_config,
 )
-from emonav_drake.provenance import package_identity, sha256_bytes
+from emonav_drake.provenance import numeric_kernels, package_identity, sha256_bytes
 from emonav_drake.scenarios.scenario import MAX_SEED
 from emonav_drake.scenarios.scenario_families import WALLED_FAMILIES
 
@@ -129,6 +129,7 @@ def make_settings(
             None if emotion_estimate_yaml is None else sha256_bytes(emotion_estimate_yaml.encode())
         ),
         "package": package_identity(),
+        "numerics": numeric_kernels(),
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
     }
 
