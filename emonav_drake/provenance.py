@@ -79,7 +79,7 @@ def numeric_kernels() -> dict:
     (OpenBLAS picks them by the processor at import, e.g. `Haswell` or `SkylakeX`, unless
     `OPENBLAS_CORETYPE` names them), and that variable itself. Two machines whose BLAS
     kernels differ give records that differ in their last bits (docs/reliability.md,
-    "OpenBLAS chooses its kernels by the processor")."""
+    "OpenBLAS chooses its kernels …")."""
     import numpy  # noqa: F401  (loads numpy's BLAS)
     import scipy.linalg  # noqa: F401  (and SciPy's)
     from threadpoolctl import threadpool_info
