@@ -31,6 +31,12 @@ import sys
 import tempfile
 from pathlib import Path
 
+from emonav_drake.provenance import kernels_difference, numeric_kernels
+
+# The kernels of a fingerprint written before they were recorded (860e3d2): OpenBLAS's
+# SkylakeX set, the one that reproduces it (docs/reliability.md).
+SKYLAKEX = {"blas": [{"library": "openblas", "version": "?", "architecture": "SkylakeX"}]}
+
 ROOT = Path(__file__).resolve().parent.parent
 PLANNERS = "dwa,mpc,policy,sarl"
 TRIALS = 3
@@ -118,6 +124,7 @@ def fingerprint() -> dict:
         "trials": trials,
         "dagger_weights_sha256": student.pop("weights_sha256"),
         "dagger_decisions": student,
+        "numerics": numeric_kernels(),  # the BLAS kernels the trials ran on
     }
 
 
@@ -173,6 +180,9 @@ def main() -> int:
     for line in diff:
         print(line)
     print(f"{len(diff)} difference(s) against {args.check} (commit {old['commit']})")
+    kernels = kernels_difference(old.get("numerics", SKYLAKEX), new["numerics"])
+    if diff and kernels:  # the last bits follow OpenBLAS's kernels (docs/reliability.md)
+        print(f"note: {kernels}")
     return 1 if diff else 0
 
 

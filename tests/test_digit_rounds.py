@@ -17,23 +17,29 @@ from emonav_drake.planners.variants import CONFIG_DIR as ROUTES
 from emonav_drake.typed_yaml import load_typed_yaml
 
 
+def _tiny_route_then_a_digit_round(tmp_path, cfg: DaggerConfig):
+    """`cfg`'s calibrated run at a tiny budget, then one Digit round of two 3-step
+    episodes from it; returns the round's policy file."""
+    cfg.expert_episodes, cfg.episodes_per_round, cfg.rounds = 2, 1, 1
+    cfg.grad_steps_first, cfg.grad_steps_per_round, cfg.batch_size = 2, 2, 8
+    cfg.eval_episodes = 1
+    source = tmp_path / "calibrated"
+    train_dagger(source, cfg.validate(), command="test")
+    short = EmoNavConfig()
+    short.episode.max_steps = 3
+    rounds = DigitRoundsConfig(rounds=1, episodes=2, grad_steps=3, batch_size=8, beta=0.5)
+    return run_digit_rounds(tmp_path / "digit", source, rounds, env_config=short)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(
     "route", ["emobipednav_digit", "emobipednav_digit_mpc", "emobipednav_distilled"]
 )
 def test_a_tiny_digit_round_writes_a_loadable_policy(tmp_path, route):
     cfg = load_typed_yaml(DaggerConfig, path=ROUTES / f"{route}.yaml")
-    cfg.expert_episodes, cfg.episodes_per_round, cfg.rounds = 2, 1, 1
-    cfg.grad_steps_first, cfg.grad_steps_per_round, cfg.batch_size = 2, 2, 8
-    cfg.eval_episodes = 1
     if isinstance(cfg.expert, MpcSpec):
         cfg.expert = MpcSpec(clearance=0.1)  # a widened teacher labels on Digit too
-    source = tmp_path / "calibrated"
-    train_dagger(source, cfg.validate(), command="test")
-    short = EmoNavConfig()
-    short.episode.max_steps = 3
-    rounds = DigitRoundsConfig(rounds=1, episodes=2, grad_steps=3, batch_size=8, beta=0.5)
-    policy = run_digit_rounds(tmp_path / "digit", source, rounds, env_config=short)
+    policy = _tiny_route_then_a_digit_round(tmp_path, cfg)
     planner = PolicyPlanner(policy)
     prov = planner.meta["provenance"]
     assert prov["route"] == "dagger+digit" and prov["round"] == 0
@@ -128,15 +134,7 @@ def test_the_digit_rounds_walk_the_calibrated_runs_world(tmp_path):
     `doorway`), and every round's line of the history names the world it walked."""
     cfg = DaggerConfig(grid_kind="lgm_tracks", num_frames=3, hidden=16, family="doorway")
     cfg.sensor, cfg.perception = "vlp16", "tracks"
-    cfg.expert_episodes, cfg.episodes_per_round, cfg.rounds = 1, 1, 1
-    cfg.grad_steps_first, cfg.grad_steps_per_round, cfg.batch_size = 2, 2, 8
-    cfg.eval_episodes = 1
-    source = tmp_path / "calibrated"
-    train_dagger(source, cfg.validate(), command="test")
-    short = EmoNavConfig()
-    short.episode.max_steps = 3
-    rounds = DigitRoundsConfig(rounds=1, episodes=2, grad_steps=2, batch_size=8, beta=0.5)
-    policy = run_digit_rounds(tmp_path / "digit", source, rounds, env_config=short)
+    policy = _tiny_route_then_a_digit_round(tmp_path, cfg)
     (entry,) = PolicyPlanner(policy).meta["provenance"]["history"]
     assert entry["world"] == {"family": "doorway", "sensor": "vlp16", "perception": "tracks"}
     assert entry["walled_episodes"] == 2 and entry["digit_samples"] >= 6
