@@ -97,14 +97,20 @@ def numeric_kernels() -> dict:
     }
 
 
+def kernels_words(numerics: dict | None) -> str:
+    """The BLAS kernels a `numeric_kernels` record names, as "library architecture" words
+    (each kind once, sorted; '' when it names none)."""
+    blas = (numerics or {}).get("blas") or []
+    return ", ".join(sorted({f"{b['library']} {b['architecture']}" for b in blas}))
+
+
 def kernels_difference(old: dict | None, new: dict) -> str | None:
     """How the BLAS kernels of `new` (`numeric_kernels`) differ from a run's recorded
     `old`, as words with the variable that would match them; None when they agree or the
     run recorded none."""
     if not old or old.get("blas") == new.get("blas"):
         return None
-    there = ", ".join(f"{b['library']} {b['architecture']}" for b in old.get("blas", []))
-    here = ", ".join(f"{b['library']} {b['architecture']}" for b in new.get("blas", []))
+    there, here = kernels_words(old), kernels_words(new)
     hint = ""
     arch = {b["architecture"] for b in old.get("blas", []) if b["library"] == "openblas"}
     if len(arch) == 1:

@@ -49,7 +49,7 @@ from emonav_drake.evaluation.run_settings import (
 from emonav_drake.evaluation.trial_check import check_trial
 from emonav_drake.json_input import JsonInputError, parse_json, read_json
 from emonav_drake.params import ConfigError, load_config
-from emonav_drake.provenance import kernels_difference
+from emonav_drake.provenance import kernels_difference, kernels_words
 from emonav_drake.run_lock import RunDirectoryBusy, locked_directory
 
 log = logging.getLogger(__name__)
@@ -459,10 +459,8 @@ def _estimate_mode(estimate_yaml: str | None) -> str | None:
 def _kernels_label(numerics: dict | None) -> str:
     """'; BLAS kernels …' of a run that recorded them (docs/reliability.md: the same
     records on another machine need the same kernels), else ''."""
-    if not numerics or not numerics.get("blas"):
-        return ""
-    kinds = sorted({f"{b['library']} {b['architecture']}" for b in numerics["blas"]})
-    return "; BLAS kernels " + ", ".join(kinds)
+    words = kernels_words(numerics)
+    return "; BLAS kernels " + words if words else ""
 
 
 def _estimate_label(estimate_yaml: str | None) -> str:

@@ -108,6 +108,21 @@ def with_run_world(env_cfg: EmoNavConfig, cfg: "TrainingRunConfig") -> EmoNavCon
     return env_cfg
 
 
+def with_run_family(env_cfg: EmoNavConfig, family: str) -> EmoNavConfig:
+    """`env_cfg` (changed in place and returned) with the training run's scenario
+    `family`: "paper" leaves the configuration's own; any other family replaces the paper's
+    arena. `ConfigError` if the configuration already names another family (two answers to
+    one question: give one)."""
+    if family != "paper":
+        if env_cfg.crowd.family not in ("paper", family):
+            raise ConfigError(
+                f"the run trained in family {family!r} and the environment configuration "
+                f"names family {env_cfg.crowd.family!r}: give one"
+            )
+        env_cfg.crowd.family = family
+    return env_cfg
+
+
 def check_choice(name: str, value: str, allowed: tuple[str, ...]) -> None:
     """`ConfigError` unless `value` is one of `allowed`."""
     if value not in allowed:

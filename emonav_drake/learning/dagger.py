@@ -56,7 +56,7 @@ from emonav_drake.atomic_io import write_text_atomic
 from emonav_drake.configs import load_setting
 from emonav_drake.errors import RunInterrupted
 from emonav_drake.learning.config import DaggerConfig
-from emonav_drake.learning.config_common import with_run_world
+from emonav_drake.learning.config_common import with_run_family, with_run_world
 from emonav_drake.learning.dagger_rollouts import (
     evaluate_student,
     make_world,
@@ -143,13 +143,7 @@ def train_dagger(
     env_cfg = copy.deepcopy(env_cfg or load_setting(cfg.setting))
     env_cfg.lidar.num_frames = cfg.num_frames  # the variant's stack depth
     with_run_world(env_cfg, cfg)  # its LiDAR (ideal: the setting's own), its perception
-    if cfg.family != "paper":  # scenes to train and select on
-        if env_cfg.crowd.family not in ("paper", cfg.family):
-            raise ConfigError(
-                f"family = {cfg.family!r} and an environment of family "
-                f"{env_cfg.crowd.family!r}: give one"
-            )
-        env_cfg.crowd.family = cfg.family
+    with_run_family(env_cfg, cfg.family)  # scenes to train and select on
     out = Path(out)
     ckpt = out / STATE_FILE
     if resume:

@@ -34,15 +34,19 @@ import dataclasses as dc
 import logging
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from emonav_drake.learning.digit_rounds_config import DigitRoundsConfig, rounds_plain
 from emonav_drake.navigation.observations import observation_kind
-from emonav_drake.params import ConfigError
+from emonav_drake.params import ConfigError, EmoNavConfig
 from emonav_drake.planners.dwa import DwaPlanner
 from emonav_drake.planners.policy import vector_state
 from emonav_drake.planners.protocol import Planner
+
+if TYPE_CHECKING:
+    from emonav_drake.learning.config import DaggerConfig
 
 log = logging.getLogger(__name__)
 DIGIT_ROUNDS_FORMAT = "emonav-digit-dagger/1"
@@ -249,27 +253,20 @@ def run_digit_rounds(
     return policy
 
 
-def rounds_world(dcfg, env_config=None):
+def rounds_world(dcfg: DaggerConfig, env_config: EmoNavConfig | None = None) -> EmoNavConfig:
     """The Digit rounds' navigation configuration (a copy): `env_config` (default: the
     setting the calibrated run trained in, `DaggerConfig.setting`) with the calibrated run
     `dcfg`'s world — its LiDAR `sensor`, its `perception` (`with_run_world`) and its scenario
-    `family` — so that the student meets on Digit the world it learnt in. `ConfigError` if
-    `env_config` names another family than the run's (other than the paper's arena)."""
+    `family` (`with_run_family`) — so that the student meets on Digit the world it learnt
+    in. `ConfigError` if `env_config` names another family than the run's (other than the
+    paper's arena)."""
     import copy
 
     from emonav_drake.configs import load_setting
-    from emonav_drake.learning.config_common import with_run_world
+    from emonav_drake.learning.config_common import with_run_family, with_run_world
 
     env = copy.deepcopy(env_config) if env_config is not None else load_setting(dcfg.setting)
-    with_run_world(env, dcfg)
-    if dcfg.family != "paper":
-        if env.crowd.family not in ("paper", dcfg.family):
-            raise ConfigError(
-                f"the calibrated run trained in family {dcfg.family!r}, the rounds' "
-                f"configuration names {env.crowd.family!r}: give one"
-            )
-        env.crowd.family = dcfg.family
-    return env
+    return with_run_family(with_run_world(env, dcfg), dcfg.family)
 
 
 def _start_from(source: Path) -> tuple:
