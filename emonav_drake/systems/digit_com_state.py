@@ -41,6 +41,8 @@ class DigitComState(LeafSystem):
         p_WC = self._plant.CalcCenterOfMassPositionInWorld(self._ctx)
         v_WC = self._plant.CalcCenterOfMassTranslationalVelocityInWorld(self._ctx)
         w, qx, qy, qz = x[self._quat]
-        yaw = math.atan2(2.0 * (w * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+        # the form that holds for a quaternion of any norm (the discrete plant's grows
+        # slowly as the robot turns; 1 − 2(qy² + qz²) would assume it is one)
+        yaw = math.atan2(2.0 * (w * qz + qx * qy), w * w + qx * qx - qy * qy - qz * qz)
         speed = v_WC[0] * math.cos(yaw) + v_WC[1] * math.sin(yaw)
         output.SetFromVector(np.array([p_WC[0], p_WC[1], yaw, speed]))

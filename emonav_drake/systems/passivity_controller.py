@@ -68,7 +68,7 @@ def _as_slice(idx: np.ndarray) -> slice | np.ndarray:
 def _orientation_error(
     qw: float, qx: float, qy: float, qz: float, yaw: float, pitch: float
 ) -> tuple[float, float, float]:
-    """Error of the torso orientation (unit quaternion) against Rz(yaw)·Ry(pitch), world
+    """Error of the torso orientation (a unit quaternion: normalise it first) against Rz(yaw)·Ry(pitch), world
     axes: ½ vee(R R_dᵀ − R_d Rᵀ) ≈ θ k for R = exp(θ k̂) R_d. Scalar math: no arrays."""
     R00 = 1 - 2 * (qy * qy + qz * qz)
     R01 = 2 * (qx * qy - qw * qz)
@@ -211,6 +211,10 @@ class PassivityController(LeafSystem):
         xs = x.tolist()  # scalar work in Python floats, matrix work in numpy
         b0, v0 = self._bq0, self._nq + self._bv0
         qw, qx, qy, qz, z = xs[b0], xs[b0 + 1], xs[b0 + 2], xs[b0 + 3], xs[b0 + 6]
+        # the discrete plant does not renormalise the torso's quaternion (its norm grows
+        # as the robot turns; Drake's kinematics normalise it): the rotation below must
+        n = 1.0 / math.sqrt(qw * qw + qx * qx + qy * qy + qz * qz)
+        qw, qx, qy, qz = qw * n, qx * n, qy * n, qz * n
         wx, wy, wz, vbx, vby, vbz = xs[v0 : v0 + 6]
         phase = tg.phase
 
