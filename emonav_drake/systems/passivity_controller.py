@@ -68,8 +68,9 @@ def _as_slice(idx: np.ndarray) -> slice | np.ndarray:
 def _orientation_error(
     qw: float, qx: float, qy: float, qz: float, yaw: float, pitch: float
 ) -> tuple[float, float, float]:
-    """Error of the torso orientation (a unit quaternion: normalise it first) against Rz(yaw)·Ry(pitch), world
-    axes: ½ vee(R R_dᵀ − R_d Rᵀ) ≈ θ k for R = exp(θ k̂) R_d. Scalar math: no arrays."""
+    """Error of the torso orientation (a unit quaternion: normalise it first) against
+    Rz(yaw)·Ry(pitch), world axes: ½ vee(R R_dᵀ − R_d Rᵀ) ≈ θ k for R = exp(θ k̂) R_d.
+    Scalar math: no arrays."""
     R00 = 1 - 2 * (qy * qy + qz * qz)
     R01 = 2 * (qx * qy - qw * qz)
     R02 = 2 * (qx * qz + qw * qy)
