@@ -39,6 +39,7 @@ from emonav_drake.params_crowd import (
 )
 from emonav_drake.params_planners import DwaParams, MpcParams, RouteParams
 from emonav_drake.params_robot import (
+    LEG_JOINT_NAMES,
     MAP_RINGS,
     NUM_BEAMS,
     PEOPLE_AS,
@@ -237,6 +238,27 @@ class EmoNavConfig:
             "walking.lateral_step_min",
             w.lateral_step_min,
             f"< walking.lateral_step_max ({w.lateral_step_max})",
+        )
+        for j in w.implicit_damping:
+            require(
+                j in LEG_JOINT_NAMES,
+                "walking.implicit_damping",
+                w.implicit_damping,
+                f"leg joints among {list(LEG_JOINT_NAMES)} ({j!r} is not one)",
+            )
+        require(
+            len(set(w.implicit_damping)) == len(w.implicit_damping),
+            "walking.implicit_damping",
+            w.implicit_damping,
+            "each joint once",
+        )
+        require(
+            not w.implicit_damping or abs(w.controller_period - w.time_step) < 1e-12,
+            "walking.controller_period",
+            w.controller_period,
+            f"= walking.time_step ({w.time_step}) when walking.implicit_damping names "
+            "joints (the solver's damping needs the controller's reference velocity at "
+            "every step)",
         )
         for name in ("planner_period", "controller_period", "fall_check_period"):
             period = getattr(w, name)

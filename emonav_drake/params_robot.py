@@ -13,6 +13,9 @@ import math
 
 from emonav_drake.config_fields import SEED_RANGE, WORLD_POINT, setting
 
+# Digit's leg joints, hip to ankle: the order of `walking.kd_leg` and of each leg's indices
+LEG_JOINT_NAMES = ("hip_roll", "hip_yaw", "hip_pitch", "knee", "toe_pitch", "toe_roll")
+
 
 def pendulum_frequency(height: float, gravity: float) -> float:
     """ω = √(g/H) [1/s] of a (angular-momentum) linear inverted pendulum of CoM height H [m]
@@ -344,6 +347,13 @@ class WalkingParams:
         "N·m·s/rad",
         (6, 0.0, 1000.0),
     )
+    implicit_damping: list[str] = setting(
+        [],
+        "leg joints (hip_roll, hip_yaw, hip_pitch, knee, toe_pitch, toe_roll) whose K_D "
+        "damping the contact solver applies implicitly, at the end of its step, as the "
+        "actuator's PD controller (proportional gain 0); the others' K_D s is in the "
+        "controller's torque",
+    )
     kd_arm: float = setting(20.0, "PD damping of the arms when held", "N·m·s/rad", (0.0, 1000.0))
     kp_arm: float = setting(200.0, "PD stiffness of the arms when held", "N·m/rad", (0.0, 10000.0))
     ankle_torque_fraction: float = setting(
@@ -356,7 +366,7 @@ class WalkingParams:
     controller_period: float = setting(
         0.004, "passivity controller period; = time_step: every step", "s", (0.0002, 0.02)
     )
-    time_step: float = setting(0.004, "plant step", "s", (0.0002, 0.005))
+    time_step: float = setting(0.004, "plant step", "s", (0.0002, 0.01))
     friction: float = setting(1.0, "ground friction coefficient", "", (0.1, 2.0))
     arms: str = setting("welded", '"welded" (fixed at the held pose) or "held" (PD-controlled)')
     fall_height: float = setting(0.6, "torso origin below this is a fall", "m", (0.2, 1.0))

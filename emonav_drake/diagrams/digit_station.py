@@ -2,10 +2,10 @@
 
     command ──►┌──────────────────────────────────────────────────────────────┐
     (u_v, u_Δθ)│ AlipFootstepPlanner (50 Hz)  ─targets─► PassivityController  │
-               │        ▲                                 (250 Hz) │ torques   │
-               │        │ state                                   ▼           │
-               │ Digit MultibodyPlant (SAP, 4 ms) ──► DigitComState ──────────┼──► robot_state
-               │        └──────────────────────────► FallMonitor (125 Hz) ────┼──► fall
+               │        ▲                       (every plant step) │ torques,  │
+               │        │ state                                   ▼ v_r       │
+               │ Digit MultibodyPlant (SAP) ──────► DigitComState ────────────┼──► robot_state
+               │        └──────────────────────────► FallMonitor ─────────────┼──► fall
                └──────────────────────────────────────────────────────────────┘
 
 Input port:
@@ -18,7 +18,10 @@ Output ports:
     plant_state (nq + nv): the Digit plant's (q, v).
     targets (abstract `WalkingTargets`): the footstep planner's current targets.
     next_step (1): steps started so far; step_log (N_LOG): the last switch's record.
-    actuation (nu): the controller's joint torques [N·m].
+    actuation (nu): the joint torques [N·m] the plant applies in the step from now, in
+        actuator order: the controller's, plus the contact solver's damping of the joints
+        in `walking.implicit_damping` (the plant's net actuation; evaluating it solves
+        that step's contact problem).
     query_object, contact_results: the scene graph's and the plant's, for visualisers.
 
 The plant's default state is standing still at `pose`, so `Simulator(diagram)` with a
@@ -95,6 +98,11 @@ class DigitStation(Diagram):
         b.Connect(model.scene_graph.get_query_output_port(), fall.GetInputPort("geometry_query"))
         b.Connect(planner.GetOutputPort("targets"), controller.GetInputPort("targets"))
         b.Connect(controller.GetOutputPort("actuation"), plant.get_actuation_input_port())
+        if model.implicit_legs.any():  # the solver's damping needs the reference velocity
+            b.Connect(
+                controller.GetOutputPort("desired_state"),
+                plant.get_desired_state_input_port(model.instance),
+            )
         b.ExportInput(planner.GetInputPort("command"), "command")
         b.ExportOutput(com.GetOutputPort("robot_state"), "robot_state")
         b.ExportOutput(fall.GetOutputPort("fall"), "fall")
@@ -102,7 +110,7 @@ class DigitStation(Diagram):
         b.ExportOutput(planner.GetOutputPort("targets"), "targets")
         b.ExportOutput(planner.GetOutputPort("next_step"), "next_step")
         b.ExportOutput(planner.GetOutputPort("step_log"), "step_log")
-        b.ExportOutput(controller.GetOutputPort("actuation"), "actuation")
+        b.ExportOutput(plant.get_net_actuation_output_port(), "actuation")
         b.ExportOutput(model.scene_graph.get_query_output_port(), "query_object")
         b.ExportOutput(plant.get_contact_results_output_port(), "contact_results")
         b.ExportOutput(plant.get_body_poses_output_port(), "body_poses")

@@ -30,14 +30,15 @@ from pydrake.multibody.plant import (
     MultibodyPlant,
     MultibodyPlantConfig,
 )
-from pydrake.multibody.tree import ModelInstanceIndex
+from pydrake.multibody.tree import ModelInstanceIndex, PdControllerGains
 from pydrake.systems.framework import DiagramBuilder
 
 from emonav_drake.params import WalkingParams
+from emonav_drake.params_robot import LEG_JOINT_NAMES
 
 DIGIT_URDF = Path(__file__).resolve().parent.parent / "models" / "digit" / "digit.urdf"
 SIDES = ("left", "right")
-LEG_JOINTS = ("hip_roll", "hip_yaw", "hip_pitch", "knee", "toe_pitch", "toe_roll")
+LEG_JOINTS = LEG_JOINT_NAMES
 ARM_JOINTS = ("shoulder_roll", "shoulder_pitch", "shoulder_yaw", "elbow")
 # The held arm pose [rad] (shoulder roll, pitch, yaw, elbow; the right arm mirrors roll/yaw).
 ARM_POSE = (0.15, 0.0, 0.0, -0.5)
@@ -69,6 +70,10 @@ class DigitModel:
     indices of leg i (0 left, 1 right) in `LEG_JOINTS` order; `arm_*` the same for the
     arms (empty when welded). `base_v` = slice(0, 6) style index array of the torso's
     floating velocities [ω_WT; v_WTo], `base_q` its quaternion + position.
+    `implicit_legs` (6 booleans, `LEG_JOINTS` order): the joints damped by the contact
+    solver (`walking.implicit_damping`); `actuated_q`, `actuated_v`: the position and
+    velocity index of each actuator's joint, in actuation-input order (the layout of the
+    plant's desired-state port: [q_d; v_d]).
     """
 
     plant: MultibodyPlant
@@ -88,6 +93,9 @@ class DigitModel:
     foot_bodies: list
     torso_body: object
     non_foot_bodies: set
+    implicit_legs: np.ndarray
+    actuated_q: np.ndarray
+    actuated_v: np.ndarray
 
     @property
     def num_positions(self) -> int:
@@ -115,6 +123,21 @@ def _weld_arms(plant: MultibodyPlant, instance: ModelInstanceIndex) -> None:
             plant.RemoveJoint(joint)
             X_PC = RigidTransform(_axis_rotation(axis, angle))
             plant.WeldFrames(parent, child, X_PC)  # the joint's frames coincide at angle 0
+
+
+def _damp_implicitly(
+    plant: MultibodyPlant, instance: ModelInstanceIndex, params: WalkingParams
+) -> None:
+    """Give the actuators of the joints in `params.implicit_damping` (both legs) a PD
+    controller of proportional gain 0 and derivative gain K_D (`params.kd_leg`): SAP then
+    applies −K_D (v − v_d) with the velocity at the end of its step, inside its solve (the
+    controller supplies v_d on the plant's desired-state port and the rest of the torque
+    as feed-forward on its actuation port)."""
+    for name in params.implicit_damping:
+        kd = params.kd_leg[LEG_JOINTS.index(name)]
+        for side in SIDES:
+            actuator = plant.GetJointActuatorByName(f"{side}_{name}_motor", instance)
+            actuator.set_controller_gains(PdControllerGains(p=0.0, d=kd))
 
 
 def _axis_rotation(axis: np.ndarray, angle: float) -> RotationMatrix:
@@ -162,6 +185,7 @@ def AddDigitPlant(
         np.array([0.8, 0.8, 0.78, 1.0]),
     )
     plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, -gravity])
+    _damp_implicitly(plant, instance, params)
     plant.Finalize()
     model = describe_digit(plant, scene_graph, instance, params)
     x0 = standing_state(model, pose=pose)
@@ -206,6 +230,8 @@ def describe_digit(
     foot_indices = {int(b.index()) for b in feet}
     non_foot = {int(i) for i in plant.GetBodyIndices(instance) if int(i) not in foot_indices}
     mass = float(sum(plant.get_body(i).default_mass() for i in plant.GetBodyIndices(instance)))
+    actuators = [plant.get_joint_actuator(i) for i in plant.GetJointActuatorIndices(instance)]
+    actuators.sort(key=lambda a: a.input_start())
     return DigitModel(
         plant=plant,
         scene_graph=scene_graph,
@@ -224,6 +250,9 @@ def describe_digit(
         foot_bodies=feet,
         torso_body=torso,
         non_foot_bodies=non_foot,
+        implicit_legs=np.array([j in params.implicit_damping for j in LEG_JOINTS]),
+        actuated_q=np.array([a.joint().position_start() for a in actuators], dtype=int),
+        actuated_v=np.array([a.joint().velocity_start() for a in actuators], dtype=int),
     )
 
 

@@ -1,17 +1,24 @@
-"""`PassivityController`: the 1 kHz passivity-based whole-body controller.
+"""`PassivityController`: the passivity-based whole-body controller (the paper's 1 kHz
+layer; here at every plant step).
 
 Input ports:
     state (nq + nv): the Digit plant state (q, v).
     targets (abstract `robot.walking_targets.WalkingTargets`): the footstep planner's
         targets; the controller evaluates their reference motion at its own time.
-Output port:
+Output ports:
     actuation (nu): joint torques [N·m] in the plant's actuator order, within the
         joint-side effort limits; the stance toe (ankle) torques within
-        `ankle_torque_fraction` of theirs. Computed in the output port from the current
-        state (no one-step delay): the discrete plant pulls it at every step. With a
-        `controller_period` longer than the plant's `time_step` (e.g. 2 ms, 4 ms) it is
-        computed only at the controller's instants and held in between (a zero-order
-        hold, kept in a discrete state by a periodic update).
+        `ankle_torque_fraction` of theirs. For the joints the contact solver damps
+        (`walking.implicit_damping`) this is the feed-forward only: the solver adds
+        −K_D (v − v_r) at the end of its step and bounds the sum by the effort limit.
+    desired_state (2 nu, only with `walking.implicit_damping`): [q; v_r] of each
+        actuator's joint in actuator order [rad; rad/s], for the plant's desired-state
+        port (proportional gain 0: q is the measured position; v_r the reference
+        velocity q̇_r of the law below). Both ports read one computation per step.
+Computed from the current state (no one-step delay): the discrete plant pulls the torques
+at every step. With a `controller_period` longer than the plant's `time_step` (explicit
+damping only) they are computed only at the controller's instants and held in between (a
+zero-order hold, kept in a discrete state by a periodic update).
 
 Law (Slotine–Li / Sadeghian form on the stance-constrained dynamics). The stance foot is
 a holonomic constraint J_st v = 0; with it the robot's 12 leg joints are fully actuated
@@ -47,7 +54,7 @@ import time
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.multibody.tree import JacobianWrtVariable, MultibodyForces
-from pydrake.systems.framework import BasicVector, Context, LeafSystem, State
+from pydrake.systems.framework import BasicVector, Context, LeafSystem, State, ValueProducer
 from scipy.linalg.lapack import dgesv
 
 from emonav_drake.params import WalkingParams
@@ -142,12 +149,18 @@ class PassivityController(LeafSystem):
         self._bv0 = int(model.base_v[0])
         self._lv = [_as_slice(i) for i in model.leg_v]
         self._lu = [_as_slice(i) for i in model.leg_u]
-        self._kd = np.asarray(params.kd_leg, dtype=float)
+        # K_D s of the joints the solver damps (`implicit_legs`) is the plant's, not ours
+        implicit = np.asarray(model.implicit_legs, dtype=bool)
+        self._kd = np.where(implicit, 0.0, np.asarray(params.kd_leg, dtype=float))
         limits = np.array(
             [plant.get_joint_actuator(i).effort_limit() for i in plant.GetJointActuatorIndices()]
         )
-        self._u_max = limits
         self._ankle_max = params.ankle_torque_fraction * limits[model.leg_u[0][4:6]]
+        # the solver bounds feed-forward + damping of those joints by the effort limit
+        # itself: their feed-forward is left unbounded here
+        self._u_max = limits.copy()
+        for leg_u in model.leg_u:
+            self._u_max[np.asarray(leg_u)[implicit]] = np.inf
         self._mass = model.total_mass
         self._record = record_timing
         self.tick_seconds: list[float] = []
@@ -155,7 +168,20 @@ class PassivityController(LeafSystem):
         self._state_in = self.DeclareVectorInputPort("state", nx)
         self._targets_in = self.DeclareAbstractInputPort("targets", AbstractValue.Make(object()))
         self._period = params.controller_period
-        if abs(self._period / params.time_step - 1.0) < 1e-9:
+        if implicit.any():  # torques and the reference velocity, computed once per step
+            self._aq, self._av = model.actuated_q, model.actuated_v
+            self._held = None
+            self._result = self.DeclareCacheEntry(
+                "torques and the solver's desired state",
+                ValueProducer(
+                    allocate=lambda: AbstractValue.Make(np.zeros(3 * self._nu)),
+                    calc=self._calc_result,
+                ),
+                {self.all_input_ports_ticket(), self.time_ticket()},
+            )
+            self._out = self.DeclareVectorOutputPort("actuation", self._nu, self._calc_from_result)
+            self.DeclareVectorOutputPort("desired_state", 2 * self._nu, self._calc_desired)
+        elif abs(self._period / params.time_step - 1.0) < 1e-9:
             self._held = None
             self._out = self.DeclareVectorOutputPort("actuation", self._nu, self._calc_actuation)
         else:
@@ -175,6 +201,20 @@ class PassivityController(LeafSystem):
         output.SetFromVector(self.compute(x, tg, context.get_time()))
         if self._record:
             self.tick_seconds.append(time.perf_counter() - t0)
+
+    def _calc_result(self, context: Context, value: AbstractValue) -> None:
+        t0 = time.perf_counter()
+        x = self._state_in.Eval(context)
+        u = self.compute(x, self._targets_in.Eval(context), context.get_time())
+        value.set_value(np.concatenate([u, x[self._aq], self._vr[self._av]]))
+        if self._record:
+            self.tick_seconds.append(time.perf_counter() - t0)
+
+    def _calc_from_result(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(self._result.Eval(context)[: self._nu])
+
+    def _calc_desired(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(self._result.Eval(context)[self._nu :])
 
     def _on_tick(self, t: float) -> bool:
         return abs(t - round(t / self._period) * self._period) < 1e-9
