@@ -53,6 +53,15 @@ class FallStatus:
     time: float = math.nan
     reason: str = ""
 
+    # Immutable: Drake copies a system's abstract state twice at each of its unrestricted
+    # updates (the fall check's, every few milliseconds); a copy is the object itself
+    # (a generic deep copy of a frozen dataclass cost ~3 % of a Digit episode's wall time).
+    def __copy__(self) -> FallStatus:
+        return self
+
+    def __deepcopy__(self, memo: dict) -> FallStatus:
+        return self
+
 
 class FallMonitor(LeafSystem):
     """Checks the Digit plant for a fall (see the module docstring).
