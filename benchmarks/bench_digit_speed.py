@@ -4,8 +4,8 @@
         [--trees DIR DIR ...] [--repeats 3] [--walk-seconds 10]
         [--nav-seeds 1001 1002 1003] [--core N]
 
-For every configuration (default: the 1 ms / 1 kHz reference `configs/walking_1ms.yaml`
-and the package default), pinned to one CPU core and interleaved run by run (so a change of
+For every configuration (default: the 4 ms stack `configs/walking_4ms.yaml`, every K_D
+explicit, and the package default: 10 ms with the solver's implicit damping), pinned to one CPU core and interleaved run by run (so a change of
 load on the shared machine hits every configuration alike):
 
 * walk: `--repeats` open-loop walks of `--walk-seconds` with seeded random commands
@@ -51,7 +51,7 @@ def main() -> None:
         nargs="+",
         default=None,
         help="YAML configurations ('default' = the package defaults); the first is the base "
-        "(default: walking_1ms.yaml and default; with --trees: default)",
+        "(default: walking_4ms.yaml and default; with --trees: default)",
     )
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--walk-seconds", type=float, default=10.0)
@@ -68,7 +68,7 @@ def main() -> None:
             ["default"]
             if args.trees or args.single
             else [
-                str(CONFIG_DIR / "walking_1ms.yaml"),
+                str(CONFIG_DIR / "walking_4ms.yaml"),
                 "default",
             ]
         )

@@ -3,8 +3,9 @@
     .venv/bin/python benchmarks/bench_walking.py [--seconds 10] [--repeats 3] [--core N]
         [--config F.yaml] [--controller-hz HZ] [--planner-hz HZ]
 
-Runs the full walking diagram (the configured Digit stack — by default the plant at 4 ms
-with SAP, the ALIP planner at 50 Hz, the passivity controller at 250 Hz;
+Runs the full walking diagram (the configured Digit stack — by default the plant at 10 ms
+with SAP and its implicit damping of the hip yaws and knees, the ALIP planner at 50 Hz,
+the passivity controller at every plant step (`configs/walking_4ms.yaml`: the 4 ms stack);
 `--config emonav_drake/configs/walking_1ms.yaml` for the 1 ms / 200 Hz / 1 kHz one — with
 per-step random commands, no Meshcat) `--repeats` times
 pinned to one CPU core, and prints per run and as medians: the real-time factor

@@ -347,29 +347,32 @@ class WalkingParams:
         "N·m·s/rad",
         (6, 0.0, 1000.0),
     )
+    # Hip yaws and knees damped by the contact solver (docs/rates.md, "Digit at 10 ms"): the
+    # explicit K_D of those joints is what kept the plant step at 4 ms
     implicit_damping: list[str] = setting(
-        [],
+        ["hip_yaw", "knee"],
         "leg joints (hip_roll, hip_yaw, hip_pitch, knee, toe_pitch, toe_roll) whose K_D "
         "damping the contact solver applies implicitly, at the end of its step, as the "
         "actuator's PD controller (proportional gain 0); the others' K_D s is in the "
-        "controller's torque",
+        "controller's torque ([]: all explicit)",
     )
     kd_arm: float = setting(20.0, "PD damping of the arms when held", "N·m·s/rad", (0.0, 1000.0))
     kp_arm: float = setting(200.0, "PD stiffness of the arms when held", "N·m/rad", (0.0, 10000.0))
     ankle_torque_fraction: float = setting(
         0.8, "stance toe torque bound, fraction of its limit", "", (0.0, 1.0)
     )
-    # Rates (docs/rates.md, "Fast Digit"): the plant at 4 ms, the controller at every plant
-    # step (250 Hz), the footstep planner at 50 Hz walk as the 1 ms / 1 kHz / 200 Hz stack
-    # did (configs/walking_1ms.yaml) at ~3.5x its speed
+    # Rates (docs/rates.md, "Digit at 10 ms"): the plant and the controller at 10 ms with the
+    # solver's implicit damping above, the footstep planner at 50 Hz, walk as the 4 ms stack
+    # did (x/y tracking within 2 %) at ~1.8x its speed; the 4 ms stack is
+    # configs/walking_4ms.yaml, the 1 ms / 1 kHz / 200 Hz one configs/walking_1ms.yaml
     planner_period: float = setting(0.02, "ALIP footstep planner update (50 Hz)", "s", (0.001, 0.1))
     controller_period: float = setting(
-        0.004, "passivity controller period; = time_step: every step", "s", (0.0002, 0.02)
+        0.01, "passivity controller period; = time_step: every step", "s", (0.0002, 0.02)
     )
-    time_step: float = setting(0.004, "plant step", "s", (0.0002, 0.01))
+    time_step: float = setting(0.01, "plant step", "s", (0.0002, 0.01))
     friction: float = setting(1.0, "ground friction coefficient", "", (0.1, 2.0))
     arms: str = setting("welded", '"welded" (fixed at the held pose) or "held" (PD-controlled)')
     fall_height: float = setting(0.6, "torso origin below this is a fall", "m", (0.2, 1.0))
     fall_check_period: float = setting(
-        0.008, "the fall monitor's period (125 Hz)", "s", (0.0002, 0.01)
+        0.01, "the fall monitor's period (100 Hz)", "s", (0.0002, 0.02)
     )

@@ -126,7 +126,11 @@ def test_a_knee_on_the_ground_is_a_fall_even_with_the_torso_high():
 
 
 def test_a_slower_controller_holds_its_torque_between_ticks():
-    cfg = load_config(data="walking: {controller_period: 0.008}\n")  # every 2nd plant step
+    # the 4 ms stack with every K_D explicit, its controller at every 2nd plant step
+    cfg = load_config(
+        data="walking: {time_step: 0.004, controller_period: 0.008, fall_check_period: 0.008, "
+        "implicit_damping: []}\n"
+    )
     r = run_walk(2.0, seed=5, config=cfg, record_timing=True)
     assert not r.fell
     assert len(r.tick_seconds) == pytest.approx(250, abs=2)  # 125 Hz for 2 s

@@ -7,17 +7,15 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
+from emonav_drake.configs import CONFIG_DIR
 from emonav_drake.diagrams.walking import build_walking_diagram, run_walk
 from emonav_drake.params import ConfigError, load_config
 from emonav_drake.systems.digit_plant import LEG_JOINTS
 from emonav_drake.systems.walking_command_source import command_sequence
 
-IMPLICIT = "walking: {implicit_damping: [hip_yaw, knee]}\n"
-IMPLICIT_10MS = (
-    "walking: {time_step: 0.01, controller_period: 0.01, fall_check_period: 0.01, "
-    "implicit_damping: [hip_yaw, knee]}\n"
-)
-EXPLICIT_10MS = "walking: {time_step: 0.01, controller_period: 0.01, fall_check_period: 0.01}\n"
+IMPLICIT = "walking: {implicit_damping: [hip_yaw, knee]}\n"  # the default's
+EXPLICIT_10MS = "walking: {implicit_damping: []}\n"  # the 10 ms default, every K_D explicit
+EXPLICIT_4MS = str(CONFIG_DIR / "walking_4ms.yaml")  # the 4 ms stack (every K_D explicit)
 
 
 def _walking_at(cfg, seconds: float, seed: int = 3):
@@ -36,7 +34,7 @@ def _walking_at(cfg, seconds: float, seed: int = 3):
         ("walking: {implicit_damping: [ankle]}\n", "implicit_damping", "'ankle' is not one"),
         ("walking: {implicit_damping: [knee, knee]}\n", "implicit_damping", "each joint once"),
         (
-            "walking: {implicit_damping: [knee], controller_period: 0.008}\n",
+            "walking: {implicit_damping: [knee], time_step: 0.004, controller_period: 0.008}\n",
             "controller_period",
             "implicit_damping names joints",
         ),
@@ -64,8 +62,8 @@ def test_the_named_joints_and_only_they_get_the_solvers_damping():
     desired = port.Eval(plant.GetMyContextFromRoot(ctx))
     x = station.GetOutputPort("plant_state").Eval(station.GetMyContextFromRoot(ctx))
     assert np.array_equal(desired[: plant.num_actuators()], x[model.actuated_q])
-    # the default plant has no PD controller at all
-    _, plain, _ = _walking_at(load_config(), 0.1)
+    # the 4 ms stack's plant has no PD controller at all
+    _, plain, _ = _walking_at(load_config(EXPLICIT_4MS), 0.1)
     assert not any(
         plain.plant.get_joint_actuator(i).has_controller()
         for i in plain.plant.GetJointActuatorIndices()
@@ -87,7 +85,7 @@ def test_the_controller_leaves_to_the_solver_exactly_the_damping_of_those_joints
     model = station.model
     nu = len(u_ff)
     v_r = desired[nu:]
-    _, explicit_station, _ = _walking_at(load_config(), 0.0)
+    _, explicit_station, _ = _walking_at(load_config(data=EXPLICIT_10MS), 0.0)
     u_explicit = explicit_station.controller.compute(x, targets, t)
     kd = np.array(cfg_i.walking.kd_leg)
     expected = u_ff.copy()
@@ -104,10 +102,12 @@ def test_the_controller_leaves_to_the_solver_exactly_the_damping_of_those_joints
 
 @pytest.mark.slow
 def test_digit_walks_at_10_ms_with_the_solvers_damping_and_falls_without_it():
-    walked = run_walk(10.0, seed=7, config=load_config(data=IMPLICIT_10MS))
+    """The default (10 ms, hip yaws and knees damped by the solver) tracks as the 4 ms
+    stack with every K_D explicit; at 10 ms without the solver's damping it does not."""
+    walked = run_walk(10.0, seed=7)
     assert not walked.fell, walked.fall_reason
-    base = run_walk(10.0, seed=7)
-    for key in ("x", "y"):  # within 10 % of the default's tracking
+    base = run_walk(10.0, seed=7, config=load_config(EXPLICIT_4MS))
+    for key in ("x", "y"):  # within 10 % of the 4 ms stack's tracking
         assert walked.tracking_rms[key] < 1.1 * base.tracking_rms[key], key
     assert walked.tracking_rms["heading"] < 2.0 * base.tracking_rms["heading"]
     explicit = run_walk(10.0, seed=7, config=load_config(data=EXPLICIT_10MS))

@@ -123,7 +123,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     """Register `emonav walk` on the CLI's sub-parsers."""
     w = subparsers.add_parser(
         "walk",
-        help="simulate the full-order Digit walking (plant and controller at 4 ms by default)",
+        help="simulate the full-order Digit walking (plant and controller at 10 ms by default)",
     )
     w.add_argument(
         "--seconds",

@@ -5,8 +5,8 @@ MPC or a learned policy) and episode monitor — around the Digit station
 (`diagrams/digit_station.py`) instead of the LIP robot:
 
     NavigationPlanner (2.5 Hz, holds u_k) ─command─► DigitStation ──► robot_state, fall
-       ▲  robot_state, crowd, lgm_stack               (ALIP 50 Hz, controller 250 Hz,
-       └──────────────────────────────────────────────  plant 4 ms, fall check 125 Hz)
+       ▲  robot_state, crowd, lgm_stack               (ALIP 50 Hz, controller and
+       └──────────────────────────────────────────────  plant 10 ms, fall check 100 Hz)
 
 The robot state the navigation stack sees is Digit's CoM, torso yaw and sagittal CoM
 speed, so the walking stack's tracking errors reach the crowd, the policy's observation

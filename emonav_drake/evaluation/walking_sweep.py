@@ -33,7 +33,7 @@ def run_one(
 ) -> dict:
     """One walk with the given periods [s]; returns its JSON row. The sweep's plant is the
     1 ms one of `configs/walking_1ms.yaml` unless `config` says otherwise (the default's
-    4 ms step would forbid the finer rates)."""
+    10 ms step would forbid the finer rates)."""
     from emonav_drake.configs import CONFIG_DIR
     from emonav_drake.diagrams.walking import run_walk
 

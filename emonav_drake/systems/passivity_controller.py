@@ -236,8 +236,8 @@ class PassivityController(LeafSystem):
     def compute(self, x: np.ndarray, tg: WalkingTargets, t: float) -> np.ndarray:
         """Joint torques for plant state `x`, planner targets `tg` at time `t` [s].
 
-        One piece on purpose: it runs at every controller tick (250 Hz, about a third of
-        the Digit loop's wall time) and every split measured slower. Timed on fixed inputs
+        One piece on purpose: it runs at every controller tick (every plant step, about a
+        third of the Digit loop's wall time) and every split measured slower. Timed on fixed inputs
         of each phase, 100-call blocks alternated 300 times with this version on the same
         instance, one core, paired medians of ≈ 75–90 µs per call: the swing task and the
         torques as methods +0.2 … +1.3 µs, all four steps as methods +0.7 … +2.1 µs,
