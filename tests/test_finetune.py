@@ -7,6 +7,7 @@ Digit-calibrated one) and a real SIGINT raised inside a step or an update; no mo
 import json
 import shlex
 import signal
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -399,3 +400,40 @@ def test_seed_ranges_are_validated():
     with pytest.raises(ConfigError, match="critic_loss"):
         FinetuneConfig(critic_loss="l1").validate()
     assert FinetuneConfig().validate().train_seed_offset == 2_000_000
+
+
+BUILDINGS_STUDENT = (
+    Path(__file__).resolve().parent.parent
+    / "benchmarks/results/buildings_route/checkpoints/digit_r2.pt"
+)
+
+
+def test_the_run_learns_in_its_family_and_the_trackers_world_with_a_tracks_student(tmp_path):
+    """Issue 53 item 3: the fine-tuning's world is its configuration's scenario family,
+    LiDAR sensor and perception, and the student may read the tracks as a second input
+    (`lgm_tracks`: the buildings route's output); another family in the environment's
+    configuration is refused before any work."""
+    cfg = _cfg(
+        total_steps=10,
+        learning_starts=4,
+        eval_every=8,
+        eval_episodes=1,
+        family="doorway",
+        sensor="vlp16",
+        perception="tracks",
+    )
+    path = train_finetune(
+        tmp_path / "run", cfg, init=str(BUILDINGS_STUDENT), env_cfg=_env(6), progress=False
+    )
+    meta = PolicyPlanner(path).meta
+    assert meta["observation"]["grid_kind"] == "lgm_tracks"
+    world = meta["provenance"]["env_config"]
+    assert world["crowd"]["family"] == "doorway"
+    assert world["perception"]["state_source"] == "lidar" and world["sensor"]["preset"] == "vlp16"
+    with pytest.raises(ConfigError, match="family"):
+        FinetuneConfig(family="hallways").validate()
+    office = _env()
+    office.crowd.family = "office"
+    with pytest.raises(ConfigError, match="give one"):
+        train_finetune(tmp_path / "other", cfg, init=str(BUILDINGS_STUDENT), env_cfg=office)
+    assert not (tmp_path / "other").exists()

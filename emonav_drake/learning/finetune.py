@@ -51,7 +51,7 @@ from tqdm import tqdm
 
 from emonav_drake.atomic_io import write_text_atomic
 from emonav_drake.errors import RunInterrupted
-from emonav_drake.learning.config_common import with_run_world
+from emonav_drake.learning.config_common import with_run_family, with_run_world
 from emonav_drake.learning.finetune_agent import DiscreteSac, check_observation, load_init
 from emonav_drake.learning.finetune_state import (
     STATE_FILE,
@@ -118,6 +118,7 @@ def train_finetune(
     """
     cfg = (cfg or FinetuneConfig()).validate()
     env_cfg = with_run_world(copy.deepcopy(env_cfg or EmoNavConfig()), cfg)
+    with_run_family(env_cfg, cfg.family)  # scenes to train and select in
     out = Path(out)
     device = resolve_device(cfg.device, "device")
     path = out / STATE_FILE

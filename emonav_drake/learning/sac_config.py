@@ -32,7 +32,7 @@ from emonav_drake.learning.config_common import (
     check_choice,
     check_observation,
 )
-from emonav_drake.params import NUM_BEAMS, EpisodeParams
+from emonav_drake.params import NUM_BEAMS, SCENARIO_FAMILIES, EpisodeParams
 from emonav_drake.typed_yaml import ConfigError, validate_fields
 
 _ADAM_BETA1 = (0.0, 0.999999)
@@ -131,6 +131,11 @@ class FinetuneConfig(TrainingRunConfig):
     threads: int = setting(
         1, "torch threads: batch-1 acting and small MLP updates are fastest on one", "", THREADS
     )
+    family: str = setting(
+        "paper",
+        "the scenario family it trains and selects in, as `DaggerConfig.family` "
+        '("paper": the paper\'s arena; e.g. "mixed_buildings")',
+    )
     response: str = setting(
         "",
         'the training and selection world, as `DaggerConfig.response`: "" = the paper\'s LIP; '
@@ -213,6 +218,7 @@ class FinetuneConfig(TrainingRunConfig):
         """Raise `ConfigError` naming the field if a value is out of range, or if the
         training, selection and evaluation seed ranges overlap."""
         validate_fields(self)
+        check_choice("family", self.family, SCENARIO_FAMILIES)
         check_choice("critic_loss", self.critic_loss, ("huber", "mse"))
         self.check_common()
         # at most one episode per environment step: seeds offset … offset + total_steps − 1
