@@ -5,8 +5,9 @@
         [--nav-seeds 1001 1002 1003] [--core N]
 
 For every configuration (default: the 4 ms stack `configs/walking_4ms.yaml`, every K_D
-explicit, and the package default: 10 ms with the solver's implicit damping), pinned to one CPU core and interleaved run by run (so a change of
-load on the shared machine hits every configuration alike):
+explicit, and the package default: 10 ms with the solver's implicit damping), pinned to
+one CPU core and interleaved run by run (so a change of load on the shared machine hits
+every configuration alike):
 
 * walk: `--repeats` open-loop walks of `--walk-seconds` with seeded random commands
   (seeds 0, 1, ...): real-time factor, tracking RMS (x, y, heading), falls;
