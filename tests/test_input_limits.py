@@ -696,6 +696,7 @@ def test_every_shipped_configuration_and_scenario_still_loads():
     for name in SETTINGS:
         load_setting(name)
     load_config(PACKAGE / "configs" / "walking_1ms.yaml")
+    load_config(PACKAGE / "configs" / "walking_4ms.yaml")
     load_typed_yaml(FinetuneConfig, path=PACKAGE / "configs" / "finetune_digit.yaml").validate()
     load_typed_yaml(SarlConfig, path=PACKAGE / "configs" / "rgl.yaml").validate()
     for v in VARIANTS.values():
@@ -705,6 +706,7 @@ def test_every_shipped_configuration_and_scenario_still_loads():
     shipped = {p.name for p in (PACKAGE / "configs").glob("*.yaml")}
     assert shipped == {f"{s}.yaml" for s in SETTINGS} | {
         "walking_1ms.yaml",
+        "walking_4ms.yaml",
         "finetune_digit.yaml",
         "rgl.yaml",
     }
