@@ -108,9 +108,9 @@ def kernels_difference(old: dict | None, new: dict) -> str | None:
     """How the BLAS kernels of `new` (`numeric_kernels`) differ from a run's recorded
     `old`, as words with the variable that would match them; None when they agree or the
     run recorded none."""
-    if not old or old.get("blas") == new.get("blas"):
-        return None
     there, here = kernels_words(old), kernels_words(new)
+    if not old or there == here:  # the same kernel sets (library versions aside)
+        return None
     hint = ""
     arch = {b["architecture"] for b in old.get("blas", []) if b["library"] == "openblas"}
     if len(arch) == 1:

@@ -457,3 +457,18 @@ def test_a_run_records_its_blas_kernels_and_a_resume_on_others_says_how_to_match
     with caplog.at_level("WARNING"):
         assert main(_bench_argv(run_same, tiny, trials=3)) == 0
     assert "other numerics" not in caplog.text
+
+
+def test_kernels_differ_by_their_set_not_by_a_library_version():
+    """A fingerprint written before versions were recorded ("?") on SkylakeX kernels and a
+    run on SkylakeX kernels of a known version: the same kernels, nothing to say."""
+    from emonav_drake.provenance import kernels_difference
+
+    def blas(version: str, arch: str) -> dict:
+        return {"blas": [{"library": "openblas", "version": version, "architecture": arch}]}
+
+    assert kernels_difference(blas("?", "SkylakeX"), blas("0.3.30", "SkylakeX")) is None
+    words = kernels_difference(blas("?", "SkylakeX"), blas("0.3.30", "Haswell"))
+    assert (
+        "SkylakeX there, openblas Haswell here" in words and "OPENBLAS_CORETYPE=SkylakeX" in words
+    )
