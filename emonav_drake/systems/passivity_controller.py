@@ -234,7 +234,9 @@ class PassivityController(LeafSystem):
         state.get_mutable_discrete_state(self._held).set_value(self._out.Eval(context))
 
     def compute(self, x: np.ndarray, tg: WalkingTargets, t: float) -> np.ndarray:
-        """Joint torques for plant state `x`, planner targets `tg` at time `t` [s].
+        """Joint torques for plant state `x`, planner targets `tg` at time `t` [s]; for the
+        joints in `walking.implicit_damping` the feed-forward only (the solver adds
+        −K_D (v − v_r)), the reference velocity v_r left in `self._vr`.
 
         One piece on purpose: it runs at every controller tick (every plant step, about a
         third of the Digit loop's wall time) and every split measured slower. Timed on fixed inputs
