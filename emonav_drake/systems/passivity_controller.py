@@ -168,9 +168,9 @@ class PassivityController(LeafSystem):
         self._state_in = self.DeclareVectorInputPort("state", nx)
         self._targets_in = self.DeclareAbstractInputPort("targets", AbstractValue.Make(object()))
         self._period = params.controller_period
+        self._held = None  # the discrete state of a zero-order hold, if any (below)
         if implicit.any():  # torques and the reference velocity, computed once per step
             self._aq, self._av = model.actuated_q, model.actuated_v
-            self._held = None
             self._result = self.DeclareCacheEntry(
                 "torques and the solver's desired state",
                 ValueProducer(
@@ -182,7 +182,6 @@ class PassivityController(LeafSystem):
             self._out = self.DeclareVectorOutputPort("actuation", self._nu, self._calc_from_result)
             self.DeclareVectorOutputPort("desired_state", 2 * self._nu, self._calc_desired)
         elif abs(self._period / params.time_step - 1.0) < 1e-9:
-            self._held = None
             self._out = self.DeclareVectorOutputPort("actuation", self._nu, self._calc_actuation)
         else:
             self._held = self.DeclareDiscreteState(self._nu)
@@ -205,8 +204,11 @@ class PassivityController(LeafSystem):
     def _calc_result(self, context: Context, value: AbstractValue) -> None:
         t0 = time.perf_counter()
         x = self._state_in.Eval(context)
-        u = self.compute(x, self._targets_in.Eval(context), context.get_time())
-        value.set_value(np.concatenate([u, x[self._aq], self._vr[self._av]]))
+        nu = self._nu
+        out = value.get_mutable_value()  # [u; q; v_r], the cache's own array, filled in place
+        out[:nu] = self.compute(x, self._targets_in.Eval(context), context.get_time())
+        out[nu : 2 * nu] = x[self._aq]
+        out[2 * nu :] = self._vr[self._av]
         if self._record:
             self.tick_seconds.append(time.perf_counter() - t0)
 
