@@ -166,6 +166,32 @@ def test_diagnose_re_simulates_a_lip_run_and_skips_the_digit_comparison(tmp_path
     assert "skipped — on a LIP run" in printed and "failures.md" in printed
 
 
+def test_failures_are_counted_by_what_ended_them():
+    from emonav_drake.evaluation.failures import failure_counts, failure_kind, format_counts
+
+    records = [
+        {"outcome": "collision", "collided_with": "happy"},
+        {"outcome": "collision", "collided_with": "negative"},
+        {"outcome": "collision", "collided_with": "wall"},
+        {"outcome": "collision", "collided_with": "static"},
+        {"outcome": "collision"},  # recorded before `collided_with`
+        {"outcome": "timeout"},
+        {"outcome": "success"},
+    ]
+    assert [failure_kind(r) for r in records] == [
+        "pedestrian",
+        "pedestrian",
+        "wall",
+        "static",
+        "collision",
+        "timeout",
+        None,
+    ]
+    counts = failure_counts(records)
+    assert sum(counts.values()) == 6
+    assert format_counts(counts) == "pedestrian 2, collision 1, static 1, timeout 1, wall 1"
+
+
 def test_failure_listing_names_causes_and_a_changed_configuration():
     """Collisions name what was hit, falls their reason; a run whose configuration source
     no longer gives its configuration (hash) is re-run from run_config.yaml; a learned
@@ -203,7 +229,8 @@ def test_failure_listing_names_causes_and_a_changed_configuration():
         (3, "fall: torso at 0.512 m", 10, "0.75"),
         (4, "timeout", 11, "1.00"),
     ]
-    assert "mine: 2 of 3 trials failed (collision 1, fall 1)" in text
+    assert "mine: 2 of 3 trials failed (collision 1, fall 1; by kind: fall 1, pedestrian 1)" in text
+    assert "dwa: 1 of 2 trials failed (timeout 1)\n" in text  # no collision: no breakdown
     assert "RUN/settings.json" in text and "> run_config.yaml" in text
     assert rerun_command(settings, "mine", 1) == (
         "emonav sim --planner policy --checkpoint /x/mine.pt --seed 1 --plant digit "

@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 import shlex
 from collections import Counter
+from collections.abc import Iterable
 from pathlib import Path
 
 RUN_CONFIG_FILE = "run_config.yaml"  # the run's configuration, written with --out
@@ -28,6 +29,31 @@ def failure_cause(record: dict) -> str:
     if outcome == "fall":
         return f"fall: {record.get('fall_reason') or 'unknown'}"
     return outcome
+
+
+def failure_kind(record: dict) -> str | None:
+    """What ended a failed trial, coarsely: a collision by what it hit ("pedestrian",
+    "wall", "static"; "collision" when the record does not say), else the outcome
+    ("timeout", "fall", "no_route"); None for a success."""
+    from emonav_drake.params import EMOTION_NAMES
+
+    outcome = record["outcome"]
+    if outcome == "success":
+        return None
+    if outcome != "collision":
+        return outcome
+    hit = record.get("collided_with") or ""
+    return "pedestrian" if hit in EMOTION_NAMES else (hit or "collision")
+
+
+def failure_counts(records: Iterable[dict]) -> Counter[str]:
+    """The failed trials among `records` counted by `failure_kind`."""
+    return Counter(k for r in records if (k := failure_kind(r)) is not None)
+
+
+def format_counts(counts: Counter[str]) -> str:
+    """'pedestrian 12, wall 3' — most frequent first, ties in name order."""
+    return ", ".join(f"{k} {n}" for k, n in sorted(counts.items(), key=lambda x: (-x[1], x[0])))
 
 
 def failing_trials(trials: list[dict], methods: list[str]) -> list[dict]:
@@ -181,7 +207,8 @@ def format_failures(
     rerun: int = 3,
     causes: dict[tuple[str, int], str] | None = None,
 ) -> str:
-    """The failed trials of `methods` as text, per method: a count by outcome, one line
+    """The failed trials of `methods` as text, per method: a count by outcome (and, with
+    collisions, by `failure_kind`: what they hit), one line
     per trial (seed, cause, steps, smallest pedestrian distance) and the `emonav sim`
     command of the first `rerun` (`rerun_command`). `causes` replaces a record's cause
     by a re-simulated one ((method, seed) → cause, from `diagnose_run`)."""
@@ -209,8 +236,10 @@ def format_failures(
     for m in methods:
         mine = [f for f in failures if f["method"] == m]
         n = sum(t["method"] == m for t in trials)
-        by_outcome = Counter(f["outcome"] for f in mine)
-        text = ", ".join(f"{o} {k}" for o, k in sorted(by_outcome.items(), key=lambda x: -x[1]))
+        text = format_counts(Counter(f["outcome"] for f in mine))
+        kinds = failure_counts(t["record"] for t in trials if t["method"] == m)
+        if any(k not in ("timeout", "fall", "no_route") for k in kinds):  # what collisions hit
+            text += f"; by kind: {format_counts(kinds)}"
         lines += ["", f"{m}: {len(mine)} of {n} trials failed" + (f" ({text})" if text else "")]
         if not mine:
             continue
