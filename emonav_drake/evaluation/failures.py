@@ -19,6 +19,7 @@ from pathlib import Path
 
 RUN_CONFIG_FILE = "run_config.yaml"  # the run's configuration, written with --out
 RUN_ESTIMATE_FILE = "run_emotion_estimate.yaml"  # its emotion estimate, if it has one
+HIT_KINDS = frozenset({"pedestrian", "wall", "static"})  # what a recorded collision hit
 
 
 def failure_cause(record: dict) -> str:
@@ -238,7 +239,7 @@ def format_failures(
         n = sum(t["method"] == m for t in trials)
         text = format_counts(Counter(f["outcome"] for f in mine))
         kinds = failure_counts(t["record"] for t in trials if t["method"] == m)
-        if any(k not in ("timeout", "fall", "no_route") for k in kinds):  # what collisions hit
+        if kinds.keys() & HIT_KINDS:  # the records say what the collisions hit
             text += f"; by kind: {format_counts(kinds)}"
         lines += ["", f"{m}: {len(mine)} of {n} trials failed" + (f" ({text})" if text else "")]
         if not mine:
