@@ -264,6 +264,28 @@ def test_grid_maps_ring_the_tracked_people_in_both_worlds():
         assert np.array_equal(got, stacks[k]), k
 
 
+def test_the_maps_ring_a_standing_crowd_through_its_still_tracks():
+    """Five people converge on the robot's path and stand (robot_crowding); the tracker
+    holds a person who stands as a still track (a static disc), not a pedestrian. The
+    maps that ring the tracks ring the still tracks too, so each standing person is
+    inside a ring, as the planners reading tracks see them (before: no ring at all)."""
+    from emonav_drake.crowd.crowd import obstacle_discs
+    from emonav_drake.navigation.lip_world import NavigationWorld
+    from emonav_drake.sensing.crowd_perception import perceived_inflation
+
+    cfg = _deployable("robot_crowding", rings="tracks")
+    w = NavigationWorld(sample_scenario(1, cfg), cfg)
+    for _ in range(40):  # the robot stands; the pedestrians walk up and stand
+        assert w.step(np.zeros(2))[1] is None
+    truth, seen = w.crowd.snapshot(w.crowd_state), w.planner_input().crowd
+    standing = truth.positions[np.hypot(*truth.velocities.T) < 0.05]
+    assert len(standing) == 5 and len(seen.positions) == 0  # all of them still tracks
+    centres = obstacle_discs(perceived_inflation(truth, seen))[0]
+    assert len(centres)
+    gap = np.linalg.norm(standing[:, None] - centres[None], axis=2).min(axis=1)
+    assert (gap < 0.15).all(), gap
+
+
 def test_a_saved_lip_world_keeps_its_tracks():
     from emonav_drake.navigation.lip_world import NavigationWorld
 

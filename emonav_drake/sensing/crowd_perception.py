@@ -139,11 +139,17 @@ class CrowdPerception:
 def perceived_inflation(crowd: CrowdSnapshot, seen: CrowdSnapshot) -> CrowdSnapshot:
     """The crowd whose discs ring the grid maps' inflated layer when the maps ring the
     pedestrians as the robot perceives them: `seen`'s pedestrians (positions, velocities,
-    emotions, discomfort distances) with `crowd`'s static discs and walls."""
+    emotions, discomfort distances), `crowd`'s walls, and as static discs both `crowd`'s
+    (the map's) and `seen`'s — the tracker's still tracks. A person who stands still
+    long enough is a still track, not a pedestrian, of the tracker (as the planners that
+    read tracks see them): without its still tracks the maps would ring a standing crowd
+    nowhere, and show it only as the scan's returns of legs."""
     return dc.replace(
         crowd,
         positions=seen.positions,
         velocities=seen.velocities,
         emotions=seen.emotions,
         discomfort=seen.discomfort,
+        static_centers=np.vstack([crowd.static_centers, seen.static_centers]).reshape(-1, 2),
+        static_radii=np.concatenate([crowd.static_radii, seen.static_radii]),
     )
