@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from emonav_drake.evaluation.failures import format_counts
+from emonav_drake.evaluation.failures import failure_kind, format_counts
 from emonav_drake.navigation.lip_world import NavigationWorld
 from emonav_drake.params import EmoNavConfig, EpisodeParams
 from emonav_drake.planners import configure_for, make_planner
@@ -32,7 +32,8 @@ STAND = "stand"
 
 
 def run(name: str, family: str, first_seed: int, episodes: int) -> tuple[collections.Counter, list]:
-    """Outcomes ('collision: wall', 'success', …) and the robot's speeds at collisions."""
+    """Outcomes ('success', 'timeout', or a collision by what it hit: 'pedestrian', 'wall',
+    'static') and the robot's speeds at the collisions [m/s]."""
     cfg = EmoNavConfig()
     cfg.crowd.family = family
     planner = None if name == STAND else make_planner(name, cfg, None)
@@ -51,12 +52,11 @@ def run(name: str, family: str, first_seed: int, episodes: int) -> tuple[collect
             u = np.zeros(2) if planner is None else planner.plan(world.planner_input())
             ev, outcome = world.step(u)
             moved = math.hypot(world.robot.x - before[0], world.robot.y - before[1])
+        outcomes[
+            failure_kind({"outcome": outcome, "collided_with": ev.collided_with}) or outcome
+        ] += 1
         if outcome == "collision":
-            hit = ev.collided_with
-            outcomes[f"collision: {hit if hit in ('wall', 'static') else 'pedestrian'}"] += 1
             speeds.append(moved / cfg.robot.step_time)
-        else:
-            outcomes[outcome] += 1
     return outcomes, speeds
 
 

@@ -23,6 +23,7 @@ same seeds after the fix that rings a standing person in the maps (commit 423de8
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 
 from emonav_drake.evaluation.failures import failure_counts, format_counts
@@ -85,8 +86,9 @@ def row(label: str, run: Path, mpc_run: Path | None) -> list[str] | None:
     if not mine:
         return None
     mpc = records(mpc_run if mpc_run is not None else run, "mpc")
+    planned = json.loads((run / "settings.json").read_text()).get("trials") or len(mine)
     return [
-        label,
+        label + (f" (under way: {len(mine)} of {planned})" if len(mine) < planned else ""),
         success_cell(mine),
         gap_cell(mine),
         format_counts(failure_counts(mine.values())) or "—",
