@@ -28,7 +28,7 @@ from pathlib import Path
 
 from emonav_drake.evaluation.failures import failure_counts, format_counts
 from emonav_drake.evaluation.run_directory import read_trials
-from emonav_drake.evaluation.tables import format_p, mcnemar_exact, wilson_interval
+from emonav_drake.evaluation.tables import format_p, pairwise_comparisons, wilson_interval
 from emonav_drake.params import SCENARIO_FAMILIES
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -71,14 +71,17 @@ def gap_cell(recs: dict[int, dict]) -> str:
 
 
 def versus(mine: dict[int, dict], other: dict[int, dict]) -> str:
-    both = sorted(set(mine) & set(other))
-    if not both:
+    """McNemar on the seeds both ran (`pairwise_comparisons`): 'x : y, p = …'."""
+    trials = [
+        {"method": m, "seed": seed, "record": r}
+        for m, recs in (("student", mine), ("mpc", other))
+        for seed, r in recs.items()
+    ]
+    pair = pairwise_comparisons(trials, ["student", "mpc"])[0]
+    if not pair["paired_trials"]:
         return "—"
-    ok_m = {s: mine[s]["outcome"] == "success" for s in both}
-    ok_o = {s: other[s]["outcome"] == "success" for s in both}
-    b = sum(ok_m[s] and not ok_o[s] for s in both)
-    c = sum(ok_o[s] and not ok_m[s] for s in both)
-    return f"{b} : {c}, p = {format_p(mcnemar_exact(b, c))}"
+    b, c = pair["a_only_success"], pair["b_only_success"]
+    return f"{b} : {c}, p = {format_p(pair['p_value'])}"
 
 
 def row(label: str, run: Path, mpc_run: Path | None) -> list[str] | None:
