@@ -116,12 +116,23 @@ def test_every_tried_morph_is_recorded_and_the_shipped_one_is_negative_png(
 
 
 def test_script_reproduces_the_shipped_files(script: ModuleType, tmp_path: Path) -> None:
+    """Byte for byte on the processor that made them; elsewhere OpenCV's SIMD paths
+    (AVX-512 against AVX2) may round a shrunk pixel the other way, so a file may differ by
+    one grey level in a few pixels, and then only its digest may change."""
     pytest.importorskip("skimage", reason="the happy face's photograph ships with scikit-image")
     assert script.main(["--out", str(tmp_path)]) == 0
-    for name in PNGS:
-        assert (tmp_path / name).read_bytes() == (FACES / name).read_bytes(), name
     new = json.loads((tmp_path / "faces.json").read_text(encoding="utf-8"))
     old = _faces_json()
+    for name, emotion in zip(PNGS, EMOTION_NAMES, strict=True):
+        made, shipped = load_image(tmp_path / name), load_image(FACES / name)
+        assert made.shape == shipped.shape, name
+        step = np.abs(made.astype(int) - shipped.astype(int))
+        assert step.max() <= 1 and np.count_nonzero(step) <= 16, (name, step.max())
+        if not step.any():
+            assert (tmp_path / name).read_bytes() == (FACES / name).read_bytes(), name
+        else:
+            new["textures"][emotion].pop("sha256")
+            old["textures"][emotion].pop("sha256")
     new.pop("versions")  # library versions may move while the files stay identical
     old.pop("versions")
     _assert_same(new, old)
