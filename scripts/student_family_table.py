@@ -89,7 +89,8 @@ def versus(mine: dict[int, dict], other: dict[int, dict]) -> str:
     if not pair["paired_trials"]:
         return "—"
     b, c = pair["a_only_success"], pair["b_only_success"]
-    return f"{b} : {c}, p = {format_p(pair['p_value'])}"
+    p = format_p(pair["p_value"])
+    return f"{b} : {c}, p {p}" if p.startswith("<") else f"{b} : {c}, p = {p}"
 
 
 def row(label: str, run: Path, mpc_run: Path | None, method: str = STUDENT) -> list[str] | None:
