@@ -133,7 +133,7 @@ def rows() -> list[str]:
         r = row(family, RUNS / f"digit_{family}", MPC_ELSEWHERE.get(family))
         lines.append(r if r else [family, "not run", "", "", "", ""])
         if family in AFTER_FIX and (
-            r := row(f"{family}, still tracks ringed", AFTER_FIX[family], None)
+            r := row(f"{family}, still tracks ringed", AFTER_FIX[family], MPC_ELSEWHERE.get(family))
         ):
             lines.append(r)
         again = row(
