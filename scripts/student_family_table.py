@@ -122,11 +122,11 @@ def rows() -> list[str]:
     ]
     lines = []
     for label, name in PAPER_ROWS:
-        lines += [r for r in [row(label, RUNS / name, None)] if r]
-        again = row(
-            f"{label}, retrained at the fix", RETRAINED / name, RUNS / name, RETRAINED_METHOD
-        )
-        lines += [again] if again else []
+        candidates = [
+            row(label, RUNS / name, None),
+            row(f"{label}, retrained at the fix", RETRAINED / name, RUNS / name, RETRAINED_METHOD),
+        ]
+        lines += [r for r in candidates if r]
     for family in SCENARIO_FAMILIES:
         if family in ("paper", "mixed", "mixed_buildings"):
             continue
